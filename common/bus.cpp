@@ -1,0 +1,87 @@
+#include "common/bus.h"
+
+#include <lcm/lcm.h>
+
+#include <stdexcept>
+
+namespace objscan {
+namespace {
+
+class LcmBus final : public Bus {
+ public:
+  explicit LcmBus(const std::string& url) : url_(url) {
+    lcm_ = lcm_create(url.empty() ? nullptr : url.c_str());
+    if (lcm_ == nullptr) throw std::runtime_error("cannot start LCM on '" + url + "'");
+  }
+  ~LcmBus() override {
+    for (auto& sub : subscriptions_) lcm_unsubscribe(lcm_, sub->subscription);
+    lcm_destroy(lcm_);
+  }
+
+  bool Publish(const std::string& channel, const void* data, int size) override {
+    return lcm_publish(lcm_, channel.c_str(), data, static_cast<unsigned int>(size)) == 0;
+  }
+
+  void Subscribe(const std::string& channel, RawHandler handler, int queue_capacity) override {
+    auto sub = std::make_unique<Sub>();
+    sub->handler = std::move(handler);
+    sub->subscription = lcm_subscribe(lcm_, channel.c_str(), &LcmBus::Dispatch, sub.get());
+    if (sub->subscription == nullptr) throw std::runtime_error("cannot subscribe to '" + channel + "'");
+    if (queue_capacity > 0) lcm_subscription_set_queue_capacity(sub->subscription, queue_capacity);
+    subscriptions_.push_back(std::move(sub));
+  }
+
+  int Handle(int timeout_ms) override {
+    const int status = lcm_handle_timeout(lcm_, timeout_ms);
+    if (status < 0) return -1;
+    return status > 0 ? 1 : 0;
+  }
+
+  std::string Describe() const override { return url_.empty() ? std::string("(LCM default)") : url_; }
+
+ private:
+  struct Sub {
+    RawHandler handler;
+    lcm_subscription_t* subscription = nullptr;
+  };
+
+  static void Dispatch(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
+    auto* sub = static_cast<Sub*>(user);
+    const std::string channel_name(channel);
+    const RawMessage raw{channel_name, rbuf->data, static_cast<int>(rbuf->data_size), rbuf->recv_utime};
+    sub->handler(raw);
+  }
+
+  std::string url_;
+  lcm_t* lcm_ = nullptr;
+  std::vector<std::unique_ptr<Sub>> subscriptions_;
+};
+
+class SplitBus final : public Bus {
+ public:
+  SplitBus(std::unique_ptr<Bus> input, std::unique_ptr<Bus> output)
+      : input_(std::move(input)), output_(std::move(output)) {}
+  bool Publish(const std::string& channel, const void* data, int size) override {
+    return output_->Publish(channel, data, size);
+  }
+  void Subscribe(const std::string& channel, RawHandler handler, int queue_capacity) override {
+    input_->Subscribe(channel, std::move(handler), queue_capacity);
+  }
+  int Handle(int timeout_ms) override { return input_->Handle(timeout_ms); }
+  std::string Describe() const override { return "in " + input_->Describe() + ", out " + output_->Describe(); }
+
+ private:
+  std::unique_ptr<Bus> input_;
+  std::unique_ptr<Bus> output_;
+};
+
+}  // namespace
+
+std::unique_ptr<Bus> MakeLcmBus(const std::string& url) { return std::make_unique<LcmBus>(url); }
+
+std::unique_ptr<Bus> MakeBus(const std::string& input_url, const std::string& output_url) {
+  if (output_url.empty() || output_url == input_url) return MakeLcmBus(input_url);
+  return std::make_unique<SplitBus>(MakeLcmBus(input_url), MakeLcmBus(output_url));
+}
+
+}  // namespace objscan

@@ -1,0 +1,81 @@
+// The message bus every objscan process talks through. LCM sits behind this one interface so that live runs
+// (udpm://), in-process tests (memq://) and log replay (file://...?speed=0 in, file://...?mode=w or udpm:// out)
+// run the very same node code.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace objscan {
+
+// Default live URL: multicast on this host only (ttl=0) with a receive buffer large enough for 640x480 frames
+// at 30 Hz (must be <= net.core.rmem_max to take full effect).
+inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+// A received message as bytes. data is valid only during the handler call.
+struct RawMessage {
+  const std::string& channel;
+  const void* data;
+  int size;
+  int64_t recv_utime;  // µs, when the bus received it (NOT the data time: use the message's own utime)
+};
+
+using RawHandler = std::function<void(const RawMessage&)>;
+
+class Bus {
+ public:
+  virtual ~Bus() = default;
+
+  // Publishes bytes on a channel. Returns false on failure (e.g. publishing on a read-mode log).
+  virtual bool Publish(const std::string& channel, const void* data, int size) = 0;
+
+  // Subscribes to a channel (an LCM regular expression). queue_capacity > 0 sets how many undelivered messages
+  // the subscription keeps before dropping (slow handlers drop there otherwise). Handlers run inside Handle().
+  virtual void Subscribe(const std::string& channel, RawHandler handler, int queue_capacity = 0) = 0;
+
+  // Waits up to timeout_ms for a message and dispatches it to its handlers (0 = do not wait).
+  // Returns 1 when something was handled, 0 on timeout, -1 at the end of a log or on a bus error.
+  virtual int Handle(int timeout_ms) = 0;
+
+  // Human-readable description (URLs) for start-up output.
+  virtual std::string Describe() const = 0;
+
+  // Encodes and publishes an LCM message type. Returns false when encoding or publishing fails.
+  template <class Msg>
+  bool PublishMessage(const std::string& channel, const Msg& msg) {
+    const int size = msg.getEncodedSize();
+    std::vector<uint8_t> buffer(static_cast<size_t>(size > 0 ? size : 0));
+    if (size < 0 || msg.encode(buffer.data(), 0, size) != size) return false;
+    return Publish(channel, buffer.data(), size);
+  }
+
+  // Subscribes with decoding. on_message gets the decoded message; on_malformed (may be empty) gets messages
+  // that do not decode as Msg (wrong type, truncated), so the caller can count and report them.
+  template <class Msg>
+  void SubscribeMessage(const std::string& channel, std::function<void(const Msg&, const RawMessage&)> on_message,
+                        std::function<void(const RawMessage&)> on_malformed = {}, int queue_capacity = 0) {
+    Subscribe(
+        channel,
+        [on_message, on_malformed](const RawMessage& raw) {
+          Msg msg;
+          if (msg.decode(raw.data, 0, raw.size) != raw.size) {
+            if (on_malformed) on_malformed(raw);
+            return;
+          }
+          on_message(msg, raw);
+        },
+        queue_capacity);
+  }
+};
+
+// A bus on one LCM instance (any LCM URL). Throws std::runtime_error when LCM cannot start on the URL.
+std::unique_ptr<Bus> MakeLcmBus(const std::string& url);
+
+// Input and output on separate LCM instances (needed to replay a file:// log and publish elsewhere).
+// When output_url is empty or equal to input_url, returns a single-instance bus. Throws std::runtime_error.
+std::unique_ptr<Bus> MakeBus(const std::string& input_url, const std::string& output_url = "");
+
+}  // namespace objscan

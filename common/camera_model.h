@@ -1,0 +1,37 @@
+// Pinhole camera with optional OpenCV plumb_bob distortion (k1 k2 p1 p2 k3).
+// Frames: camera x right, y down, z forward. Pixels: (u, v) = (column, row), origin at the top-left pixel's centre.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+
+namespace objscan {
+
+struct PinholeCamera {
+  std::string name;        // camera name
+  int width = 0;           // px
+  int height = 0;          // px
+  double fx = 0, fy = 0;   // px
+  double cx = 0, cy = 0;   // px
+  double skew = 0;         // px
+  // k1 k2 p1 p2 k3 (OpenCV); all zero = no distortion.
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+
+  bool HasDistortion() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0 || k3 != 0; }
+  // True when the numbers can describe a camera (positive size and focal lengths, finite values).
+  bool IsValid(std::string* why = nullptr) const;
+  Eigen::Matrix3d K() const;
+
+  // Projects a point in the camera frame (mm or any unit) to a distorted pixel. False when z <= 0.
+  bool Project(const Eigen::Vector3d& point_in_camera, Eigen::Vector2d* pixel) const;
+  // Normalized image coordinates (x/z, y/z) of a distorted pixel (undistorts iteratively).
+  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const;
+  // Distorts normalized coordinates (no-op without distortion).
+  Eigen::Vector2d Distort(const Eigen::Vector2d& normalized) const;
+  bool InImage(const Eigen::Vector2d& pixel, double margin = 0) const {
+    return pixel.x() >= -0.5 + margin && pixel.y() >= -0.5 + margin && pixel.x() <= width - 0.5 - margin &&
+           pixel.y() <= height - 0.5 - margin;
+  }
+};
+
+}  // namespace objscan

@@ -1,0 +1,56 @@
+// Command-line options: "--name value" or "--name=value", bool flags as "--name" / "--name=false",
+// "--options-file FILE" reads "name = value" lines (# comments) first; the command line overrides the file.
+// Every option has a one-line help text; Usage() lists them, Effective() prints the values in force.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace objscan {
+
+class OptionParser {
+ public:
+  OptionParser(std::string program, std::string description);
+
+  void Add(const std::string& name, std::string* value, const std::string& help);
+  void Add(const std::string& name, int* value, const std::string& help);
+  void Add(const std::string& name, int64_t* value, const std::string& help);
+  void Add(const std::string& name, double* value, const std::string& help);
+  void Add(const std::string& name, bool* value, const std::string& help);
+
+  // Parses argv. Returns false with *error set on an unknown option, a missing or malformed value, or an
+  // unreadable options file. Sets help_requested() on --help / -h (and returns true).
+  bool Parse(int argc, char** argv, std::string* error);
+  // Same, for "name value" pairs already split (used by Parse and by tests).
+  bool ParseArgs(const std::vector<std::string>& args, std::string* error);
+
+  bool help_requested() const { return help_requested_; }
+  const std::vector<std::string>& positional() const { return positional_; }
+  std::string Usage() const;
+  std::string Effective() const;
+
+ private:
+  struct Option {
+    std::string name;
+    std::string help;
+    bool is_flag = false;
+    std::function<bool(const std::string&)> set;
+    std::function<std::string()> get;
+  };
+  Option* Find(const std::string& name);
+  bool ReadFile(const std::string& path, std::string* error);
+
+  std::string program_;
+  std::string description_;
+  std::vector<Option> options_;
+  std::vector<std::string> positional_;
+  bool help_requested_ = false;
+};
+
+// Parses argv for a process main(): prints usage and returns 0 into *exit_code when --help was asked, prints the
+// error and usage and returns 2 into *exit_code on a bad command line; returns true when the program should run.
+bool ParseCommandLineOrExit(OptionParser& parser, int argc, char** argv, int* exit_code);
+
+}  // namespace objscan

@@ -1,0 +1,128 @@
+#include "common/status.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+
+#include "common/bus.h"
+#include "common/log.h"
+#include "objscan/process_status_t.hpp"
+
+namespace objscan {
+namespace {
+constexpr size_t kLatencyWindow = 1000;
+
+double Percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  return values[k];
+}
+}  // namespace
+
+StatusReporter::StatusReporter(Bus* bus, std::string name, std::string channel, double period_s)
+    : bus_(bus), name_(std::move(name)), channel_(std::move(channel)),
+      period_us_(static_cast<int64_t>(period_s * 1e6)) {
+  char host[256] = {0};
+  if (gethostname(host, sizeof(host) - 1) == 0) host_ = host;
+  latency_window_ms_.reserve(kLatencyWindow);
+}
+
+void StatusReporter::Reject(const std::string& reason, const std::string& detail) {
+  ++messages_in_;
+  if (rejections_[reason]++ == 0) {
+    LogWarning("rejected input (" + reason + ")" + (detail.empty() ? "" : ": " + detail) +
+               " [further rejections of this kind are only counted]");
+  }
+}
+
+SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
+  auto it = last_seq_.find(stream);
+  if (it == last_seq_.end()) {
+    last_seq_.emplace(stream, seq);
+    return SeqResult::kFirst;
+  }
+  if (seq <= it->second) return SeqResult::kRepeatedOrOld;
+  const int64_t missing = seq - it->second - 1;
+  it->second = seq;
+  if (missing > 0) {
+    dropped_inputs_ += missing;
+    return SeqResult::kGap;
+  }
+  return SeqResult::kNext;
+}
+
+void StatusReporter::RecordLatencyMs(double ms) {
+  if (latency_window_ms_.size() < kLatencyWindow) {
+    latency_window_ms_.push_back(ms);
+  } else {
+    latency_window_ms_[latency_next_] = ms;
+    latency_next_ = (latency_next_ + 1) % kLatencyWindow;
+  }
+}
+
+void StatusReporter::SetValue(const std::string& name, double value) {
+  for (auto& kv : values_) {
+    if (kv.first == name) {
+      kv.second = value;
+      return;
+    }
+  }
+  values_.emplace_back(name, value);
+}
+
+double StatusReporter::value(const std::string& name) const {
+  for (const auto& kv : values_)
+    if (kv.first == name) return kv.second;
+  return 0.0;
+}
+
+void StatusReporter::SetState(int8_t state, const std::string& detail) {
+  state_ = state;
+  state_detail_ = detail;
+}
+
+int64_t StatusReporter::rejected(const std::string& reason) const {
+  auto it = rejections_.find(reason);
+  return it == rejections_.end() ? 0 : it->second;
+}
+
+int64_t StatusReporter::rejected_total() const {
+  int64_t total = 0;
+  for (const auto& kv : rejections_) total += kv.second;
+  return total;
+}
+
+void StatusReporter::PublishIfDue(int64_t wall_utime, bool force) {
+  if (bus_ == nullptr) return;
+  if (!force && wall_utime - last_publish_us_ < period_us_) return;
+  last_publish_us_ = wall_utime;
+  process_status_t msg;
+  msg.utime = wall_utime;
+  msg.seq = status_seq_++;
+  msg.name = name_;
+  msg.host = host_;
+  msg.pid = static_cast<int32_t>(getpid());
+  msg.state = state_;
+  msg.state_detail = state_detail_;
+  msg.last_data_utime = last_data_utime_;
+  msg.messages_in = messages_in_;
+  msg.messages_out = messages_out_;
+  msg.messages_rejected = rejected_total();
+  for (const auto& kv : rejections_) {
+    msg.rejection_reason.push_back(kv.first);
+    msg.rejection_count.push_back(kv.second);
+  }
+  msg.num_rejection_reasons = static_cast<int32_t>(msg.rejection_reason.size());
+  msg.dropped_inputs = dropped_inputs_;
+  msg.latency_p50_ms = Percentile(latency_window_ms_, 0.5);
+  msg.latency_p99_ms = Percentile(latency_window_ms_, 0.99);
+  for (const auto& kv : values_) {
+    msg.value_name.push_back(kv.first);
+    msg.value.push_back(kv.second);
+  }
+  msg.num_values = static_cast<int32_t>(msg.value.size());
+  bus_->PublishMessage(channel_, msg);
+}
+
+}  // namespace objscan

@@ -1,0 +1,68 @@
+// Process status: counters, rejections by reason, sequence-gap drops and handler latency, published as a full
+// process_status_t (stateless: every message is complete) at most once per period on PROCESS_STATUS.
+// Not thread-safe: use it from the thread that runs the bus handlers.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace objscan {
+
+class Bus;
+
+// What a sequence number says about the stream it came from.
+enum class SeqResult { kFirst, kNext, kGap, kRepeatedOrOld };
+
+class StatusReporter {
+ public:
+  // bus may be null (then nothing is published; counters still work, e.g. in unit tests).
+  StatusReporter(Bus* bus, std::string name, std::string channel = "PROCESS_STATUS", double period_s = 1.0);
+
+  void CountIn() { ++messages_in_; }
+  void CountOut() { ++messages_out_; }
+  // Counts a rejected input under `reason` ("image: wrong size"); logs the first one of each reason with detail.
+  void Reject(const std::string& reason, const std::string& detail = "");
+  // Tracks the sequence numbers of one input stream; a gap adds the missing count to dropped_inputs.
+  SeqResult ObserveSeq(const std::string& stream, int64_t seq);
+  void RecordLatencyMs(double ms);
+  void SetLastDataUtime(int64_t utime) { last_data_utime_ = utime; }
+  void SetValue(const std::string& name, double value);
+  // state is a process_status_t::STATE_* constant.
+  void SetState(int8_t state, const std::string& detail = "");
+
+  // Publishes when the period has passed since the last publication (or always with force). wall_utime in µs.
+  void PublishIfDue(int64_t wall_utime, bool force = false);
+
+  int64_t messages_in() const { return messages_in_; }
+  int64_t messages_out() const { return messages_out_; }
+  int64_t dropped_inputs() const { return dropped_inputs_; }
+  int64_t rejected(const std::string& reason) const;
+  int64_t rejected_total() const;
+  int8_t state() const { return state_; }
+  double value(const std::string& name) const;
+  const std::string& name() const { return name_; }
+
+ private:
+  Bus* bus_;
+  std::string name_;
+  std::string channel_;
+  std::string host_;
+  int64_t period_us_;
+  int64_t last_publish_us_ = 0;
+  int64_t status_seq_ = 0;
+  int8_t state_ = 0;
+  std::string state_detail_;
+  int64_t last_data_utime_ = 0;
+  int64_t messages_in_ = 0;
+  int64_t messages_out_ = 0;
+  int64_t dropped_inputs_ = 0;
+  std::map<std::string, int64_t> rejections_;
+  std::map<std::string, int64_t> last_seq_;
+  std::vector<std::pair<std::string, double>> values_;
+  std::vector<double> latency_window_ms_;
+  size_t latency_next_ = 0;
+};
+
+}  // namespace objscan
