@@ -1,0 +1,90 @@
+#include "common/options.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+
+namespace objscan {
+namespace {
+
+struct Fixture {
+  std::string url = "memq://";
+  int frames = 10;
+  double rate = 30.0;
+  bool realtime = true;
+  int64_t seed = 1;
+  OptionParser parser{"prog", "test program"};
+  Fixture() {
+    parser.Add("lcm-url", &url, "bus URL");
+    parser.Add("frames", &frames, "frames");
+    parser.Add("rate", &rate, "Hz");
+    parser.Add("realtime", &realtime, "wall-clock pacing");
+    parser.Add("seed", &seed, "seed");
+  }
+};
+
+TEST(OptionsTest, ParsesBothForms) {
+  Fixture f;
+  std::string error;
+  ASSERT_TRUE(f.parser.ParseArgs({"--frames", "42", "--rate=15.5", "--realtime=false", "--seed", "7", "pos"}, &error))
+      << error;
+  EXPECT_EQ(f.frames, 42);
+  EXPECT_DOUBLE_EQ(f.rate, 15.5);
+  EXPECT_FALSE(f.realtime);
+  EXPECT_EQ(f.seed, 7);
+  EXPECT_EQ(f.parser.positional(), std::vector<std::string>{"pos"});
+}
+
+TEST(OptionsTest, FlagWithoutValueMeansTrue) {
+  Fixture f;
+  f.realtime = false;
+  std::string error;
+  ASSERT_TRUE(f.parser.ParseArgs({"--realtime"}, &error));
+  EXPECT_TRUE(f.realtime);
+}
+
+TEST(OptionsTest, RejectsUnknownAndMalformed) {
+  Fixture f;
+  std::string error;
+  EXPECT_FALSE(f.parser.ParseArgs({"--nope", "1"}, &error));
+  EXPECT_NE(error.find("unknown option"), std::string::npos);
+  Fixture g;
+  EXPECT_FALSE(g.parser.ParseArgs({"--frames", "12x"}, &error));
+  EXPECT_NE(error.find("bad value"), std::string::npos);
+  Fixture h;
+  EXPECT_FALSE(h.parser.ParseArgs({"--frames"}, &error));
+  EXPECT_NE(error.find("needs a value"), std::string::npos);
+}
+
+TEST(OptionsTest, FileThenCommandLineWins) {
+  const std::string path = "/tmp/objscan_options_test_" + std::to_string(getpid());
+  {
+    std::ofstream out(path);
+    out << "# comment\nframes = 99\nrate: 5\nrealtime false\n";
+  }
+  Fixture f;
+  std::string error;
+  ASSERT_TRUE(f.parser.ParseArgs({"--rate", "7", "--options-file", path}, &error)) << error;
+  EXPECT_EQ(f.frames, 99);
+  EXPECT_DOUBLE_EQ(f.rate, 7.0);
+  EXPECT_FALSE(f.realtime);
+  std::remove(path.c_str());
+  Fixture g;
+  EXPECT_FALSE(g.parser.ParseArgs({"--options-file", "/nonexistent/file"}, &error));
+}
+
+TEST(OptionsTest, UsageAndEffectiveListEveryOption) {
+  Fixture f;
+  const std::string usage = f.parser.Usage();
+  const std::string effective = f.parser.Effective();
+  for (const char* name : {"lcm-url", "frames", "rate", "realtime", "seed"}) {
+    EXPECT_NE(usage.find(name), std::string::npos) << name;
+    EXPECT_NE(effective.find(name), std::string::npos) << name;
+  }
+  EXPECT_NE(effective.find("frames = 10"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace objscan
