@@ -17,12 +17,21 @@ missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+
+# LCM over udpm needs large socket receive buffers for images (objscan asks for 4 MiB); Debian's default cap is
+# 208 KiB, which silently shrinks the buffer and drops 640x480 frames. Raise the cap for this boot.
+want_rmem=4194304
+if [ "$(cat /proc/sys/net/core/rmem_max 2>/dev/null || echo $want_rmem)" -lt $want_rmem ]; then
+  echo "setup_deps: raising net.core.rmem_max to $want_rmem (LCM image traffic)"
+  $SUDO sysctl -q -w net.core.rmem_max=$want_rmem || echo "setup_deps: WARNING: could not raise net.core.rmem_max"
+fi
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup_deps: all ${#PACKAGES[@]} packages present"
   exit 0
 fi
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
 echo "setup_deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

@@ -1,0 +1,47 @@
+// One child OS process of a session: started with fork/exec in its own process group, stdout and stderr appended to
+// a log file, polled without blocking, stopped with SIGINT then SIGTERM then SIGKILL.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+#include <vector>
+
+namespace objscan {
+
+class ChildProcess {
+ public:
+  ChildProcess(std::string name, std::vector<std::string> argv, std::string log_path);
+  ~ChildProcess();  // kills the process group if still running
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  // Starts the process. Returns false with *error when it cannot be started (fork failure, or the executable does
+  // not exist / is not executable: checked before fork so the error is clear).
+  bool Start(std::string* error);
+  // Non-blocking: true while running. After exit, exit_code() holds the code (128 + signal when killed).
+  bool Running();
+  // Sends `signal` to the process group, waits up to timeout_ms for it to exit. Returns true once exited.
+  bool StopWith(int signal, int timeout_ms);
+  // SIGINT, then SIGTERM, then SIGKILL, each with the grace period.
+  void Stop(int grace_ms);
+
+  const std::string& name() const { return name_; }
+  const std::string& log_path() const { return log_path_; }
+  pid_t pid() const { return pid_; }
+  bool started() const { return pid_ > 0; }
+  int exit_code() const { return exit_code_; }
+  std::string CommandLine() const;
+  // The last lines of the log file (for error messages).
+  std::string LogTail(int lines) const;
+
+ private:
+  std::string name_;
+  std::vector<std::string> argv_;
+  std::string log_path_;
+  pid_t pid_ = -1;
+  bool exited_ = false;
+  int exit_code_ = -1;
+};
+
+}  // namespace objscan

@@ -1,0 +1,102 @@
+// A minimal streaming JSON writer (objects, arrays, strings with escaping, numbers, booleans) for summaries.
+// Non-finite numbers are written as null.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace objscan {
+
+class JsonWriter {
+ public:
+  JsonWriter& BeginObject() { return Open('{'); }
+  JsonWriter& EndObject() { return Close('}'); }
+  JsonWriter& BeginArray() { return Open('['); }
+  JsonWriter& EndArray() { return Close(']'); }
+  JsonWriter& Key(const std::string& key) {
+    Separator();
+    AppendString(key);
+    out_ += ": ";
+    after_key_ = true;
+    return *this;
+  }
+  JsonWriter& String(const std::string& value) {
+    Separator();
+    AppendString(value);
+    return *this;
+  }
+  JsonWriter& Int(int64_t value) {
+    Separator();
+    out_ += std::to_string(value);
+    return *this;
+  }
+  JsonWriter& Number(double value) {
+    Separator();
+    if (!std::isfinite(value)) {
+      out_ += "null";
+    } else {
+      char buf[40];
+      std::snprintf(buf, sizeof(buf), "%.6g", value);
+      out_ += buf;
+    }
+    return *this;
+  }
+  JsonWriter& Bool(bool value) {
+    Separator();
+    out_ += value ? "true" : "false";
+    return *this;
+  }
+  const std::string& str() const { return out_; }
+
+ private:
+  JsonWriter& Open(char c) {
+    Separator();
+    out_ += c;
+    first_.push_back(true);
+    return *this;
+  }
+  JsonWriter& Close(char c) {
+    first_.pop_back();
+    out_ += '\n' + std::string(2 * first_.size(), ' ') + c;
+    return *this;
+  }
+  void Separator() {
+    if (after_key_) {
+      after_key_ = false;
+      return;
+    }
+    if (first_.empty()) return;
+    if (!first_.back()) out_ += ',';
+    first_.back() = false;
+    out_ += '\n' + std::string(2 * first_.size(), ' ');
+  }
+  void AppendString(const std::string& s) {
+    out_ += '"';
+    for (unsigned char c : s) {
+      switch (c) {
+        case '"': out_ += "\\\""; break;
+        case '\\': out_ += "\\\\"; break;
+        case '\n': out_ += "\\n"; break;
+        case '\t': out_ += "\\t"; break;
+        case '\r': out_ += "\\r"; break;
+        default:
+          if (c < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+            out_ += buf;
+          } else {
+            out_ += static_cast<char>(c);
+          }
+      }
+    }
+    out_ += '"';
+  }
+  std::string out_;
+  std::vector<bool> first_;
+  bool after_key_ = false;
+};
+
+}  // namespace objscan

@@ -1,0 +1,27 @@
+// Reads an LCM log file and counts its events per channel (for checking that lcm-logger kept everything and for
+// session summaries). Message data times come from the message itself: every objscan type starts with
+// int64 utime right after the 8-byte fingerprint.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace objscan {
+
+struct ChannelStats {
+  int64_t count = 0;
+  int64_t bytes = 0;
+  int64_t first_utime = 0;  // µs, data time of the first message (from the message's utime field)
+  int64_t last_utime = 0;   // µs, data time of the last message
+};
+
+// Decodes the utime of any objscan message from raw bytes (big-endian int64 at offset 8); false if too short.
+bool RawMessageUtime(const void* data, int size, int64_t* utime);
+// Decodes the seq field that follows utime in most objscan types (offset 16); false if too short.
+bool RawMessageSeq(const void* data, int size, int64_t* seq);
+
+// Counts every event of the log. Returns false with *error when the file cannot be opened.
+bool ReadLogStats(const std::string& path, std::map<std::string, ChannelStats>* stats, std::string* error);
+
+}  // namespace objscan

@@ -1,0 +1,386 @@
+#include "procman/session.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/node.h"
+#include "common/time.h"
+#include "objscan/control_t.hpp"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/process_status_t.hpp"
+#include "procman/child_process.h"
+#include "procman/json_writer.h"
+#include "procman/log_stats.h"
+
+namespace objscan {
+namespace {
+
+// Channels whose seq field counts frames: a gap there is a dropped message.
+const std::set<std::string> kSequencedChannels = {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "ROBOT_ODOMETRY",
+                                                  "GROUND_TRUTH_POSE"};
+
+struct ChannelCount {
+  int64_t messages = 0;
+  int64_t bytes = 0;
+  int64_t last_seq = -1;
+  int64_t seq_gaps = 0;
+  int64_t first_utime = 0, last_utime = 0;
+  int64_t window_start_count = 0;  // for the progress rate
+};
+
+class Monitor {
+ public:
+  explicit Monitor(Bus& bus) {
+    bus.Subscribe(".*", [this](const RawMessage& raw) { OnMessage(raw); }, 10000);
+  }
+
+  void OnMessage(const RawMessage& raw) {
+    ChannelCount& c = channels_[raw.channel];
+    ++c.messages;
+    c.bytes += raw.size;
+    int64_t utime = 0, seq = 0;
+    if (RawMessageUtime(raw.data, raw.size, &utime)) {
+      if (c.messages == 1) c.first_utime = utime;
+      c.last_utime = utime;
+    }
+    if (kSequencedChannels.count(raw.channel) && RawMessageSeq(raw.data, raw.size, &seq)) {
+      if (c.last_seq >= 0 && seq > c.last_seq + 1) c.seq_gaps += seq - c.last_seq - 1;
+      c.last_seq = std::max(c.last_seq, seq);
+    }
+    if (raw.channel == "PROCESS_STATUS") {
+      process_status_t m;
+      if (m.decode(raw.data, 0, raw.size) == raw.size) statuses_[m.name] = m;
+    } else if (raw.channel == "OBJSCAN_CONTROL") {
+      control_t m;
+      if (m.decode(raw.data, 0, raw.size) == raw.size) {
+        if (m.command == control_t::COMMAND_FINISHED) finished_.insert(m.sender);
+        if (m.command == control_t::COMMAND_END_OF_STREAM) end_of_stream_ = true;
+      }
+    } else if (raw.channel == "FEATURE_TRACKS") {
+      feature_tracks_t m;
+      if (m.decode(raw.data, 0, raw.size) == raw.size) {
+        ++track_frames_;
+        live_tracks_sum_ += m.num_tracks;
+        min_live_tracks_ = track_frames_ == 1 ? m.num_tracks : std::min<int64_t>(min_live_tracks_, m.num_tracks);
+        for (int64_t id : m.track_id) distinct_ids_.insert(id);
+      }
+    }
+  }
+
+  std::map<std::string, ChannelCount> channels_;
+  std::map<std::string, process_status_t> statuses_;
+  std::set<std::string> finished_;
+  bool end_of_stream_ = false;
+  int64_t track_frames_ = 0, live_tracks_sum_ = 0, min_live_tracks_ = 0;
+  std::set<int64_t> distinct_ids_;
+};
+
+std::string Hz(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.1f Hz", v);
+  return buf;
+}
+
+}  // namespace
+
+bool ParseProcessList(const std::string& text, std::vector<SessionProcess>* processes, std::string* error) {
+  std::istringstream in(text);
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    std::vector<std::string> words;
+    std::string word;
+    char quote = 0;
+    bool in_word = false;
+    for (char ch : line) {
+      if (quote) {
+        if (ch == quote) quote = 0;
+        else word += ch;
+      } else if (ch == '\'' || ch == '"') {
+        quote = ch;
+        in_word = true;
+      } else if (ch == '#' && !in_word) {
+        break;
+      } else if (ch == ' ' || ch == '\t') {
+        if (in_word) words.push_back(word);
+        word.clear();
+        in_word = false;
+      } else {
+        word += ch;
+        in_word = true;
+      }
+    }
+    if (quote) {
+      *error = "line " + std::to_string(line_number) + ": unterminated quote";
+      return false;
+    }
+    if (in_word) words.push_back(word);
+    if (words.empty()) continue;
+    if (words.size() < 3 || (words[1] != "driver" && words[1] != "processor")) {
+      *error = "line " + std::to_string(line_number) + ": expected 'NAME driver|processor COMMAND ARGS...'";
+      return false;
+    }
+    SessionProcess p;
+    p.name = words[0];
+    p.is_driver = words[1] == "driver";
+    p.argv.assign(words.begin() + 2, words.end());
+    processes->push_back(std::move(p));
+  }
+  return true;
+}
+
+int RunSession(const SessionOptions& options, const std::vector<SessionProcess>& processes) {
+  InstallStopSignalHandlers();
+  const int64_t start_us = MonotonicMicros();
+  const auto elapsed_s = [&] { return (MonotonicMicros() - start_us) * 1e-6; };
+  mkdir(options.out_dir.c_str(), 0755);
+  const std::string logs_dir = options.out_dir + "/logs";
+  mkdir(logs_dir.c_str(), 0755);
+  const std::string log_path = options.out_dir + "/session.lcmlog";
+  std::remove(log_path.c_str());
+
+  std::string failure;
+  bool interrupted = false;
+  std::unique_ptr<Bus> bus;
+  std::unique_ptr<Monitor> monitor;
+  try {
+    bus = MakeLcmBus(options.lcm_url);
+    monitor = std::make_unique<Monitor>(*bus);
+  } catch (const std::exception& e) {
+    LogError(std::string("cannot listen on the bus: ") + e.what());
+    return 1;
+  }
+
+  ChildProcess logger("lcm-logger",
+                      {options.logger, "--lcm-url=" + options.lcm_url, "--flush-interval=100", "-f", log_path},
+                      logs_dir + "/lcm-logger.log");
+  std::vector<std::unique_ptr<ChildProcess>> children;
+  for (const auto& p : processes)
+    children.push_back(std::make_unique<ChildProcess>(p.name, p.argv, logs_dir + "/" + p.name + ".log"));
+
+  auto pump = [&](int ms) {
+    const int64_t until = MonotonicMicros() + ms * 1000LL;
+    while (MonotonicMicros() < until) bus->Handle(10);
+  };
+  auto check_children = [&]() -> bool {
+    for (size_t i = 0; i < children.size(); ++i) {
+      ChildProcess& c = *children[i];
+      if (!c.started() || c.Running()) continue;
+      const bool finished_ok = c.exit_code() == 0 &&
+                               (processes[i].is_driver || monitor->finished_.count(c.name()) ||
+                                options.finish_on.empty());
+      if (!finished_ok) {
+        failure = "process '" + c.name() + "' exited with code " + std::to_string(c.exit_code()) +
+                  " before the session ended; last lines of " + c.log_path() + ":\n" + c.LogTail(15);
+        return false;
+      }
+    }
+    if (logger.started() && !logger.Running()) {
+      failure = "lcm-logger exited early (code " + std::to_string(logger.exit_code()) + "):\n" + logger.LogTail(10);
+      return false;
+    }
+    return true;
+  };
+
+  std::string error;
+  std::fprintf(stderr, "[objscan] session in %s, bus %s\n", options.out_dir.c_str(), options.lcm_url.c_str());
+  if (!logger.Start(&error)) failure = error;
+  pump(300);
+  // Processors first, each must report on PROCESS_STATUS before the drivers start.
+  for (size_t i = 0; failure.empty() && i < children.size(); ++i) {
+    if (processes[i].is_driver) continue;
+    std::fprintf(stderr, "[objscan] start %s: %s\n", children[i]->name().c_str(), children[i]->CommandLine().c_str());
+    if (!children[i]->Start(&error)) failure = error;
+  }
+  for (size_t i = 0; failure.empty() && i < children.size(); ++i) {
+    if (processes[i].is_driver) continue;
+    const std::string& name = children[i]->name();
+    while (failure.empty() && !monitor->statuses_.count(name)) {
+      if (StopRequested()) {
+        interrupted = true;
+        break;
+      }
+      if (!check_children()) break;
+      if (elapsed_s() > options.start_timeout_s) {
+        failure = "process '" + name + "' did not report on PROCESS_STATUS within " +
+                  std::to_string(options.start_timeout_s) + " s; last lines of its log:\n" + children[i]->LogTail(15);
+        break;
+      }
+      pump(50);
+    }
+    if (interrupted) break;
+  }
+  for (size_t i = 0; failure.empty() && !interrupted && i < children.size(); ++i) {
+    if (!processes[i].is_driver) continue;
+    std::fprintf(stderr, "[objscan] start %s: %s\n", children[i]->name().c_str(), children[i]->CommandLine().c_str());
+    if (!children[i]->Start(&error)) failure = error;
+  }
+
+  // Main watch loop.
+  int64_t last_progress = MonotonicMicros();
+  std::map<std::string, int64_t> last_counts;
+  while (failure.empty() && !interrupted) {
+    bus->Handle(50);
+    if (StopRequested()) {
+      interrupted = true;
+      break;
+    }
+    if (!check_children()) break;
+    const bool done = options.finish_on.empty()
+                          ? std::none_of(children.begin(), children.end(), [](auto& c) { return c->Running(); })
+                          : monitor->finished_.count(options.finish_on) > 0;
+    if (done) break;
+    if (elapsed_s() > options.timeout_s) {
+      failure = "session timed out after " + std::to_string(options.timeout_s) + " s";
+      break;
+    }
+    const int64_t now = MonotonicMicros();
+    if (now - last_progress >= options.progress_period_ms * 1000LL) {
+      const double dt = (now - last_progress) * 1e-6;
+      last_progress = now;
+      std::ostringstream line;
+      const auto& images = monitor->channels_["CAMERA_IMAGE"];
+      line << "[objscan] frame " << (images.last_seq + 1);
+      if (options.expected_frames > 0) line << "/" << options.expected_frames;
+      for (const char* ch : {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "VOXEL_MAP"}) {
+        auto it = monitor->channels_.find(ch);
+        if (it == monitor->channels_.end()) continue;
+        line << " | " << ch << " " << Hz((it->second.messages - last_counts[ch]) / dt);
+        last_counts[ch] = it->second.messages;
+      }
+      int64_t gaps = 0, rejected = 0, dropped_inputs = 0;
+      for (const auto& kv : monitor->channels_) gaps += kv.second.seq_gaps;
+      for (const auto& kv : monitor->statuses_) {
+        rejected += kv.second.messages_rejected;
+        dropped_inputs += kv.second.dropped_inputs;
+      }
+      line << " | dropped " << gaps << " on bus, " << dropped_inputs << " at inputs | rejected " << rejected;
+      std::fprintf(stderr, "%s\n", line.str().c_str());
+    }
+  }
+
+  // Ordered stop: give processes a moment to exit on their own, then drivers, then processors.
+  const int64_t wait_until = MonotonicMicros() + (failure.empty() && !interrupted ? 10'000'000 : 0);
+  while (MonotonicMicros() < wait_until &&
+         std::any_of(children.begin(), children.end(), [](auto& c) { return c->Running(); })) {
+    bus->Handle(20);
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    for (size_t i = 0; i < children.size(); ++i) {
+      if (processes[i].is_driver == (pass == 0) && children[i]->Running()) children[i]->Stop(3000);
+    }
+  }
+  pump(options.flush_wait_ms);  // the logger writes what is still buffered
+  logger.Stop(5000);
+
+  // What did the log keep?
+  std::map<std::string, ChannelStats> logged;
+  std::string log_error;
+  const bool log_read = ReadLogStats(log_path, &logged, &log_error);
+  bool log_complete = log_read;
+  int64_t logged_events = 0;
+  for (const auto& kv : logged) logged_events += kv.second.count;
+  for (const auto& kv : monitor->channels_) {
+    if (!logged.count(kv.first) || logged[kv.first].count < kv.second.messages) log_complete = false;
+  }
+
+  // Summary.
+  int64_t bus_gaps = 0;
+  for (const auto& kv : monitor->channels_) bus_gaps += kv.second.seq_gaps;
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("status").String(interrupted ? "interrupted" : failure.empty() ? "ok" : "failed");
+  if (!failure.empty()) json.Key("error").String(failure);
+  json.Key("label").String(options.label);
+  json.Key("wall_time_s").Number(elapsed_s());
+  json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].messages);
+  json.Key("expected_frames").Int(options.expected_frames);
+  json.Key("end_of_stream").Bool(monitor->end_of_stream_);
+  json.Key("tracks").BeginObject();
+  json.Key("frames").Int(monitor->track_frames_);
+  json.Key("mean_live_tracks")
+      .Number(monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0);
+  json.Key("min_live_tracks").Int(monitor->min_live_tracks_);
+  json.Key("distinct_tracks").Int(static_cast<int64_t>(monitor->distinct_ids_.size()));
+  json.EndObject();
+  int64_t dropped_inputs = 0;
+  for (const auto& kv : monitor->statuses_) dropped_inputs += kv.second.dropped_inputs;
+  json.Key("dropped_messages").BeginObject();
+  json.Key("bus_sequence_gaps").Int(bus_gaps);
+  json.Key("process_inputs").Int(dropped_inputs);
+  json.EndObject();
+  json.Key("channels").BeginObject();
+  for (const auto& kv : monitor->channels_) {
+    const ChannelCount& c = kv.second;
+    json.Key(kv.first).BeginObject();
+    json.Key("messages").Int(c.messages);
+    json.Key("logged").Int(logged.count(kv.first) ? logged[kv.first].count : 0);
+    json.Key("bytes").Int(c.bytes);
+    const double span_s = (c.last_utime - c.first_utime) * 1e-6;
+    json.Key("data_rate_hz").Number(c.messages > 1 && span_s > 0 ? (c.messages - 1) / span_s : 0.0);
+    if (kSequencedChannels.count(kv.first)) json.Key("sequence_gaps").Int(c.seq_gaps);
+    json.EndObject();
+  }
+  json.EndObject();
+  json.Key("processes").BeginObject();
+  for (size_t i = 0; i < children.size(); ++i) {
+    const ChildProcess& c = *children[i];
+    json.Key(c.name()).BeginObject();
+    json.Key("command").String(c.CommandLine());
+    json.Key("exit_code").Int(c.exit_code());
+    json.Key("log").String(c.log_path());
+    auto it = monitor->statuses_.find(c.name());
+    if (it != monitor->statuses_.end()) {
+      const process_status_t& s = it->second;
+      json.Key("messages_in").Int(s.messages_in);
+      json.Key("messages_out").Int(s.messages_out);
+      json.Key("messages_rejected").Int(s.messages_rejected);
+      json.Key("rejections").BeginObject();
+      for (int k = 0; k < s.num_rejection_reasons; ++k) json.Key(s.rejection_reason[k]).Int(s.rejection_count[k]);
+      json.EndObject();
+      json.Key("dropped_inputs").Int(s.dropped_inputs);
+      json.Key("latency_p50_ms").Number(s.latency_p50_ms);
+      json.Key("latency_p99_ms").Number(s.latency_p99_ms);
+      json.Key("values").BeginObject();
+      for (int k = 0; k < s.num_values; ++k) json.Key(s.value_name[k]).Number(s.value[k]);
+      json.EndObject();
+    }
+    json.EndObject();
+  }
+  json.EndObject();
+  json.Key("log").BeginObject();
+  json.Key("path").String(log_path);
+  json.Key("events").Int(logged_events);
+  json.Key("complete").Bool(log_complete);
+  if (!log_read) json.Key("error").String(log_error);
+  json.EndObject();
+  json.EndObject();
+  const std::string summary_path = options.out_dir + "/summary.json";
+  std::ofstream(summary_path) << json.str() << "\n";
+
+  std::fprintf(stderr, "[objscan] %s: %lld frames, %lld track frames (mean %.0f live tracks), %lld dropped, "
+               "log %s (%lld events), %.1f s\n[objscan] summary: %s\n",
+               interrupted ? "interrupted" : failure.empty() ? "done" : "FAILED",
+               static_cast<long long>(monitor->channels_["CAMERA_IMAGE"].messages),
+               static_cast<long long>(monitor->track_frames_),
+               monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0,
+               static_cast<long long>(bus_gaps + dropped_inputs), log_complete ? "complete" : "INCOMPLETE",
+               static_cast<long long>(logged_events), elapsed_s(), summary_path.c_str());
+  if (!failure.empty()) std::fprintf(stderr, "[objscan] error: %s\n", failure.c_str());
+  if (interrupted) return 130;
+  return failure.empty() ? 0 : 1;
+}
+
+}  // namespace objscan

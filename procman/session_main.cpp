@@ -1,0 +1,50 @@
+// objscan_session: runs one session from a process list (see session.h). Used by the `objscan run` launcher.
+#include <fstream>
+#include <sstream>
+
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "procman/session.h"
+
+int main(int argc, char** argv) {
+  objscan::SetLogName("objscan_session");
+  objscan::SessionOptions options;
+  options.lcm_url = objscan::kDefaultLcmUrl;
+  std::string process_list;
+  objscan::OptionParser parser("objscan_session", "Starts, watches, logs and stops one objscan session.");
+  parser.Add("out", &options.out_dir, "output folder (session.lcmlog, summary.json, logs/)");
+  parser.Add("processes", &process_list, "process list file: 'NAME driver|processor COMMAND ARGS...' per line");
+  parser.Add("lcm-url", &options.lcm_url, "live LCM URL of the session");
+  parser.Add("logger", &options.logger, "lcm-logger executable");
+  parser.Add("finish-on", &options.finish_on, "process whose COMMAND_FINISHED ends the session ('' = all exited)");
+  parser.Add("expected-frames", &options.expected_frames, "frames the driver publishes (for progress)");
+  parser.Add("timeout", &options.timeout_s, "s, session time limit");
+  parser.Add("start-timeout", &options.start_timeout_s, "s, time a processor has to report PROCESS_STATUS");
+  parser.Add("flush-wait-ms", &options.flush_wait_ms, "ms to wait after publishers stop before stopping the logger");
+  parser.Add("label", &options.label, "text copied into summary.json");
+  int exit_code = 0;
+  if (!objscan::ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
+  if (options.out_dir.empty() || process_list.empty()) {
+    objscan::LogError("--out and --processes are required");
+    return 2;
+  }
+  std::ifstream in(process_list);
+  if (!in) {
+    objscan::LogError("cannot read process list " + process_list);
+    return 2;
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  std::vector<objscan::SessionProcess> processes;
+  std::string error;
+  if (!objscan::ParseProcessList(text.str(), &processes, &error)) {
+    objscan::LogError(process_list + ": " + error);
+    return 2;
+  }
+  if (processes.empty()) {
+    objscan::LogError(process_list + ": no processes");
+    return 2;
+  }
+  return objscan::RunSession(options, processes);
+}
