@@ -1,6 +1,11 @@
 #include "common/bus.h"
 
+#include <lcm/eventlog.h>
 #include <lcm/lcm.h>
+
+#include <set>
+#include <sstream>
+#include <thread>
 
 #include <stdexcept>
 
@@ -75,9 +80,64 @@ class SplitBus final : public Bus {
   std::unique_ptr<Bus> output_;
 };
 
+class DataLogBus final : public Bus {
+ public:
+  explicit DataLogBus(const std::string& url) : url_(url) {
+    std::string rest = url.substr(std::string("datalog://").size());
+    std::string exclude = "PROCESS_STATUS";
+    const auto q = rest.find('?');
+    if (q != std::string::npos) {
+      const std::string query = rest.substr(q + 1);
+      rest.resize(q);
+      if (query.rfind("exclude=", 0) == 0) exclude = query.substr(8);
+      else throw std::runtime_error("datalog: unknown parameter in '" + url + "'");
+    }
+    std::stringstream ss(exclude);
+    std::string channel;
+    while (std::getline(ss, channel, ',')) if (!channel.empty()) exclude_.insert(channel);
+    log_ = lcm_eventlog_create(rest.c_str(), "w");
+    if (log_ == nullptr) throw std::runtime_error("cannot write log '" + rest + "'");
+  }
+  ~DataLogBus() override { lcm_eventlog_destroy(log_); }
+
+  bool Publish(const std::string& channel, const void* data, int size) override {
+    if (exclude_.count(channel)) return true;
+    if (size < 16) return false;
+    const auto* bytes = static_cast<const uint8_t*>(data);
+    uint64_t utime = 0;
+    for (int i = 8; i < 16; ++i) utime = (utime << 8) | bytes[i];
+    // Keep event times non-decreasing (lcm-logplayer sleeps on the differences).
+    last_timestamp_ = std::max<int64_t>(last_timestamp_, static_cast<int64_t>(utime));
+    lcm_eventlog_event_t event{};
+    event.eventnum = next_event_++;
+    event.timestamp = last_timestamp_;
+    event.channellen = static_cast<int32_t>(channel.size());
+    event.channel = const_cast<char*>(channel.c_str());
+    event.datalen = size;
+    event.data = const_cast<void*>(data);
+    return lcm_eventlog_write_event(log_, &event) == 0;
+  }
+  void Subscribe(const std::string&, RawHandler, int) override {}
+  int Handle(int timeout_ms) override {
+    if (timeout_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(timeout_ms));
+    return 0;
+  }
+  std::string Describe() const override { return url_; }
+
+ private:
+  std::string url_;
+  std::set<std::string> exclude_;
+  lcm_eventlog_t* log_ = nullptr;
+  int64_t next_event_ = 0;
+  int64_t last_timestamp_ = 0;
+};
+
 }  // namespace
 
-std::unique_ptr<Bus> MakeLcmBus(const std::string& url) { return std::make_unique<LcmBus>(url); }
+std::unique_ptr<Bus> MakeLcmBus(const std::string& url) {
+  if (url.rfind("datalog://", 0) == 0) return std::make_unique<DataLogBus>(url);
+  return std::make_unique<LcmBus>(url);
+}
 
 std::unique_ptr<Bus> MakeBus(const std::string& input_url, const std::string& output_url) {
   if (output_url.empty() || output_url == input_url) return MakeLcmBus(input_url);

@@ -72,6 +72,10 @@ class Bus {
 };
 
 // A bus on one LCM instance (any LCM URL). Throws std::runtime_error when LCM cannot start on the URL.
+// Also accepts "datalog://PATH[?exclude=CH1,CH2]": a publish-only log writer whose event timestamps are the
+// messages' own data time (the int64 utime every objscan type starts with), so that lcm-logplayer replays it at
+// the data rate. Channels in exclude (default PROCESS_STATUS, whose utime is wall clock) are not written.
+// Subscriptions on a datalog bus never fire and Handle() returns 0.
 std::unique_ptr<Bus> MakeLcmBus(const std::string& url);
 
 // Input and output on separate LCM instances (needed to replay a file:// log and publish elsewhere).

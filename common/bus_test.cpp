@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <string>
 
+#include <lcm/eventlog.h>
+
 #include "objscan/control_t.hpp"
 #include "objscan/odometry_t.hpp"
 
@@ -80,6 +82,31 @@ TEST(BusTest, LogWriteThenReplayToEndSplitBus) {
   }
   EXPECT_EQ(status, -1);  // end of log
   EXPECT_EQ(count, 20);
+  std::remove(path.c_str());
+}
+
+TEST(BusTest, DataLogStampsEventsWithDataTimeAndSkipsStatus) {
+  const std::string path = TempPath("data.lcmlog");
+  {
+    auto writer = MakeLcmBus("datalog://" + path);
+    for (int i = 0; i < 3; ++i) {
+      odometry_t m{};
+      m.utime = 1000000 + i * 33333;
+      m.seq = i;
+      ASSERT_TRUE(writer->PublishMessage("ODOM", m));
+      ASSERT_TRUE(writer->PublishMessage("PROCESS_STATUS", m));  // excluded by default
+    }
+  }
+  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");
+  ASSERT_NE(log, nullptr);
+  std::vector<int64_t> stamps;
+  while (lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(log)) {
+    EXPECT_EQ(std::string(e->channel, e->channellen), "ODOM");
+    stamps.push_back(e->timestamp);
+    lcm_eventlog_free_event(e);
+  }
+  lcm_eventlog_destroy(log);
+  EXPECT_EQ(stamps, (std::vector<int64_t>{1000000, 1033333, 1066666}));
   std::remove(path.c_str());
 }
 
