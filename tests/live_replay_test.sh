@@ -17,17 +17,17 @@ URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
   > "$WORK/reference.out" 2>&1 || { cat "$WORK/reference.out"; fail "reference run failed"; }
 FRAMES=$("$BIN/objscan_logtool" count "$LOG" | awk '$1=="CAMERA_IMAGE" {print $2}')
 
-in_ns "$NS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/live.lcmlog" > "$WORK/logger.out" 2>&1 &
+ip netns exec "$NS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/live.lcmlog" > "$WORK/logger.out" 2>&1 &
 LOGGER=$!
-in_ns "$NS" "$BIN/tracker" --lcm-url "$URL" > "$WORK/tracker.out" 2>&1 &
+ip netns exec "$NS" "$BIN/tracker" --lcm-url "$URL" > "$WORK/tracker.out" 2>&1 &
 TRACKER=$!
 sleep 1.0
 in_ns "$NS" lcm-logplayer -s 1 --lcm-url="$URL" "$LOG" > "$WORK/player.out" 2>&1 || fail "lcm-logplayer failed"
 # The tracker exits by itself after END_OF_STREAM; give it time to finish the last frames.
 for _ in $(seq 1 100); do kill -0 $TRACKER 2>/dev/null || break; sleep 0.1; done
-kill -INT $TRACKER 2>/dev/null || true; wait $TRACKER || true
+kill -TERM $TRACKER 2>/dev/null || true; wait $TRACKER || true
 sleep 1.0
-kill -INT $LOGGER; wait $LOGGER || true
+kill -TERM $LOGGER; wait $LOGGER || true
 
 "$BIN/objscan_logtool" compare-tracks "$WORK/reference.lcmlog" "$WORK/live.lcmlog" 0.01 | tee "$WORK/cmp.txt"
 read -r _ fa _ fb _ matched _ contiguous _ compared _ within _ maxpx _ overlap < "$WORK/cmp.txt"

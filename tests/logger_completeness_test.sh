@@ -11,13 +11,13 @@ WORK=$(mktemp -d); trap 'netns_cleanup; rm -rf "$WORK"' EXIT
 URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 FRAMES=45
 
-in_ns "$NS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/run.lcmlog" > "$WORK/logger.out" 2>&1 &
+ip netns exec "$NS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/run.lcmlog" > "$WORK/logger.out" 2>&1 &
 LOGGER=$!
 sleep 0.5
 in_ns "$NS" "$BIN/robot_sim" --lcm-url "$URL" --scene "$SRC/drivers/robot_sim/scenes/sphere.scene" \
   --frames $FRAMES --realtime=true > "$WORK/sim.out" 2>&1 || { cat "$WORK/sim.out"; fail "robot_sim failed"; }
 sleep 1.5   # flush interval x 15 after the publisher stopped
-kill -INT $LOGGER; wait $LOGGER || true
+kill -TERM $LOGGER; wait $LOGGER || true
 
 "$BIN/objscan_logtool" count "$WORK/run.lcmlog" | tee "$WORK/count.txt"
 for ch in CAMERA_IMAGE CAMERA_INFO ROBOT_ODOMETRY GROUND_TRUTH_POSE; do

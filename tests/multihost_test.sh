@@ -12,18 +12,18 @@ WORK=$(mktemp -d); trap 'netns_cleanup; rm -rf "$WORK"' EXIT
 URL="udpm://239.255.76.67:7667?ttl=1&recv_buf_size=4194304"
 FRAMES=30
 
-in_ns "$WS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/ws.lcmlog" > "$WORK/logger.out" 2>&1 &
+ip netns exec "$WS" lcm-logger --lcm-url="$URL" --flush-interval=100 -f "$WORK/ws.lcmlog" > "$WORK/logger.out" 2>&1 &
 LOGGER=$!
-in_ns "$WS" "$BIN/tracker" --lcm-url "$URL" > "$WORK/tracker.out" 2>&1 &
+ip netns exec "$WS" "$BIN/tracker" --lcm-url "$URL" > "$WORK/tracker.out" 2>&1 &
 TRACKER=$!
 sleep 1.0
 in_ns "$ROBOT" "$BIN/robot_sim" --lcm-url "$URL" --scene "$SRC/drivers/robot_sim/scenes/sphere.scene" \
   --frames $FRAMES --realtime=true --lockstep-channel FEATURE_TRACKS > "$WORK/sim.out" 2>&1 \
   || { cat "$WORK/sim.out"; fail "robot_sim failed"; }
 for _ in $(seq 1 100); do kill -0 $TRACKER 2>/dev/null || break; sleep 0.1; done
-kill -INT $TRACKER 2>/dev/null || true; wait $TRACKER || true
+kill -TERM $TRACKER 2>/dev/null || true; wait $TRACKER || true
 sleep 1.0
-kill -INT $LOGGER; wait $LOGGER || true
+kill -TERM $LOGGER; wait $LOGGER || true
 "$BIN/objscan_logtool" count "$WORK/ws.lcmlog" | tee "$WORK/count.txt"
 for ch in CAMERA_IMAGE FEATURE_TRACKS; do
   n=$(awk -v c=$ch '$1==c {print $2}' "$WORK/count.txt")

@@ -1,0 +1,99 @@
+// KLT feature tracker (LCM-free): Shi-Tomasi corners spread over a grid, pyramidal Lucas-Kanade with a
+// forward-backward check, replenishment in cells below quota, persistent never-reused int64 track ids.
+//
+// Pixel convention: (u, v) = (column, row), origin at the centre of the top-left pixel (the OpenCV convention of
+// calcOpticalFlowPyrLK / cornerSubPix). Coordinates are those of the input (distorted) image.
+// Not thread-safe; one instance per image stream. Deterministic: no random numbers, OpenCV thread count fixed by
+// options.threads, output order = ascending track id.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "common/sensor_data.h"
+
+namespace objscan {
+
+struct KltTrackerOptions {
+  int max_tracks = 1000;               // upper bound on live tracks in any frame
+  int grid_cols = 16;                  // spatial grid columns over the image (detection quotas are per cell)
+  int grid_rows = 12;                  // spatial grid rows
+  int max_per_cell = 0;                // live-track quota per grid cell; 0 = ceil(max_tracks / (cols * rows))
+  int border_margin_px = 8;            // px, tracks closer than this to the image border are dropped / not born
+  double min_distance_px = 8.0;        // px, a new corner must be at least this far from live tracks and new corners
+  double duplicate_distance_px = 1.0;  // px, of two tracks closer than this the younger is dropped (0 = never)
+  double quality_level = 0.01;         // Shi-Tomasi: min eigenvalue >= quality_level * strongest in the frame
+  double min_eigenvalue = 1e-4;        // Shi-Tomasi absolute floor on the min eigenvalue (gradient units / 255^2)
+  int corner_block_size = 3;           // px, Shi-Tomasi structure-tensor window (odd, >= 3)
+  int subpix_half_window = 3;          // px, cornerSubPix half window for new corners (0 = no refinement)
+  int detect_interval = 1;             // frames; detection runs every this many frames (always on the first)
+  double min_cell_fill = 1.0;          // detect only when some cell holds < min_cell_fill * quota tracks (0..1]
+  int win_size = 21;                   // px, Lucas-Kanade window side (odd, >= 5)
+  int max_level = 3;                   // pyramid levels above the base image (0 = no pyramid)
+  int max_iterations = 30;             // Lucas-Kanade iterations per level
+  double epsilon = 0.01;               // px, Lucas-Kanade convergence threshold
+  double lk_min_eigenvalue = 1e-4;     // Lucas-Kanade: drop a point when its normalised min eigenvalue is below
+  bool forward_backward_check = true;  // track back from the new frame and drop points that do not come home
+  double fb_threshold_px = 0.5;        // px, max forward-backward round trip error
+  int fb_max_level = -1;               // pyramid levels of the backward pass (starts at the old point); -1 = max_level
+  double max_patch_error = 0.0;        // gray levels, max mean |difference| of the LK window after tracking (0 = off)
+  int threads = 1;                     // cv::setNumThreads value set on every Track() call (>= 1)
+};
+
+// Returns true when the options are usable; otherwise false with *why set.
+bool ValidateKltTrackerOptions(const KltTrackerOptions& options, std::string* why);
+
+// Figures of the most recent Track() call.
+struct KltTrackStats {
+  int live = 0;        // tracks in the returned frame
+  int born = 0;        // new tracks in this frame (age 0)
+  int lost = 0;        // tracks of the previous frame that were dropped
+  bool detected = false;  // corner detection ran on this frame
+  bool reset = false;     // the frame size changed (or first frame): all previous tracks were dropped
+};
+
+class KltTracker {
+ public:
+  // Throws std::invalid_argument when the options do not validate.
+  explicit KltTracker(const KltTrackerOptions& options = {});
+
+  // Tracks the live features into this frame (CV_8UC1 gray or CV_8UC3 BGR), replenishes, and returns every live
+  // track with its position in this frame. utime/seq/camera_name are copied from the input. The first frame (or a
+  // frame whose size differs from the previous one) only detects. Throws std::invalid_argument on an empty image
+  // or another pixel type; the tracker state is unchanged then.
+  TrackFrame Track(const ImageFrame& frame);
+
+  // Drops every track (ids keep counting up; they are never reused).
+  void Reset();
+
+  const KltTrackerOptions& options() const { return options_; }
+  const KltTrackStats& last_stats() const { return stats_; }
+  int64_t next_id() const { return next_id_; }
+  int frames_processed() const { return frames_; }
+
+ private:
+  struct LiveTrack {
+    int64_t id;
+    cv::Point2f pt;
+    int32_t age;
+  };
+  int CellOf(const cv::Point2f& p) const;
+  void RemoveDuplicates(std::vector<LiveTrack>* tracks) const;
+  void Detect(const cv::Mat& gray, std::vector<LiveTrack>* tracks);
+
+  KltTrackerOptions options_;
+  int quota_ = 1;
+  int64_t next_id_ = 0;
+  int frames_ = 0;              // frames processed in total
+  int frames_since_reset_ = 0;  // frames processed since the last reset
+  cv::Size size_;
+  cv::Mat prev_gray_;
+  std::vector<cv::Mat> prev_pyramid_;
+  std::vector<LiveTrack> tracks_;
+  KltTrackStats stats_;
+};
+
+}  // namespace objscan

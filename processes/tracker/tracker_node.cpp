@@ -1,0 +1,195 @@
+#include "processes/tracker/tracker_node.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "common/time.h"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/process_status_t.hpp"
+
+namespace objscan {
+
+void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
+  p.Add("name", &o->name, "process name (status name, sender of control messages)");
+  p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
+  p.Add("info-channel", &o->info_channel, "optional camera_info_t channel that fixes the image size (\"\" = ignore)");
+  p.Add("tracks-channel", &o->tracks_channel, "output channel for feature_tracks_t");
+  p.Add("control-channel", &o->control_channel, "control_t channel (end of stream in, finished out)");
+  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
+  p.Add("status-period", &o->status_period_s, "s, status publication period");
+  p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
+  KltTrackerOptions* k = &o->tracker;
+  p.Add("klt-max-tracks", &k->max_tracks, "upper bound on live tracks per frame");
+  p.Add("klt-grid-cols", &k->grid_cols, "detection grid columns");
+  p.Add("klt-grid-rows", &k->grid_rows, "detection grid rows");
+  p.Add("klt-max-per-cell", &k->max_per_cell, "live-track quota per grid cell (0 = ceil(max_tracks / cells))");
+  p.Add("klt-border-margin", &k->border_margin_px, "px, tracks closer to the border are dropped / not born");
+  p.Add("klt-min-distance", &k->min_distance_px, "px, min distance of a new corner to other tracks");
+  p.Add("klt-duplicate-distance", &k->duplicate_distance_px, "px, the younger of two closer tracks is dropped (0 = off)");
+  p.Add("klt-quality-level", &k->quality_level, "Shi-Tomasi quality relative to the strongest corner, (0, 1)");
+  p.Add("klt-min-eigenvalue", &k->min_eigenvalue, "Shi-Tomasi absolute min eigenvalue floor");
+  p.Add("klt-corner-block-size", &k->corner_block_size, "px, Shi-Tomasi window (odd >= 3)");
+  p.Add("klt-subpix-half-window", &k->subpix_half_window, "px, cornerSubPix half window (0 = off)");
+  p.Add("klt-detect-interval", &k->detect_interval, "frames between corner detections (>= 1)");
+  p.Add("klt-min-cell-fill", &k->min_cell_fill, "detect when a cell holds < this fraction of its quota, (0, 1]");
+  p.Add("klt-win-size", &k->win_size, "px, Lucas-Kanade window side (odd)");
+  p.Add("klt-max-level", &k->max_level, "pyramid levels above the base image");
+  p.Add("klt-max-iterations", &k->max_iterations, "Lucas-Kanade iterations per level");
+  p.Add("klt-epsilon", &k->epsilon, "px, Lucas-Kanade convergence threshold");
+  p.Add("klt-lk-min-eigenvalue", &k->lk_min_eigenvalue, "Lucas-Kanade min normalised eigenvalue");
+  p.Add("klt-forward-backward-check", &k->forward_backward_check, "drop tracks failing the forward-backward check");
+  p.Add("klt-fb-threshold", &k->fb_threshold_px, "px, max forward-backward round-trip error");
+  p.Add("klt-fb-max-level", &k->fb_max_level, "pyramid levels of the backward pass (-1 = klt-max-level)");
+  p.Add("klt-max-patch-error", &k->max_patch_error, "gray levels, max mean LK window residual (0 = off)");
+  p.Add("threads", &k->threads, "OpenCV threads (cv::setNumThreads)");
+}
+
+bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (o.name.empty()) e << "name must not be empty; ";
+  if (o.image_channel.empty()) e << "image-channel must not be empty; ";
+  if (o.tracks_channel.empty()) e << "tracks-channel must not be empty; ";
+  if (o.control_channel.empty()) e << "control-channel must not be empty; ";
+  if (o.status_channel.empty()) e << "status-channel must not be empty; ";
+  if (o.image_queue_capacity < 1) e << "image-queue-capacity must be >= 1; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  std::string tracker_why;
+  if (!ValidateKltTrackerOptions(o.tracker, &tracker_why)) e << tracker_why << "; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+namespace {
+const TrackerNodeOptions& ValidatedOrThrow(const TrackerNodeOptions& o) {
+  std::string why;
+  if (!ValidateTrackerNodeOptions(o, &why)) throw std::invalid_argument("tracker node: " + why);
+  return o;
+}
+}  // namespace
+
+TrackerNode::TrackerNode(Bus& bus, const TrackerNodeOptions& options)
+    : bus_(bus),
+      options_(ValidatedOrThrow(options)),
+      tracker_(options_.tracker),
+      status_(&bus, options_.name, options_.status_channel, options_.status_period_s) {
+  status_.SetState(+process_status_t::STATE_STARTING, "waiting for images on " + options_.image_channel);
+  bus_.SubscribeMessage<image_t>(
+      options_.image_channel, [this](const image_t& msg, const RawMessage&) { OnImage(msg); },
+      [this](const RawMessage& raw) {
+        status_.Reject("image: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+      },
+      options_.image_queue_capacity);
+  if (!options_.info_channel.empty()) {
+    bus_.SubscribeMessage<camera_info_t>(
+        options_.info_channel, [this](const camera_info_t& msg, const RawMessage&) { OnCameraInfo(msg); },
+        [this](const RawMessage& raw) {
+          status_.Reject("camera_info: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+        });
+  }
+  bus_.SubscribeMessage<control_t>(
+      options_.control_channel, [this](const control_t& msg, const RawMessage&) { OnControl(msg); },
+      [this](const RawMessage& raw) {
+        status_.Reject("control: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+      });
+}
+
+void TrackerNode::OnCameraInfo(const camera_info_t& msg) {
+  PinholeCamera camera;
+  std::string error;
+  if (!CameraFromMessage(msg, &camera, &error)) {
+    status_.Reject(error, "camera " + msg.camera_name);
+    return;
+  }
+  status_.CountIn();
+  if (!size_from_info_ || camera.width != expected_width_ || camera.height != expected_height_) {
+    if (expected_width_ > 0 && (camera.width != expected_width_ || camera.height != expected_height_))
+      LogWarning("camera_info size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                 " replaces " + std::to_string(expected_width_) + "x" + std::to_string(expected_height_));
+    expected_width_ = camera.width;
+    expected_height_ = camera.height;
+    size_from_info_ = true;
+  }
+}
+
+void TrackerNode::OnImage(const image_t& msg) {
+  const int64_t start_us = MonotonicMicros();
+  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
+    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  ImageFrame frame;
+  std::string error;
+  if (!ImageFromMessage(msg, &frame, &error, expected_width_, expected_height_)) {
+    std::string detail = "seq " + std::to_string(msg.seq) + ", " + std::to_string(msg.width) + "x" +
+                         std::to_string(msg.height) + " encoding " + std::to_string(static_cast<int>(msg.encoding));
+    if (expected_width_ > 0)
+      detail += ", expected " + std::to_string(expected_width_) + "x" + std::to_string(expected_height_) +
+                (size_from_info_ ? " (camera_info)" : " (first frame)");
+    status_.Reject(error, detail);
+    return;
+  }
+  status_.CountIn();
+  status_.SetLastDataUtime(msg.utime);
+  if (expected_width_ == 0) {
+    expected_width_ = frame.image.cols;
+    expected_height_ = frame.image.rows;
+  }
+  TrackFrame tracks;
+  const int64_t track_start_us = MonotonicMicros();
+  try {
+    tracks = tracker_.Track(frame);
+  } catch (const std::exception& e) {  // cannot happen for a decoded frame; never let it stop the process
+    status_.Reject("image: tracker error", e.what());
+    return;
+  }
+  const double track_ms = (MonotonicMicros() - track_start_us) * 1e-3;
+  if (bus_.PublishMessage(options_.tracks_channel, TracksToMessage(tracks))) status_.CountOut();
+  else LogWarning("publishing on " + options_.tracks_channel + " failed");
+  last_seq_ = msg.seq;
+  last_utime_ = msg.utime;
+  ++frames_tracked_;
+  const KltTrackStats& s = tracker_.last_stats();
+  status_.SetValue("live_tracks", s.live);
+  status_.SetValue("new_tracks", s.born);
+  status_.SetValue("lost_tracks", s.lost);
+  status_.SetValue("track_ms", track_ms);
+  status_.SetValue("frames_tracked", static_cast<double>(frames_tracked_));
+  if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
+    status_.SetState(+process_status_t::STATE_RUNNING);
+  status_.RecordLatencyMs((MonotonicMicros() - start_us) * 1e-3);
+}
+
+void TrackerNode::OnControl(const control_t& msg) {
+  if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // other commands are not for the tracker
+  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  status_.CountIn();
+  if (finished_) return;  // answered already
+  LogInfo("end of stream from " + msg.sender + " (last_seq " + std::to_string(msg.last_seq) + "), tracked " +
+          std::to_string(frames_tracked_) + " frames, last seq " + std::to_string(last_seq_));
+  control_t reply;
+  reply.utime = last_seq_ >= 0 ? last_utime_ : msg.utime;
+  reply.sender = options_.name;
+  reply.target = "*";
+  reply.command = control_t::COMMAND_FINISHED;
+  reply.last_seq = last_seq_;
+  reply.argument = "";
+  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
+  else LogWarning("publishing on " + options_.control_channel + " failed");
+  finished_ = true;
+  status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+void TrackerNode::Tick(int64_t wall_utime) { status_.PublishIfDue(wall_utime); }
+
+void TrackerNode::OnShutdown() { status_.PublishIfDue(WallTimeMicros(), true); }
+
+}  // namespace objscan
