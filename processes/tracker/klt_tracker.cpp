@@ -44,6 +44,9 @@ class PointBuckets {
   std::vector<std::vector<cv::Point2f>> buckets_;
 };
 
+// Per detection, the response reference keeps this fraction of its previous value (if no stronger corner is seen).
+constexpr double kResponseReferenceDecay = 0.9;
+
 struct Candidate {
   float response;
   int x, y;
@@ -95,6 +98,7 @@ void KltTracker::Reset() {
   prev_gray_.release();
   size_ = cv::Size();
   frames_since_reset_ = 0;
+  response_reference_ = 0.0;
 }
 
 int KltTracker::CellOf(const cv::Point2f& p) const {
@@ -256,34 +260,42 @@ void KltTracker::Detect(const cv::Mat& gray, std::vector<LiveTrack>* tracks) {
   if (deficient.empty()) return;
   stats_.detected = true;
 
-  // Min-eigenvalue response on the bounding box of the deficient cells (plus the filter apron).
-  cv::Rect box = cell_rect[static_cast<size_t>(deficient.front())];
-  for (int c : deficient) box |= cell_rect[static_cast<size_t>(c)];
+  // Min-eigenvalue response per deficient cell (plus the filter apron; values inside the cell equal those of a
+  // full-image computation because filters read the neighbouring pixels). Candidates: local maxima (3x3).
   const int apron = options_.corner_block_size / 2 + 2;
-  const cv::Rect padded = cv::Rect(box.x - apron, box.y - apron, box.width + 2 * apron, box.height + 2 * apron) &
-                          cv::Rect(0, 0, size_.width, size_.height);
-  cv::Mat eig, dilated;
-  cv::cornerMinEigenVal(gray(padded), eig, options_.corner_block_size, 3);
-  cv::dilate(eig, dilated, cv::Mat());
-  double max_response = 0.0;
-  cv::minMaxLoc(eig(box - padded.tl()), nullptr, &max_response);
-  const float threshold =
-      static_cast<float>(std::max(options_.quality_level * max_response, options_.min_eigenvalue));
-  if (max_response <= 0.0) return;
-
-  // Candidates per deficient cell: local maxima above threshold, strongest first (ties by row, then column).
+  const cv::Rect whole(0, 0, size_.width, size_.height);
   std::vector<std::vector<Candidate>> candidates(deficient.size());
+  double max_response = 0.0;
+  cv::Mat eig, dilated;
   for (size_t k = 0; k < deficient.size(); ++k) {
     const cv::Rect r = cell_rect[static_cast<size_t>(deficient[k])];
+    const cv::Rect padded = cv::Rect(r.x - apron, r.y - apron, r.width + 2 * apron, r.height + 2 * apron) & whole;
+    cv::cornerMinEigenVal(gray(padded), eig, options_.corner_block_size, 3);
+    cv::dilate(eig, dilated, cv::Mat());
+    const float floor = static_cast<float>(options_.min_eigenvalue);
     for (int y = r.y; y < r.y + r.height; ++y) {
       const float* e = eig.ptr<float>(y - padded.y);
       const float* d = dilated.ptr<float>(y - padded.y);
       for (int x = r.x; x < r.x + r.width; ++x) {
         const int xi = x - padded.x;
-        if (e[xi] >= threshold && e[xi] == d[xi]) candidates[k].push_back({e[xi], x, y});
+        if (e[xi] > 0.0f && e[xi] >= floor && e[xi] == d[xi]) {
+          candidates[k].push_back({e[xi], x, y});
+          max_response = std::max(max_response, static_cast<double>(e[xi]));
+        }
       }
     }
-    std::sort(candidates[k].begin(), candidates[k].end(), [](const Candidate& a, const Candidate& b) {
+  }
+  // Quality threshold relative to the strongest response: that of the cells computed now, or the (slowly
+  // decaying) reference from earlier frames, so that a lone weak cell does not accept noise as corners.
+  response_reference_ = std::max(max_response, kResponseReferenceDecay * response_reference_);
+  const float threshold =
+      static_cast<float>(std::max(options_.quality_level * response_reference_, options_.min_eigenvalue));
+  for (auto& list : candidates) {
+    list.erase(std::remove_if(list.begin(), list.end(), [threshold](const Candidate& c) {
+                 return c.response < threshold;
+               }), list.end());
+    // Strongest first; ties by row, then column.
+    std::sort(list.begin(), list.end(), [](const Candidate& a, const Candidate& b) {
       return std::tie(b.response, a.y, a.x) < std::tie(a.response, b.y, b.x);
     });
   }

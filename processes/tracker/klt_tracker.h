@@ -89,6 +89,7 @@ class KltTracker {
   int64_t next_id_ = 0;
   int frames_ = 0;              // frames processed in total
   int frames_since_reset_ = 0;  // frames processed since the last reset
+  double response_reference_ = 0.0;  // strongest Shi-Tomasi response seen recently (see Detect)
   cv::Size size_;
   cv::Mat prev_gray_;
   std::vector<cv::Mat> prev_pyramid_;

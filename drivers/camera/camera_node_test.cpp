@@ -1,0 +1,456 @@
+#include "drivers/camera/camera_node.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/options.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/process_status_t.hpp"
+
+namespace objscan {
+namespace {
+namespace fs = std::filesystem;
+
+std::string TempleDir() {
+  const char* source_dir = std::getenv("OBJSCAN_SOURCE_DIR");
+  return (source_dir ? std::string(source_dir) + "/../shared/data" : std::string("/work/shared/data")) +
+         "/middlebury_templeSparseRing";
+}
+
+class TempDir {
+ public:
+  explicit TempDir(const std::string& tag) {
+    path_ = fs::temp_directory_path() / ("objscan_camera_node_" + tag + "_" + std::to_string(getpid()));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// count frames img_00.png.. (64x48, pixel value 10 k + 5), with the listed ones corrupt or odd-sized, calib.yaml
+// and poses_gt.txt (metres, x = 0.1 k).
+void WriteFolder(const fs::path& root, int count, const std::vector<int>& corrupt = {},
+                 const std::vector<int>& odd = {}) {
+  for (int k = 0; k < count; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "img_%02d.png", k);
+    const bool is_corrupt = std::find(corrupt.begin(), corrupt.end(), k) != corrupt.end();
+    const bool is_odd = std::find(odd.begin(), odd.end(), k) != odd.end();
+    if (is_corrupt) {
+      std::ofstream(root / name) << "garbage";
+    } else {
+      cv::imwrite((root / name).string(), cv::Mat(is_odd ? 24 : 48, is_odd ? 32 : 64, CV_8UC3,
+                                                  cv::Scalar(10 * k + 5, 50, 60)));
+    }
+  }
+  PinholeCamera c;
+  c.width = 64;
+  c.height = 48;
+  c.fx = c.fy = 70;
+  c.cx = 31.5;
+  c.cy = 23.5;
+  std::string error;
+  ASSERT_TRUE(WriteCalibrationFile((root / "calib.yaml").string(), c, &error)) << error;
+  std::ofstream gt(root / "poses_gt.txt");
+  for (int k = 0; k < count; ++k) gt << k / 30.0 << " " << 0.1 * k << " 0 1 0 0 0 1\n";
+}
+
+// Collects everything the node publishes.
+struct Recorder {
+  std::vector<image_t> images;
+  std::vector<camera_info_t> infos;
+  std::vector<pose_t> truths;
+  std::vector<control_t> controls;
+  std::vector<process_status_t> statuses;
+  std::vector<std::string> order;  // channel of each message, in arrival order
+
+  explicit Recorder(Bus& bus) {
+    bus.SubscribeMessage<image_t>(
+        "CAMERA_IMAGE", [this](const image_t& m, const RawMessage&) { images.push_back(m); order.push_back("I"); },
+        {}, 1000);
+    bus.SubscribeMessage<camera_info_t>(
+        "CAMERA_INFO", [this](const camera_info_t& m, const RawMessage&) { infos.push_back(m); order.push_back("C"); },
+        {}, 1000);
+    bus.SubscribeMessage<pose_t>(
+        "GROUND_TRUTH_POSE", [this](const pose_t& m, const RawMessage&) { truths.push_back(m); order.push_back("G"); },
+        {}, 1000);
+    bus.SubscribeMessage<control_t>(
+        "OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) { controls.push_back(m); order.push_back("E"); },
+        {}, 1000);
+    bus.SubscribeMessage<process_status_t>(
+        "PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) { statuses.push_back(m); }, {}, 1000);
+  }
+};
+
+void Drain(Bus& bus) {
+  while (bus.Handle(0) > 0) {
+  }
+}
+
+// Ticks the node with a fake wall clock (1 ms steps) until it finishes (or max_ticks).
+void RunToEnd(Bus& bus, CameraNode& node, int64_t* wall, int max_ticks = 100000) {
+  for (int i = 0; i < max_ticks && !node.Finished(); ++i) {
+    node.Tick(*wall);
+    *wall += 1000;
+    Drain(bus);
+  }
+  Drain(bus);
+}
+
+TEST(CameraNodeTest, FolderPublishesContiguousFramesSkipsBadFilesAndEndsStream) {
+  TempDir dir("folder");
+  WriteFolder(dir.path(), 7, {2}, {5});
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  options.rate_hz = 0;  // as fast as possible; timestamps at 30 Hz
+  CameraNode node(*bus, options);
+  int64_t wall = 1'000'000'000;
+  RunToEnd(*bus, node, &wall);
+  ASSERT_TRUE(node.Finished());
+
+  ASSERT_EQ(rec.images.size(), 5u);
+  ASSERT_EQ(rec.infos.size(), 5u);
+  ASSERT_EQ(rec.truths.size(), 5u);
+  const std::vector<int> source_of_seq = {0, 1, 3, 4, 6};
+  for (size_t i = 0; i < rec.images.size(); ++i) {
+    const image_t& m = rec.images[i];
+    EXPECT_EQ(m.seq, static_cast<int64_t>(i));
+    EXPECT_EQ(m.utime, std::llround(static_cast<double>(i) * 1e6 / 30.0));
+    EXPECT_EQ(m.encoding, +image_t::ENCODING_RGB8);
+    EXPECT_EQ(m.camera_name, "camera");
+    ImageFrame frame;
+    std::string error;
+    ASSERT_TRUE(ImageFromMessage(m, &frame, &error, 64, 48)) << error;
+    EXPECT_EQ(frame.image.at<cv::Vec3b>(3, 3)[0], 10 * source_of_seq[i] + 5) << "seq " << i;
+    EXPECT_EQ(rec.infos[i].utime, m.utime);
+    EXPECT_EQ(rec.infos[i].fx, 70);
+    EXPECT_EQ(rec.infos[i].width, 64);
+    const pose_t& t = rec.truths[i];
+    EXPECT_EQ(t.seq, m.seq);
+    EXPECT_EQ(t.utime, m.utime);
+    EXPECT_EQ(t.status, +pose_t::STATUS_GROUND_TRUTH);
+    EXPECT_EQ(t.scale_source, +pose_t::SCALE_TRUE);
+    EXPECT_EQ(t.parent_frame, "world");
+    EXPECT_NEAR(t.position_mm[0], 100.0 * source_of_seq[i], 1e-9);
+    EXPECT_NEAR(t.position_mm[2], 1000.0, 1e-9);
+    EXPECT_NEAR(t.orientation[0], 1.0, 1e-12);
+  }
+  // Per frame: calibration, image, truth; then the end of stream.
+  ASSERT_GE(rec.order.size(), 4u);
+  EXPECT_EQ(rec.order[0] + rec.order[1] + rec.order[2], "CIG");
+  EXPECT_EQ(rec.order.back(), "E");
+  ASSERT_EQ(rec.controls.size(), 1u);
+  const control_t& eos = rec.controls[0];
+  EXPECT_EQ(eos.command, +control_t::COMMAND_END_OF_STREAM);
+  EXPECT_EQ(eos.sender, "camera");
+  EXPECT_EQ(eos.last_seq, 4);
+  EXPECT_EQ(eos.utime, rec.images.back().utime);
+
+  EXPECT_EQ(node.frames_published(), 5);
+  EXPECT_EQ(node.frames_skipped(), 2);
+  EXPECT_EQ(node.status().rejected("frame: unreadable file"), 1);
+  EXPECT_EQ(node.status().rejected("frame: wrong size"), 1);
+  // The status published at the end says so.
+  ASSERT_FALSE(rec.statuses.empty());
+  const process_status_t& s = rec.statuses.back();
+  EXPECT_EQ(s.name, "camera");
+  EXPECT_EQ(s.state, +process_status_t::STATE_FINISHED);
+  EXPECT_EQ(s.messages_rejected, 2);
+  EXPECT_EQ(s.messages_out, 5 * 3 + 1);
+  bool found = false;
+  for (int i = 0; i < s.num_values; ++i) {
+    if (s.value_name[static_cast<size_t>(i)] == "frames_published") {
+      EXPECT_EQ(s.value[static_cast<size_t>(i)], 5);
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
+
+  // After the end nothing more is published.
+  node.Tick(wall + 10'000'000);
+  node.OnShutdown();
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 5u);
+  EXPECT_EQ(rec.controls.size(), 1u);
+}
+
+TEST(CameraNodeTest, MiddleburyPublishesPerViewCalibrationAndTruth) {
+  if (!fs::is_directory(TempleDir())) GTEST_SKIP() << TempleDir() << " not present";
+  std::vector<MiddleburyView> views;
+  std::string error;
+  ASSERT_TRUE(ReadMiddleburyPar(TempleDir() + "/templeSR_par.txt", &views, &error)) << error;
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  CameraNodeOptions options;
+  options.source = TempleDir();
+  options.rate_hz = 0;
+  options.order = "16,1,2";
+  options.rotate_180 = "16";
+  options.encoding = "jpeg";
+  options.jpeg_quality = 80;
+  CameraNode node(*bus, options);
+  int64_t wall = 0;
+  RunToEnd(*bus, node, &wall);
+  ASSERT_EQ(rec.images.size(), 3u);
+  ASSERT_EQ(rec.truths.size(), 3u);
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].last_seq, 2);
+  const std::vector<int> view_of_seq = {15, 0, 1};
+  for (size_t i = 0; i < 3; ++i) {
+    const MiddleburyView& v = views[static_cast<size_t>(view_of_seq[i])];
+    EXPECT_EQ(rec.images[i].encoding, +image_t::ENCODING_JPEG);
+    EXPECT_EQ(rec.images[i].width, 640);
+    ImageFrame frame;
+    ASSERT_TRUE(ImageFromMessage(rec.images[i], &frame, &error, 640, 480)) << error;
+    const bool rotated = i == 0;
+    EXPECT_EQ(rec.infos[i].fx, v.K(0, 0));
+    EXPECT_EQ(rec.infos[i].cx, rotated ? 639 - v.K(0, 2) : v.K(0, 2));
+    EXPECT_EQ(rec.infos[i].cy, rotated ? 479 - v.K(1, 2) : v.K(1, 2));
+    // True camera centre C = -R^T t (m) -> mm; orientation R^T (rotated by 180 deg about z for view 16).
+    const Eigen::Vector3d centre_mm = -v.R.transpose() * v.t * 1000;
+    const pose_t& t = rec.truths[i];
+    EXPECT_EQ(t.seq, static_cast<int64_t>(i));
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(t.position_mm[a], centre_mm[a], 1e-6) << i;
+    Eigen::Quaterniond q(t.orientation[0], t.orientation[1], t.orientation[2], t.orientation[3]);
+    Eigen::Matrix3d expected = v.R.transpose();
+    if (rotated) expected = expected * Eigen::Vector3d(-1, -1, 1).asDiagonal();
+    EXPECT_LT((q.toRotationMatrix() - expected).norm(), 1e-6) << i;
+    // Consistency of the published calibration and pose: a world point projects where K [R | t] says (or
+    // mirrored for the rotated view).
+    PinholeCamera camera;
+    ASSERT_TRUE(CameraFromMessage(rec.infos[i], &camera, &error)) << error;
+    const Eigen::Vector3d point_m(-0.02, 0.1, 0.025);
+    const Eigen::Vector3d x = v.K * (v.R * point_m + v.t);
+    Eigen::Vector2d uv_file = x.head<2>() / x.z();
+    if (rotated) uv_file = Eigen::Vector2d(639, 479) - uv_file;
+    Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+    world_from_camera.linear() = q.toRotationMatrix();
+    world_from_camera.translation() = Eigen::Vector3d(t.position_mm[0], t.position_mm[1], t.position_mm[2]);
+    Eigen::Vector2d uv;
+    ASSERT_TRUE(camera.Project(world_from_camera.inverse() * (point_m * 1000), &uv));
+    EXPECT_LT((uv - uv_file).norm(), 1e-6) << i;
+  }
+}
+
+TEST(CameraNodeTest, RatePacingAndRealtimeSchedule) {
+  TempDir dir("pace");
+  WriteFolder(dir.path(), 6);
+  for (bool realtime : {false, true}) {
+    auto bus = MakeLcmBus("memq://");
+    Recorder rec(*bus);
+    CameraNodeOptions options;
+    options.source = dir.path().string();
+    options.rate_hz = 10;
+    options.realtime = realtime;
+    CameraNode node(*bus, options);
+    const int64_t t0 = 5'000'000;
+    node.Tick(t0);
+    Drain(*bus);
+    EXPECT_EQ(rec.images.size(), 1u);
+    node.Tick(t0 + 50'000);  // 50 ms: not due
+    Drain(*bus);
+    EXPECT_EQ(rec.images.size(), 1u);
+    node.Tick(t0 + 100'000);  // due
+    Drain(*bus);
+    EXPECT_EQ(rec.images.size(), 2u);
+    // A stall of 250 ms: realtime catches up with frames 2 and 3 (due at 200 and 300 ms), paced mode sends one.
+    node.Tick(t0 + 350'000);
+    Drain(*bus);
+    EXPECT_EQ(rec.images.size(), realtime ? 4u : 3u) << "realtime " << realtime;
+    // utime depends only on seq, never on the wall clock.
+    for (size_t i = 0; i < rec.images.size(); ++i) EXPECT_EQ(rec.images[i].utime, static_cast<int64_t>(i) * 100000);
+  }
+}
+
+TEST(CameraNodeTest, LockstepWaitsForTheConsumerAndTimesOut) {
+  TempDir dir("lockstep");
+  WriteFolder(dir.path(), 3);
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  options.rate_hz = 0;
+  options.lockstep_channel = "FEATURE_TRACKS";
+  options.lockstep_timeout_ms = 500;
+  CameraNode node(*bus, options);
+  auto ack = [&](int64_t seq) {
+    feature_tracks_t tracks;
+    tracks.utime = 123;
+    tracks.seq = seq;
+    tracks.num_tracks = 0;
+    bus->PublishMessage("FEATURE_TRACKS", tracks);
+    Drain(*bus);
+  };
+  int64_t wall = 0;
+  node.Tick(wall);
+  Drain(*bus);
+  ASSERT_EQ(rec.images.size(), 1u);  // frame 0 needs no ack
+  node.Tick(wall += 100'000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 1u);  // waits for seq >= 0
+  ack(0);
+  node.Tick(wall += 1000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 2u);
+  ack(0);  // old seq: not enough for frame 2
+  node.Tick(wall += 1000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 2u);
+  // A too-short message on the channel is rejected, not taken as an ack.
+  const uint8_t junk[10] = {0};
+  bus->Publish("FEATURE_TRACKS", junk, sizeof(junk));
+  Drain(*bus);
+  EXPECT_EQ(node.status().rejected("lockstep: message too short"), 1);
+  // No ack for seq 1: after the timeout the node goes on.
+  node.Tick(wall += 499'000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 2u);
+  node.Tick(wall += 2'000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 3u);
+  EXPECT_EQ(node.lockstep_timeouts(), 1);
+  // End of stream also waits for the ack of the last frame.
+  node.Tick(wall += 1000);
+  Drain(*bus);
+  EXPECT_TRUE(rec.controls.empty());
+  ack(2);
+  node.Tick(wall += 1000);
+  Drain(*bus);
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].last_seq, 2);
+  EXPECT_TRUE(node.Finished());
+}
+
+TEST(CameraNodeTest, LoopAndMaxFrames) {
+  TempDir dir("loop");
+  WriteFolder(dir.path(), 3);
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  options.rate_hz = 0;
+  options.loop = true;
+  options.max_frames = 7;
+  options.publish_ground_truth = false;
+  options.encoding = "gray8";
+  CameraNode node(*bus, options);
+  int64_t wall = 0;
+  RunToEnd(*bus, node, &wall);
+  ASSERT_EQ(rec.images.size(), 7u);
+  EXPECT_TRUE(rec.truths.empty());
+  for (size_t i = 0; i < 7; ++i) {
+    EXPECT_EQ(rec.images[i].seq, static_cast<int64_t>(i));
+    EXPECT_EQ(rec.images[i].encoding, +image_t::ENCODING_GRAY8);
+    EXPECT_EQ(rec.images[i].size, 64 * 48);
+  }
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].last_seq, 6);
+}
+
+TEST(CameraNodeTest, ShutdownMidStreamSendsEndOfStream) {
+  TempDir dir("stop");
+  WriteFolder(dir.path(), 5);
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  options.rate_hz = 30;
+  CameraNode node(*bus, options);
+  node.Tick(0);
+  node.OnShutdown();
+  node.Tick(1'000'000);
+  Drain(*bus);
+  EXPECT_EQ(rec.images.size(), 1u);
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].last_seq, 0);
+}
+
+TEST(CameraNodeTest, InvalidOptionsAndSourcesThrowAtConstruction) {
+  TempDir dir("bad");
+  WriteFolder(dir.path(), 2);
+  auto bus = MakeLcmBus("memq://");
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  std::string why;
+  EXPECT_TRUE(ValidateCameraNodeOptions(options, &why)) << why;
+  auto expect_invalid = [&](CameraNodeOptions o, const std::string& fragment) {
+    EXPECT_FALSE(ValidateCameraNodeOptions(o, &why));
+    EXPECT_NE(why.find(fragment), std::string::npos) << why;
+    EXPECT_THROW(CameraNode(*bus, o), std::invalid_argument);
+  };
+  CameraNodeOptions o = options;
+  o.rate_hz = -1;
+  expect_invalid(o, "--rate");
+  o = options;
+  o.encoding = "yuv";
+  expect_invalid(o, "--encoding");
+  o = options;
+  o.jpeg_quality = 0;
+  expect_invalid(o, "--jpeg-quality");
+  o = options;
+  o.rate_hz = 0;
+  o.realtime = true;
+  expect_invalid(o, "--realtime");
+  o = options;
+  o.source = "";
+  expect_invalid(o, "--source");
+
+  fs::remove(dir.path() / "calib.yaml");
+  try {
+    CameraNode node(*bus, options);
+    ADD_FAILURE() << "no exception without calibration";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no calibration"), std::string::npos) << e.what();
+  }
+  o = options;
+  o.order = "1,9";
+  EXPECT_THROW(CameraNode(*bus, o), std::runtime_error);
+}
+
+TEST(CameraNodeTest, EveryOptionIsRegistered) {
+  CameraNodeOptions options;
+  OptionParser parser("camera", "test");
+  AddCameraNodeOptions(parser, &options);
+  std::string error;
+  ASSERT_TRUE(parser.ParseArgs({"--source", "/x", "--calib", "c.yaml", "--rate", "15", "--realtime", "--loop",
+                                "--order", "3,2,1", "--rotate-180", "2", "--encoding", "jpeg", "--jpeg-quality", "70",
+                                "--max-frames", "9", "--lockstep-channel", "FEATURE_TRACKS", "--lockstep-timeout-ms",
+                                "0", "--gt-position-scale", "1", "--publish-ground-truth=false", "--camera-name",
+                                "cam", "--device-width", "320", "--device-height", "240", "--image-channel", "A",
+                                "--info-channel", "B", "--ground-truth-channel", "C", "--control-channel", "D",
+                                "--status-channel", "E", "--exit-when-finished=false"},
+                               &error))
+      << error;
+  EXPECT_EQ(options.rate_hz, 15);
+  EXPECT_TRUE(options.realtime);
+  EXPECT_TRUE(options.loop);
+  EXPECT_EQ(options.rotate_180, "2");
+  EXPECT_EQ(options.max_frames, 9);
+  EXPECT_EQ(options.lockstep_timeout_ms, 0);
+  EXPECT_FALSE(options.publish_ground_truth);
+  EXPECT_EQ(options.device_height, 240);
+  EXPECT_EQ(options.status_channel, "E");
+  EXPECT_FALSE(options.exit_when_finished);
+}
+
+}  // namespace
+}  // namespace objscan

@@ -1,0 +1,84 @@
+// objscan_evaluate: scores results against ground truth.
+//   objscan_evaluate trajectory ESTIMATE.txt TRUTH.txt [--no-scale] [--max-dt S]
+//       TUM files; prints matched poses, ATE RMSE / max (file units, objscan: mm), rotation error (deg), scale.
+//   objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] [--align EST.txt TRUTH.txt]
+//       accuracy (model -> truth) p50/p90/max and completeness (truth points within D of the model);
+//       --min-z drops truth points below Z (e.g. the part hidden against the floor); --align first maps the model
+//       with the Sim(3) that aligns the estimated trajectory to the true one.
+// Output is one "key value" pair per line (easy to grep in tests and scripts).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "tools/evaluate/evaluation.h"
+
+namespace {
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return 1;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace objscan;
+  if (argc < 4) {
+    std::fprintf(stderr,
+                 "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
+                 "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
+                 "[--align EST TRUTH]\n");
+    return 2;
+  }
+  const std::string command = argv[1];
+  std::string error;
+  if (command == "trajectory") {
+    bool with_scale = true;
+    double max_dt = 0.005;
+    for (int i = 4; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--no-scale") with_scale = false;
+      else if (a == "--max-dt" && i + 1 < argc) max_dt = std::atof(argv[++i]);
+      else return Fail("unknown option " + a);
+    }
+    std::vector<StampedPose> est, truth;
+    if (!ReadTumTrajectory(argv[2], &est, &error) || !ReadTumTrajectory(argv[3], &truth, &error)) return Fail(error);
+    TrajectoryEvaluation e;
+    if (!EvaluateTumTrajectories(est, truth, with_scale, max_dt, &e, &error)) return Fail(error);
+    std::printf("matched %d\nestimated %d\ntruth %d\nregistered_fraction %.4f\nate_rmse %.4f\nate_max %.4f\n"
+                "rotation_mean_deg %.4f\nrotation_max_deg %.4f\nscale %.6f\n",
+                e.num_matched, e.num_estimated, e.num_truth, e.registered_fraction, e.error.ate_rmse, e.error.ate_max,
+                e.error.rotation_mean_rad * 180 / M_PI, e.error.rotation_max_rad * 180 / M_PI, e.error.scale);
+    return 0;
+  }
+  if (command == "surface") {
+    double threshold = 2.0, min_z = -1e300;
+    std::string align_est, align_truth;
+    for (int i = 4; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--threshold" && i + 1 < argc) threshold = std::atof(argv[++i]);
+      else if (a == "--min-z" && i + 1 < argc) min_z = std::atof(argv[++i]);
+      else if (a == "--align" && i + 2 < argc) {
+        align_est = argv[++i];
+        align_truth = argv[++i];
+      } else return Fail("unknown option " + a);
+    }
+    std::vector<Eigen::Vector3d> model, truth, visible;
+    if (!ReadPlyPoints(argv[2], &model, &error) || !ReadPlyPoints(argv[3], &truth, &error)) return Fail(error);
+    for (const auto& p : truth)
+      if (p.z() >= min_z) visible.push_back(p);
+    if (!align_est.empty()) {
+      std::vector<StampedPose> est, tru;
+      if (!ReadTumTrajectory(align_est, &est, &error) || !ReadTumTrajectory(align_truth, &tru, &error))
+        return Fail(error);
+      TrajectoryEvaluation e;
+      if (!EvaluateTumTrajectories(est, tru, true, 0.005, &e, &error)) return Fail(error);
+      for (auto& p : model) p = e.error.alignment * p;
+    }
+    const SurfaceEvaluation s = EvaluateSurface(model, visible, threshold);
+    std::printf("model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
+                "completeness %.4f\n",
+                s.num_model, s.num_truth, s.accuracy_p50, s.accuracy_p90, s.accuracy_max, s.completeness);
+    return 0;
+  }
+  return Fail("unknown command " + command);
+}

@@ -1,0 +1,276 @@
+#include "tools/evaluate/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <unordered_map>
+
+namespace objscan {
+
+bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    *error = "cannot read " + path;
+    return false;
+  }
+  poses->clear();
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    if (!(ss >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) {
+      *error = path + ":" + std::to_string(number) + ": expected 't tx ty tz qx qy qz qw'";
+      return false;
+    }
+    StampedPose p;
+    p.t = t;
+    p.world_from_camera.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+    p.world_from_camera.translation() = Eigen::Vector3d(x, y, z);
+    poses->push_back(p);
+  }
+  return true;
+}
+
+bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
+                        const std::vector<std::string>& header, std::string* error) {
+  std::ofstream out(path);
+  if (!out) {
+    *error = "cannot write " + path;
+    return false;
+  }
+  for (const auto& h : header) out << "# " << h << "\n";
+  char buf[256];
+  for (const auto& p : poses) {
+    const Eigen::Quaterniond q(p.world_from_camera.linear());
+    const Eigen::Vector3d t = p.world_from_camera.translation();
+    std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.t, t.x(), t.y(), t.z(), q.x(),
+                  q.y(), q.z(), q.w());
+    out << buf;
+  }
+  return static_cast<bool>(out);
+}
+
+bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const std::vector<StampedPose>& truth,
+                             bool with_scale, double max_dt_s, TrajectoryEvaluation* out, std::string* error) {
+  std::vector<StampedPose> sorted_truth = truth;
+  std::sort(sorted_truth.begin(), sorted_truth.end(), [](auto& a, auto& b) { return a.t < b.t; });
+  std::vector<Eigen::Isometry3d> est, tru;
+  for (const auto& e : estimated) {
+    auto it = std::lower_bound(sorted_truth.begin(), sorted_truth.end(), e.t,
+                               [](const StampedPose& p, double t) { return p.t < t; });
+    const StampedPose* best = nullptr;
+    if (it != sorted_truth.end()) best = &*it;
+    if (it != sorted_truth.begin() && (!best || std::abs((it - 1)->t - e.t) < std::abs(best->t - e.t)))
+      best = &*(it - 1);
+    if (best && std::abs(best->t - e.t) <= max_dt_s) {
+      est.push_back(e.world_from_camera);
+      tru.push_back(best->world_from_camera);
+    }
+  }
+  TrajectoryEvaluation r;
+  r.num_estimated = static_cast<int>(estimated.size());
+  r.num_truth = static_cast<int>(truth.size());
+  r.num_matched = static_cast<int>(est.size());
+  r.registered_fraction = truth.empty() ? 0.0 : double(r.num_matched) / double(truth.size());
+  if (!EvaluateTrajectory(est, tru, with_scale, &r.error)) {
+    *error = "fewer than 3 matched poses, or degenerate (collinear) positions";
+    return false;
+  }
+  *out = r;
+  return true;
+}
+
+bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = "cannot read " + path;
+    return false;
+  }
+  std::string line, format;
+  long vertex_count = -1;
+  bool in_vertex = false;
+  struct Prop {
+    std::string name, type;
+  };
+  std::vector<Prop> props;
+  std::getline(in, line);
+  if (line.rfind("ply", 0) != 0) {
+    *error = path + ": not a PLY file";
+    return false;
+  }
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ss(line);
+    std::string word;
+    ss >> word;
+    if (word == "format") ss >> format;
+    else if (word == "element") {
+      std::string name;
+      long count;
+      ss >> name >> count;
+      in_vertex = name == "vertex";
+      if (in_vertex) vertex_count = count;
+    } else if (word == "property" && in_vertex) {
+      Prop p;
+      ss >> p.type;
+      if (p.type == "list") {
+        *error = path + ": list property in vertex element";
+        return false;
+      }
+      ss >> p.name;
+      props.push_back(p);
+    } else if (word == "end_header") {
+      break;
+    }
+  }
+  if (vertex_count < 0) {
+    *error = path + ": no vertex element";
+    return false;
+  }
+  auto type_size = [](const std::string& t) -> int {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+    if (t == "double" || t == "float64") return 8;
+    return 0;
+  };
+  int xi = -1, yi = -1, zi = -1;
+  for (size_t i = 0; i < props.size(); ++i) {
+    if (props[i].name == "x") xi = static_cast<int>(i);
+    if (props[i].name == "y") yi = static_cast<int>(i);
+    if (props[i].name == "z") zi = static_cast<int>(i);
+  }
+  if (xi < 0 || yi < 0 || zi < 0) {
+    *error = path + ": vertex has no x y z";
+    return false;
+  }
+  points->clear();
+  points->reserve(static_cast<size_t>(vertex_count));
+  if (format == "ascii") {
+    for (long v = 0; v < vertex_count; ++v) {
+      if (!std::getline(in, line)) break;
+      std::istringstream ss(line);
+      std::vector<double> values(props.size());
+      for (auto& value : values) ss >> value;
+      if (!ss) {
+        *error = path + ": bad vertex line " + std::to_string(v);
+        return false;
+      }
+      points->emplace_back(values[xi], values[yi], values[zi]);
+    }
+  } else if (format == "binary_little_endian") {
+    std::vector<int> offsets;
+    int stride = 0;
+    for (const auto& p : props) {
+      const int s = type_size(p.type);
+      if (s == 0) {
+        *error = path + ": unknown property type " + p.type;
+        return false;
+      }
+      offsets.push_back(stride);
+      stride += s;
+    }
+    std::vector<char> row(stride);
+    auto read_value = [&](int i) -> double {
+      const char* at = row.data() + offsets[i];
+      if (props[i].type == "double" || props[i].type == "float64") {
+        double d;
+        std::memcpy(&d, at, 8);
+        return d;
+      }
+      float f;
+      std::memcpy(&f, at, 4);
+      return f;
+    };
+    for (long v = 0; v < vertex_count; ++v) {
+      if (!in.read(row.data(), stride)) break;
+      points->emplace_back(read_value(xi), read_value(yi), read_value(zi));
+    }
+  } else {
+    *error = path + ": unsupported PLY format " + format;
+    return false;
+  }
+  if (static_cast<long>(points->size()) != vertex_count) {
+    *error = path + ": file ends after " + std::to_string(points->size()) + " of " + std::to_string(vertex_count) +
+             " vertices";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+// Uniform hash grid for nearest-neighbour queries within a bounded radius.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell) : points_(points), cell_(cell) {
+    for (size_t i = 0; i < points.size(); ++i) cells_[Key(points[i])].push_back(static_cast<int>(i));
+  }
+  // Nearest distance, searching rings up to max_rings cells away; returns +inf if nothing found.
+  double Nearest(const Eigen::Vector3d& q, int max_rings) const {
+    const Eigen::Vector3i c = Cell(q);
+    double best = std::numeric_limits<double>::infinity();
+    for (int r = 0; r <= max_rings; ++r) {
+      for (int dx = -r; dx <= r; ++dx)
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dz = -r; dz <= r; ++dz) {
+            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+            auto it = cells_.find(Pack(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == cells_.end()) continue;
+            for (int i : it->second) best = std::min(best, (points_[i] - q).norm());
+          }
+      if (best <= r * cell_) break;  // nothing in a further ring can be closer
+    }
+    return best;
+  }
+
+ private:
+  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
+    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / cell_)), static_cast<int>(std::floor(p.y() / cell_)),
+                           static_cast<int>(std::floor(p.z() / cell_)));
+  }
+  static int64_t Pack(const Eigen::Vector3i& c) {
+    return (static_cast<int64_t>(c.x() + (1 << 20)) << 42) | (static_cast<int64_t>(c.y() + (1 << 20)) << 21) |
+           static_cast<int64_t>(c.z() + (1 << 20));
+  }
+  int64_t Key(const Eigen::Vector3d& p) const { return Pack(Cell(p)); }
+  const std::vector<Eigen::Vector3d>& points_;
+  double cell_;
+  std::unordered_map<int64_t, std::vector<int>> cells_;
+};
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+}  // namespace
+
+SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& truth,
+                                  double completeness_threshold) {
+  SurfaceEvaluation r;
+  r.num_model = static_cast<int>(model.size());
+  r.num_truth = static_cast<int>(truth.size());
+  if (model.empty() || truth.empty()) return r;
+  const double cell = std::max(completeness_threshold, 1e-9);
+  const PointGrid truth_grid(truth, cell);
+  std::vector<double> d;
+  d.reserve(model.size());
+  for (const auto& p : model) d.push_back(truth_grid.Nearest(p, 200));
+  r.accuracy_p50 = Percentile(d, 0.5);
+  r.accuracy_p90 = Percentile(d, 0.9);
+  r.accuracy_max = *std::max_element(d.begin(), d.end());
+  const PointGrid model_grid(model, cell);
+  int covered = 0;
+  for (const auto& p : truth)
+    if (model_grid.Nearest(p, 1) <= completeness_threshold) ++covered;
+  r.completeness = double(covered) / double(truth.size());
+  return r;
+}
+
+}  // namespace objscan

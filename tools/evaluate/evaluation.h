@@ -1,0 +1,53 @@
+// Evaluation against ground truth (LCM-free): trajectories in TUM format and surfaces as point sets.
+// TUM lines: "t tx ty tz qx qy qz qw" (camera-to-world), '#' comments; positions in the file's unit (objscan: mm).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "common/geometry.h"
+
+namespace objscan {
+
+struct StampedPose {
+  double t = 0;  // s
+  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+};
+
+// Reads a TUM trajectory. False with *error on an unreadable file or a malformed line.
+bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error);
+// Writes a TUM trajectory (header comment lines first, each prefixed with "# ").
+bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
+                        const std::vector<std::string>& header, std::string* error);
+
+struct TrajectoryEvaluation {
+  int num_estimated = 0;
+  int num_truth = 0;
+  int num_matched = 0;        // estimated poses with a true pose within max_dt
+  double registered_fraction = 0;  // num_matched / num_truth
+  TrajectoryError error;      // after Sim(3) (or SE(3)) alignment of the matched poses
+};
+
+// Pairs poses by timestamp (nearest, |dt| <= max_dt_s) and evaluates them.
+bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const std::vector<StampedPose>& truth,
+                             bool with_scale, double max_dt_s, TrajectoryEvaluation* out, std::string* error);
+
+// Reads the vertices (x y z) of an ASCII or binary_little_endian PLY (float or double coordinates).
+bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error);
+
+struct SurfaceEvaluation {
+  int num_model = 0;
+  int num_truth = 0;
+  double accuracy_p50 = 0, accuracy_p90 = 0, accuracy_max = 0;  // model -> truth distances
+  double completeness = 0;  // fraction of truth points within completeness_threshold of the model
+};
+
+// Distances from every model point to the nearest truth point (accuracy) and the fraction of truth points that
+// have a model point within completeness_threshold (completeness). Same unit as the inputs. Distances are
+// point-to-point: the truth sample must be much denser than the accuracy measured (spacing adds to distances).
+SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& truth,
+                                  double completeness_threshold);
+
+}  // namespace objscan

@@ -1,0 +1,98 @@
+#include "tools/evaluate/evaluation.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <random>
+
+namespace objscan {
+namespace {
+
+std::string Temp(const std::string& name) { return "/tmp/objscan_eval_" + std::to_string(getpid()) + name; }
+
+std::vector<Eigen::Vector3d> SpherePoints(double radius, int n, const Eigen::Vector3d& centre) {
+  std::vector<Eigen::Vector3d> out;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), a = golden * i;
+    out.push_back(centre + radius * Eigen::Vector3d(r * std::cos(a), r * std::sin(a), z));
+  }
+  return out;
+}
+
+TEST(EvaluationTest, TumRoundTripAndTimestampMatching) {
+  std::vector<StampedPose> truth, est;
+  for (int i = 0; i < 50; ++i) {
+    StampedPose p;
+    p.t = i / 30.0;
+    const double a = i * 0.1;
+    p.world_from_camera.translation() = Eigen::Vector3d(800 * std::cos(a), 800 * std::sin(a), 400);
+    p.world_from_camera.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    truth.push_back(p);
+    if (i % 2 == 0) {  // half the frames, scaled by 0.5
+      StampedPose q = p;
+      q.t += 0.001;  // 1 ms clock offset: still matched
+      q.world_from_camera.translation() *= 0.5;
+      est.push_back(q);
+    }
+  }
+  std::string error;
+  ASSERT_TRUE(WriteTumTrajectory(Temp("t.txt"), truth, {"units: mm"}, &error)) << error;
+  std::vector<StampedPose> read;
+  ASSERT_TRUE(ReadTumTrajectory(Temp("t.txt"), &read, &error)) << error;
+  ASSERT_EQ(read.size(), truth.size());
+  EXPECT_NEAR((read[7].world_from_camera.translation() - truth[7].world_from_camera.translation()).norm(), 0, 1e-5);
+  TrajectoryEvaluation e;
+  ASSERT_TRUE(EvaluateTumTrajectories(est, read, true, 0.005, &e, &error)) << error;
+  EXPECT_EQ(e.num_matched, 25);
+  EXPECT_NEAR(e.registered_fraction, 0.5, 1e-9);
+  EXPECT_NEAR(e.error.scale, 2.0, 1e-6);
+  EXPECT_LT(e.error.ate_rmse, 1e-3);
+  // Without scale the halved trajectory cannot fit.
+  ASSERT_TRUE(EvaluateTumTrajectories(est, read, false, 0.005, &e, &error));
+  EXPECT_GT(e.error.ate_rmse, 100);
+  std::remove(Temp("t.txt").c_str());
+}
+
+TEST(EvaluationTest, SurfaceAccuracyAndCompleteness) {
+  // ~2 points per mm^2: point-to-point distances then overestimate by < 0.1 mm.
+  const auto truth = SpherePoints(100, 250000, Eigen::Vector3d(0, 0, 100));
+  // Model: the upper half of a sphere 1 mm too large.
+  std::vector<Eigen::Vector3d> model;
+  for (const auto& p : SpherePoints(101, 20000, Eigen::Vector3d(0, 0, 100)))
+    if (p.z() > 100) model.push_back(p);
+  const SurfaceEvaluation s = EvaluateSurface(model, truth, 2.0);
+  EXPECT_NEAR(s.accuracy_p50, 1.0, 0.15);
+  EXPECT_NEAR(s.accuracy_p90, 1.0, 0.2);
+  EXPECT_NEAR(s.completeness, 0.5, 0.03);
+}
+
+TEST(EvaluationTest, ReadsAsciiAndBinaryPly) {
+  {
+    std::ofstream a(Temp("a.ply"));
+    a << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nend_header\n1 2 3 255\n4 5 6 0\n";
+    std::ofstream b(Temp("b.ply"), std::ios::binary);
+    b << "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty uchar flag\nproperty double x\n"
+         "property double y\nproperty double z\nend_header\n";
+    const unsigned char flag = 1;
+    const double xyz[3] = {7.5, -8, 9};
+    b.write(reinterpret_cast<const char*>(&flag), 1);
+    b.write(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+  }
+  std::vector<Eigen::Vector3d> p;
+  std::string error;
+  ASSERT_TRUE(ReadPlyPoints(Temp("a.ply"), &p, &error)) << error;
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_EQ(p[1], Eigen::Vector3d(4, 5, 6));
+  ASSERT_TRUE(ReadPlyPoints(Temp("b.ply"), &p, &error)) << error;
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p[0], Eigen::Vector3d(7.5, -8, 9));
+  EXPECT_FALSE(ReadPlyPoints(Temp("missing.ply"), &p, &error));
+  std::remove(Temp("a.ply").c_str());
+  std::remove(Temp("b.ply").c_str());
+}
+
+}  // namespace
+}  // namespace objscan
