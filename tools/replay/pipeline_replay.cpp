@@ -1,0 +1,112 @@
+#include "tools/replay/pipeline_replay.h"
+
+#include <lcm/eventlog.h>
+#include <sys/stat.h>
+
+#include <memory>
+#include <vector>
+
+#include "common/bus.h"
+#include "common/log.h"
+#include "objscan/control_t.hpp"
+#include "processes/tracker/tracker_node.h"
+#ifdef OBJSCAN_HAVE_POSE_SOLVER
+#include "processes/pose_solver/pose_solver_node.h"
+#endif
+#ifdef OBJSCAN_HAVE_DENSE_MODELER
+#include "processes/dense_modeler/dense_modeler_node.h"
+#endif
+
+namespace objscan {
+namespace {
+
+// The nodes' bus: delivers on memq and records every publication.
+class RecordingBus final : public Bus {
+ public:
+  RecordingBus(Bus& delivery, Bus& recorder, int64_t* count) : delivery_(delivery), recorder_(recorder), count_(count) {}
+  bool Publish(const std::string& channel, const void* data, int size) override {
+    ++*count_;
+    recorder_.Publish(channel, data, size);
+    return delivery_.Publish(channel, data, size);
+  }
+  void Subscribe(const std::string& channel, RawHandler handler, int queue_capacity) override {
+    delivery_.Subscribe(channel, std::move(handler), queue_capacity);
+  }
+  int Handle(int timeout_ms) override { return delivery_.Handle(timeout_ms); }
+  std::string Describe() const override { return "replay(" + delivery_.Describe() + ")"; }
+
+ private:
+  Bus& delivery_;
+  Bus& recorder_;
+  int64_t* count_;
+};
+
+bool IsFeedableControl(const void* data, int size) {
+  control_t msg;
+  if (msg.decode(data, 0, size) != size) return false;
+  return msg.command == control_t::COMMAND_END_OF_STREAM;
+}
+
+}  // namespace
+
+bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResult* result, std::string* error) {
+  mkdir(options.out_dir.c_str(), 0755);
+  lcm_eventlog_t* log = lcm_eventlog_create(options.log_path.c_str(), "r");
+  if (log == nullptr) {
+    *error = "cannot read log " + options.log_path;
+    return false;
+  }
+  try {
+    auto memq = MakeLcmBus("memq://");
+    auto recorder = MakeLcmBus("datalog://" + options.out_dir + "/replay.lcmlog");
+    RecordingBus bus(*memq, *recorder, &result->messages_out);
+
+    std::vector<std::unique_ptr<Node>> nodes;
+    TrackerNodeOptions tracker_options;
+    tracker_options.exit_when_finished = false;
+    nodes.push_back(std::make_unique<TrackerNode>(bus, tracker_options));
+    result->nodes = "tracker";
+#ifdef OBJSCAN_HAVE_POSE_SOLVER
+    if (options.run_pose_solver) {
+      PoseSolverNodeOptions pose_options;
+      pose_options.exit_when_finished = false;
+      pose_options.output_dir = options.out_dir;
+      nodes.push_back(std::make_unique<PoseSolverNode>(bus, pose_options));
+      result->nodes += ",pose_solver";
+    }
+#endif
+#ifdef OBJSCAN_HAVE_DENSE_MODELER
+    if (options.run_dense_modeler) {
+      DenseModelerNodeOptions dense_options;
+      dense_options.exit_when_finished = false;
+      dense_options.output_dir = options.out_dir;
+      nodes.push_back(std::make_unique<DenseModelerNode>(bus, dense_options));
+      result->nodes += ",dense_modeler";
+    }
+#endif
+    while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log)) {
+      ++result->events_read;
+      const std::string channel(event->channel, event->channellen);
+      const bool feed = options.input_channels.count(channel) &&
+                        (channel != "OBJSCAN_CONTROL" || IsFeedableControl(event->data, event->datalen));
+      if (feed) {
+        ++result->events_fed;
+        memq->Publish(channel, event->data, event->datalen);
+        while (memq->Handle(0) > 0) {
+        }
+      }
+      lcm_eventlog_free_event(event);
+    }
+    for (auto& node : nodes) node->OnShutdown();
+    while (memq->Handle(0) > 0) {
+    }
+  } catch (const std::exception& e) {
+    lcm_eventlog_destroy(log);
+    *error = e.what();
+    return false;
+  }
+  lcm_eventlog_destroy(log);
+  return true;
+}
+
+}  // namespace objscan
