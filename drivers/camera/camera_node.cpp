@@ -18,11 +18,16 @@ namespace objscan {
 namespace {
 
 bool EncodingFromName(const std::string& name, int8_t* encoding) {
-  if (name == "gray8") *encoding = image_t::ENCODING_GRAY8;
-  else if (name == "rgb8") *encoding = image_t::ENCODING_RGB8;
-  else if (name == "bgr8") *encoding = image_t::ENCODING_BGR8;
-  else if (name == "jpeg") *encoding = image_t::ENCODING_JPEG;
-  else return false;
+  if (name == "gray8")
+    *encoding = image_t::ENCODING_GRAY8;
+  else if (name == "rgb8")
+    *encoding = image_t::ENCODING_RGB8;
+  else if (name == "bgr8")
+    *encoding = image_t::ENCODING_BGR8;
+  else if (name == "jpeg")
+    *encoding = image_t::ENCODING_JPEG;
+  else
+    return false;
   return true;
 }
 
@@ -46,8 +51,9 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
   parser.Add("calib", &o->calib,
              "calibration file (OpenCV FileStorage: camera_matrix, distortion_coefficients, image_width, "
              "image_height); required for video / V4L2, overrides the source's own");
-  parser.Add("rate", &o->rate_hz, "Hz, frame timestamps i*1e6/rate and publication pace; 0 = as fast as possible "
-                                  "(timestamps at 30 Hz)");
+  parser.Add("rate", &o->rate_hz,
+             "Hz, frame timestamps i*1e6/rate and publication pace; 0 = as fast as possible "
+             "(timestamps at 30 Hz)");
   parser.Add("realtime", &o->realtime, "pace on the fixed wall-clock schedule start + i/rate (late frames catch up)");
   parser.Add("loop", &o->loop, "start again at the first frame at the end (no END_OF_STREAM; seq keeps counting)");
   parser.Add("order", &o->order, "explicit frame order, e.g. \"9,8,7\", \"3-5,1\" (1-based) or file names");

@@ -34,29 +34,29 @@ class Bus;
 class OptionParser;
 
 struct CameraNodeOptions {
-  std::string source;                    // --source: image folder, Middlebury folder / *_par.txt, video, /dev/videoN
-  std::string calib;                     // --calib: calibration file (required for video and V4L2; overrides)
-  double rate_hz = 30;                   // Hz, timestamp rate and publication pace; 0 = as fast as possible
-  bool realtime = false;                 // pace on the fixed wall-clock schedule start + i/rate (catch up when late)
-  bool loop = false;                     // start again at the first frame at the end (seq keeps counting)
-  std::string order;                     // explicit frame order: 1-based natural positions, ranges a-b, file names
-  std::string rotate_180;                // frames (natural positions / names, or "all") to rotate 180 deg in-plane
-  std::string encoding = "rgb8";         // image encoding: rgb8, bgr8, gray8 or jpeg
-  int jpeg_quality = 90;                 // 1..100, for --encoding jpeg
-  int64_t max_frames = 0;                // stop after this many published frames (0 = all)
-  std::string lockstep_channel;          // wait for seq >= i on this channel before publishing frame i+1 ("" = off)
-  int lockstep_timeout_ms = 5000;        // ms, give up waiting for a lockstep message after this (0 = forever)
-  double gt_position_scale = 1000;       // ground-truth positions (TUM, Middlebury) times this = mm (m -> mm)
-  bool publish_ground_truth = true;      // publish GROUND_TRUTH_POSE when the source has true poses
-  std::string camera_name = "camera";    // camera_name in image_t / camera_info_t
-  int device_width = 0;                  // px, V4L2 capture width to request (0 = calibration width)
-  int device_height = 0;                 // px, V4L2 capture height to request (0 = calibration height)
-  std::string image_channel = "CAMERA_IMAGE";             // output channel of image_t
-  std::string info_channel = "CAMERA_INFO";               // output channel of camera_info_t
-  std::string ground_truth_channel = "GROUND_TRUTH_POSE"; // output channel of the true poses
-  std::string control_channel = "OBJSCAN_CONTROL";        // output channel of END_OF_STREAM
-  std::string status_channel = "PROCESS_STATUS";          // output channel of process_status_t
-  bool exit_when_finished = true;        // Finished() turns true after END_OF_STREAM (the process exits)
+  std::string source;                  // --source: image folder, Middlebury folder / *_par.txt, video, /dev/videoN
+  std::string calib;                   // --calib: calibration file (required for video and V4L2; overrides)
+  double rate_hz = 30;                 // Hz, timestamp rate and publication pace; 0 = as fast as possible
+  bool realtime = false;               // pace on the fixed wall-clock schedule start + i/rate (catch up when late)
+  bool loop = false;                   // start again at the first frame at the end (seq keeps counting)
+  std::string order;                   // explicit frame order: 1-based natural positions, ranges a-b, file names
+  std::string rotate_180;              // frames (natural positions / names, or "all") to rotate 180 deg in-plane
+  std::string encoding = "rgb8";       // image encoding: rgb8, bgr8, gray8 or jpeg
+  int jpeg_quality = 90;               // 1..100, for --encoding jpeg
+  int64_t max_frames = 0;              // stop after this many published frames (0 = all)
+  std::string lockstep_channel;        // wait for seq >= i on this channel before publishing frame i+1 ("" = off)
+  int lockstep_timeout_ms = 5000;      // ms, give up waiting for a lockstep message after this (0 = forever)
+  double gt_position_scale = 1000;     // ground-truth positions (TUM, Middlebury) times this = mm (m -> mm)
+  bool publish_ground_truth = true;    // publish GROUND_TRUTH_POSE when the source has true poses
+  std::string camera_name = "camera";  // camera_name in image_t / camera_info_t
+  int device_width = 0;                // px, V4L2 capture width to request (0 = calibration width)
+  int device_height = 0;               // px, V4L2 capture height to request (0 = calibration height)
+  std::string image_channel = "CAMERA_IMAGE";              // output channel of image_t
+  std::string info_channel = "CAMERA_INFO";                // output channel of camera_info_t
+  std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // output channel of the true poses
+  std::string control_channel = "OBJSCAN_CONTROL";         // output channel of END_OF_STREAM
+  std::string status_channel = "PROCESS_STATUS";           // output channel of process_status_t
+  bool exit_when_finished = true;  // Finished() turns true after END_OF_STREAM (the process exits)
 };
 
 // Registers every CameraNodeOptions field with the parser (names as in the comments: --source, --rate, ...).
@@ -110,9 +110,9 @@ class CameraNode : public Node {
   double timestamp_rate_ = 30;
 
   bool started_ = false;
-  int64_t schedule_start_wall_ = 0;     // µs, wall time of the first Tick (realtime schedule origin)
-  int64_t last_publish_wall_ = 0;       // µs, wall time frame (frames_published_ - 1) was published
-  int64_t frames_published_ = 0;        // = seq of the next frame
+  int64_t schedule_start_wall_ = 0;  // µs, wall time of the first Tick (realtime schedule origin)
+  int64_t last_publish_wall_ = 0;    // µs, wall time frame (frames_published_ - 1) was published
+  int64_t frames_published_ = 0;     // = seq of the next frame
   int64_t frames_published_in_pass_ = 0;
   int64_t frames_skipped_ = 0;
   int64_t passes_ = 1;

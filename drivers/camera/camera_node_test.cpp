@@ -56,8 +56,8 @@ void WriteFolder(const fs::path& root, int count, const std::vector<int>& corrup
     if (is_corrupt) {
       std::ofstream(root / name) << "garbage";
     } else {
-      cv::imwrite((root / name).string(), cv::Mat(is_odd ? 24 : 48, is_odd ? 32 : 64, CV_8UC3,
-                                                  cv::Scalar(10 * k + 5, 50, 60)));
+      cv::imwrite((root / name).string(),
+                  cv::Mat(is_odd ? 24 : 48, is_odd ? 32 : 64, CV_8UC3, cv::Scalar(10 * k + 5, 50, 60)));
     }
   }
   PinholeCamera c;
@@ -83,16 +83,32 @@ struct Recorder {
 
   explicit Recorder(Bus& bus) {
     bus.SubscribeMessage<image_t>(
-        "CAMERA_IMAGE", [this](const image_t& m, const RawMessage&) { images.push_back(m); order.push_back("I"); },
+        "CAMERA_IMAGE",
+        [this](const image_t& m, const RawMessage&) {
+          images.push_back(m);
+          order.push_back("I");
+        },
         {}, 1000);
     bus.SubscribeMessage<camera_info_t>(
-        "CAMERA_INFO", [this](const camera_info_t& m, const RawMessage&) { infos.push_back(m); order.push_back("C"); },
+        "CAMERA_INFO",
+        [this](const camera_info_t& m, const RawMessage&) {
+          infos.push_back(m);
+          order.push_back("C");
+        },
         {}, 1000);
     bus.SubscribeMessage<pose_t>(
-        "GROUND_TRUTH_POSE", [this](const pose_t& m, const RawMessage&) { truths.push_back(m); order.push_back("G"); },
+        "GROUND_TRUTH_POSE",
+        [this](const pose_t& m, const RawMessage&) {
+          truths.push_back(m);
+          order.push_back("G");
+        },
         {}, 1000);
     bus.SubscribeMessage<control_t>(
-        "OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) { controls.push_back(m); order.push_back("E"); },
+        "OBJSCAN_CONTROL",
+        [this](const control_t& m, const RawMessage&) {
+          controls.push_back(m);
+          order.push_back("E");
+        },
         {}, 1000);
     bus.SubscribeMessage<process_status_t>(
         "PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) { statuses.push_back(m); }, {}, 1000);
@@ -321,7 +337,7 @@ TEST(CameraNodeTest, LockstepWaitsForTheConsumerAndTimesOut) {
   Drain(*bus);
   EXPECT_EQ(node.status().rejected("lockstep: message too short"), 1);
   // No ack for seq 1: after the timeout the node goes on.
-  node.Tick(wall += 499'000);
+  node.Tick(wall += 497'000);  // 498 ms after frame 1 was published
   Drain(*bus);
   EXPECT_EQ(rec.images.size(), 2u);
   node.Tick(wall += 2'000);
@@ -384,6 +400,39 @@ TEST(CameraNodeTest, ShutdownMidStreamSendsEndOfStream) {
   EXPECT_EQ(rec.controls[0].last_seq, 0);
 }
 
+// Same input and options -> byte-identical output messages (status excluded), whatever the tick timing.
+TEST(CameraNodeTest, OutputIsDeterministic) {
+  TempDir dir("determinism");
+  WriteFolder(dir.path(), 5, {1}, {});
+  auto run = [&](int64_t tick_us) {
+    auto bus = MakeLcmBus("memq://");
+    std::vector<std::string> messages;
+    bus->Subscribe(
+        "CAMERA_.*|GROUND_TRUTH_POSE|OBJSCAN_CONTROL",
+        [&](const RawMessage& raw) {
+          messages.push_back(raw.channel + ":" +
+                             std::string(static_cast<const char*>(raw.data), static_cast<size_t>(raw.size)));
+        },
+        1000);
+    CameraNodeOptions options;
+    options.source = dir.path().string();
+    options.encoding = "jpeg";
+    options.rotate_180 = "3";
+    options.rate_hz = 20;
+    CameraNode node(*bus, options);
+    int64_t wall = 777;
+    for (int i = 0; i < 10000 && !node.Finished(); ++i) {
+      node.Tick(wall += tick_us);
+      Drain(*bus);
+    }
+    return messages;
+  };
+  const auto a = run(1000);
+  const auto b = run(37'000);
+  EXPECT_EQ(a.size(), 4u * 3 + 1);
+  EXPECT_TRUE(a == b);
+}
+
 TEST(CameraNodeTest, InvalidOptionsAndSourcesThrowAtConstruction) {
   TempDir dir("bad");
   WriteFolder(dir.path(), 2);
@@ -431,13 +480,48 @@ TEST(CameraNodeTest, EveryOptionIsRegistered) {
   OptionParser parser("camera", "test");
   AddCameraNodeOptions(parser, &options);
   std::string error;
-  ASSERT_TRUE(parser.ParseArgs({"--source", "/x", "--calib", "c.yaml", "--rate", "15", "--realtime", "--loop",
-                                "--order", "3,2,1", "--rotate-180", "2", "--encoding", "jpeg", "--jpeg-quality", "70",
-                                "--max-frames", "9", "--lockstep-channel", "FEATURE_TRACKS", "--lockstep-timeout-ms",
-                                "0", "--gt-position-scale", "1", "--publish-ground-truth=false", "--camera-name",
-                                "cam", "--device-width", "320", "--device-height", "240", "--image-channel", "A",
-                                "--info-channel", "B", "--ground-truth-channel", "C", "--control-channel", "D",
-                                "--status-channel", "E", "--exit-when-finished=false"},
+  ASSERT_TRUE(parser.ParseArgs({"--source",
+                                "/x",
+                                "--calib",
+                                "c.yaml",
+                                "--rate",
+                                "15",
+                                "--realtime",
+                                "--loop",
+                                "--order",
+                                "3,2,1",
+                                "--rotate-180",
+                                "2",
+                                "--encoding",
+                                "jpeg",
+                                "--jpeg-quality",
+                                "70",
+                                "--max-frames",
+                                "9",
+                                "--lockstep-channel",
+                                "FEATURE_TRACKS",
+                                "--lockstep-timeout-ms",
+                                "0",
+                                "--gt-position-scale",
+                                "1",
+                                "--publish-ground-truth=false",
+                                "--camera-name",
+                                "cam",
+                                "--device-width",
+                                "320",
+                                "--device-height",
+                                "240",
+                                "--image-channel",
+                                "A",
+                                "--info-channel",
+                                "B",
+                                "--ground-truth-channel",
+                                "C",
+                                "--control-channel",
+                                "D",
+                                "--status-channel",
+                                "E",
+                                "--exit-when-finished=false"},
                                &error))
       << error;
   EXPECT_EQ(options.rate_hz, 15);

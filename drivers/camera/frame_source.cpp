@@ -46,7 +46,8 @@ bool ParseDouble(const std::string& text, double* out) {
 }
 
 bool IsAllDigits(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+  return !s.empty() &&
+         std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
 }
 
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
@@ -91,9 +92,9 @@ cv::Mat ReadImage8(const std::string& path) {
 // Folder-like sources (image folder, Middlebury): a list of files read lazily in a given order.
 
 struct ListEntry {
-  std::string path;             // full path of the image file
-  std::string name;             // file name
-  PinholeCamera camera;         // this view's intrinsics (same for all entries of an image folder)
+  std::string path;      // full path of the image file
+  std::string name;      // file name
+  PinholeCamera camera;  // this view's intrinsics (same for all entries of an image folder)
   bool has_pose = false;
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
 };
@@ -102,8 +103,14 @@ class ListFrameSource final : public FrameSource {
  public:
   ListFrameSource(SourceKind kind, std::string root, std::vector<ListEntry> entries, std::vector<int> sequence,
                   std::vector<bool> rotate, int width, int height, std::string note)
-      : kind_(kind), root_(std::move(root)), entries_(std::move(entries)), sequence_(std::move(sequence)),
-        rotate_(std::move(rotate)), width_(width), height_(height), note_(std::move(note)) {}
+      : kind_(kind),
+        root_(std::move(root)),
+        entries_(std::move(entries)),
+        sequence_(std::move(sequence)),
+        rotate_(std::move(rotate)),
+        width_(width),
+        height_(height),
+        note_(std::move(note)) {}
 
   ReadResult Next(SourceFrame* frame, std::string* reason, std::string* detail) override {
     if (position_ >= sequence_.size()) return ReadResult::kEnd;
@@ -215,8 +222,7 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
   }
   if (ec) return Fail(error, "cannot list " + image_dir.string() + ": " + ec.message()), nullptr;
   std::sort(names.begin(), names.end());
-  if (names.empty())
-    return Fail(error, "no images (png jpg jpeg bmp ppm pgm tif) in " + image_dir.string()), nullptr;
+  if (names.empty()) return Fail(error, "no images (png jpg jpeg bmp ppm pgm tif) in " + image_dir.string()), nullptr;
 
   std::string calib_path = options.calib_path;
   if (calib_path.empty()) {
@@ -250,8 +256,7 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
     return Fail(error, "none of the first images in " + image_dir.string() + " can be read"), nullptr;
   if (!any_matches)
     return Fail(error, "calibration " + calib_path + " is for " + SizeText(camera.width, camera.height) +
-                           " images but the images in " + image_dir.string() + " are " +
-                           SizeText(first_w, first_h)),
+                           " images but the images in " + image_dir.string() + " are " + SizeText(first_w, first_h)),
            nullptr;
 
   // Ground truth (evaluation only).
@@ -294,8 +299,7 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
   std::vector<bool> rotate;
   if (!ResolveLists(options, names, &sequence, &rotate, error)) return nullptr;
   return std::make_unique<ListFrameSource>(SourceKind::kImageFolder, image_dir.string(), std::move(entries),
-                                           std::move(sequence), std::move(rotate), camera.width, camera.height,
-                                           note);
+                                           std::move(sequence), std::move(rotate), camera.width, camera.height, note);
 }
 
 std::unique_ptr<FrameSource> OpenMiddlebury(const FrameSourceOptions& options, std::string* error) {
@@ -368,10 +372,9 @@ std::unique_ptr<FrameSource> OpenMiddlebury(const FrameSourceOptions& options, s
   std::vector<int> sequence;
   std::vector<bool> rotate;
   if (!ResolveLists(options, names, &sequence, &rotate, error)) return nullptr;
-  return std::make_unique<ListFrameSource>(SourceKind::kMiddlebury, par_path.string(), std::move(entries),
-                                           std::move(sequence), std::move(rotate), width, height,
-                                           has_override ? "calibration " + options.calib_path
-                                                        : std::string("per-view calibration"));
+  return std::make_unique<ListFrameSource>(
+      SourceKind::kMiddlebury, par_path.string(), std::move(entries), std::move(sequence), std::move(rotate), width,
+      height, has_override ? "calibration " + options.calib_path : std::string("per-view calibration"));
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -386,8 +389,8 @@ class CaptureFrameSource final : public FrameSource {
     try {
       if (kind_ == SourceKind::kV4l2Device) {
         const bool by_index = IsAllDigits(path_);
-        const bool ok = by_index ? capture_.open(std::atoi(path_.c_str()), cv::CAP_V4L2)
-                                 : capture_.open(path_, cv::CAP_V4L2);
+        const bool ok =
+            by_index ? capture_.open(std::atoi(path_.c_str()), cv::CAP_V4L2) : capture_.open(path_, cv::CAP_V4L2);
         if (!ok || !capture_.isOpened()) return Fail(error, "cannot open V4L2 device " + path_);
         capture_.set(cv::CAP_PROP_FRAME_WIDTH, device_width > 0 ? device_width : camera_.width);
         capture_.set(cv::CAP_PROP_FRAME_HEIGHT, device_height > 0 ? device_height : camera_.height);
@@ -467,8 +470,8 @@ class CaptureFrameSource final : public FrameSource {
   SourceKind kind() const override { return kind_; }
   std::string Describe() const override {
     std::ostringstream os;
-    os << SourceKindName(kind_) << " " << path_ << ": " << SizeText(camera_.width, camera_.height) << ", "
-       << rate_ << " fps reported";
+    os << SourceKindName(kind_) << " " << path_ << ": " << SizeText(camera_.width, camera_.height) << ", " << rate_
+       << " fps reported";
     return os.str();
   }
 
@@ -490,9 +493,10 @@ std::unique_ptr<FrameSource> OpenCapture(SourceKind kind, const FrameSourceOptio
   if (!rotate.empty() && rotate != "all")
     return Fail(error, std::string("--rotate-180 takes only 'all' for a ") + SourceKindName(kind)), nullptr;
   if (options.calib_path.empty())
-    return Fail(error, std::string("a ") + SourceKindName(kind) + " needs --calib FILE (OpenCV FileStorage with "
-                                                                  "camera_matrix, distortion_coefficients, "
-                                                                  "image_width, image_height)"),
+    return Fail(error, std::string("a ") + SourceKindName(kind) +
+                           " needs --calib FILE (OpenCV FileStorage with "
+                           "camera_matrix, distortion_coefficients, "
+                           "image_width, image_height)"),
            nullptr;
   PinholeCamera camera;
   if (!ReadCalibrationFile(options.calib_path, options.camera_name, &camera, error)) return nullptr;
@@ -544,10 +548,14 @@ bool ReadIntNode(const cv::FileNode& node, int* out) {
 
 const char* SourceKindName(SourceKind kind) {
   switch (kind) {
-    case SourceKind::kImageFolder: return "image folder";
-    case SourceKind::kMiddlebury: return "Middlebury folder";
-    case SourceKind::kVideoFile: return "video file";
-    case SourceKind::kV4l2Device: return "V4L2 device";
+    case SourceKind::kImageFolder:
+      return "image folder";
+    case SourceKind::kMiddlebury:
+      return "Middlebury folder";
+    case SourceKind::kVideoFile:
+      return "video file";
+    case SourceKind::kV4l2Device:
+      return "V4L2 device";
   }
   return "unknown";
 }
@@ -583,7 +591,7 @@ bool DetectSourceKind(const std::string& path, SourceKind* kind, std::string* er
   if (fs::is_regular_file(p, ec)) {
     const std::string name = p.filename().string();
     *kind = name.size() > 8 && name.compare(name.size() - 8, 8, "_par.txt") == 0 ? SourceKind::kMiddlebury
-                                                                                  : SourceKind::kVideoFile;
+                                                                                 : SourceKind::kVideoFile;
     return true;
   }
   return Fail(error, "source " + path + " does not exist");
@@ -596,10 +604,13 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options, 
   if (!DetectSourceKind(options.path, &kind, error)) return nullptr;
   try {
     switch (kind) {
-      case SourceKind::kImageFolder: return OpenImageFolder(options, error);
-      case SourceKind::kMiddlebury: return OpenMiddlebury(options, error);
+      case SourceKind::kImageFolder:
+        return OpenImageFolder(options, error);
+      case SourceKind::kMiddlebury:
+        return OpenMiddlebury(options, error);
       case SourceKind::kVideoFile:
-      case SourceKind::kV4l2Device: return OpenCapture(kind, options, error);
+      case SourceKind::kV4l2Device:
+        return OpenCapture(kind, options, error);
     }
   } catch (const std::exception& e) {  // filesystem errors
     return Fail(error, std::string("cannot open ") + options.path + ": " + e.what()), nullptr;
@@ -681,8 +692,9 @@ bool ReadTumTrajectory(const std::string& path, double position_scale, std::vect
     if (trimmed.empty()) continue;
     if (trimmed[0] == '#') {
       std::string text = Lower(trimmed.substr(1));
-      text.erase(std::remove_if(text.begin(), text.end(), [](char c) { return std::isspace(static_cast<unsigned char>(c)); }),
-                 text.end());
+      text.erase(
+          std::remove_if(text.begin(), text.end(), [](char c) { return std::isspace(static_cast<unsigned char>(c)); }),
+          text.end());
       if (text == "units:mm" || text == "unit:mm") scale = 1.0;
       continue;
     }
@@ -691,7 +703,8 @@ bool ReadTumTrajectory(const std::string& path, double position_scale, std::vect
     std::string token;
     while (fields >> token) {
       double x = 0;
-      if (!ParseDouble(token, &x)) return Fail(error, path + ":" + std::to_string(line_number) + ": bad number '" + token + "'");
+      if (!ParseDouble(token, &x))
+        return Fail(error, path + ":" + std::to_string(line_number) + ": bad number '" + token + "'");
       v.push_back(x);
     }
     if (v.size() != 8)
@@ -765,8 +778,8 @@ bool ReadMiddleburyPar(const std::string& path, std::vector<MiddleburyView>* vie
   }
   if (expected < 0) return Fail(error, path + ": empty file");
   if (static_cast<long>(views->size()) != expected)
-    return Fail(error, path + ": header says " + std::to_string(expected) + " views, found " +
-                           std::to_string(views->size()));
+    return Fail(error,
+                path + ": header says " + std::to_string(expected) + " views, found " + std::to_string(views->size()));
   return true;
 }
 
@@ -787,8 +800,7 @@ bool ParseFrameList(const std::string& text, const std::vector<std::string>& nam
     int a = 0, b = 0;
     const auto dash = token.find('-');
     if (number(token, &a)) {
-      if (a < 1 || a > n)
-        return Fail(error, "frame " + token + " out of range 1.." + std::to_string(n));
+      if (a < 1 || a > n) return Fail(error, "frame " + token + " out of range 1.." + std::to_string(n));
       indices->push_back(a - 1);
       continue;
     }

@@ -29,25 +29,25 @@ enum class SourceKind { kImageFolder, kMiddlebury, kVideoFile, kV4l2Device };
 const char* SourceKindName(SourceKind kind);
 
 struct FrameSourceOptions {
-  std::string path;                 // --source: folder, *_par.txt file / folder, video file, /dev/videoN or index
-  std::string calib_path;           // --calib: OpenCV FileStorage calibration; overrides the source's own
-  std::string order;                // --order: "9,8,7" / "3-5" / file names; empty = natural order
-  std::string rotate_180;           // --rotate-180: frames (natural 1-based numbers or names) to rotate 180 deg
-  double gt_position_scale = 1000;  // ground-truth positions are multiplied by this (m -> mm by default)
+  std::string path;                    // --source: folder, *_par.txt file / folder, video file, /dev/videoN or index
+  std::string calib_path;              // --calib: OpenCV FileStorage calibration; overrides the source's own
+  std::string order;                   // --order: "9,8,7" / "3-5" / file names; empty = natural order
+  std::string rotate_180;              // --rotate-180: frames (natural 1-based numbers or names) to rotate 180 deg
+  double gt_position_scale = 1000;     // ground-truth positions are multiplied by this (m -> mm by default)
   std::string camera_name = "camera";  // camera_name written into every frame's calibration
-  int device_width = 0;             // V4L2 only: requested capture size in px (0 = the calibration's size)
-  int device_height = 0;            // V4L2 only
+  int device_width = 0;                // V4L2 only: requested capture size in px (0 = the calibration's size)
+  int device_height = 0;               // V4L2 only
 };
 
 // One frame as the source delivers it, already rotated when requested.
 struct SourceFrame {
-  cv::Mat image;                 // CV_8UC1 (gray) or CV_8UC3 (BGR)
-  PinholeCamera camera;          // intrinsics of this frame (per view for Middlebury, adjusted for rotation)
-  bool has_true_pose = false;    // true when world_from_camera holds the dataset's true pose
+  cv::Mat image;               // CV_8UC1 (gray) or CV_8UC3 (BGR)
+  PinholeCamera camera;        // intrinsics of this frame (per view for Middlebury, adjusted for rotation)
+  bool has_true_pose = false;  // true when world_from_camera holds the dataset's true pose
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm, true pose (when has_true_pose)
-  std::string name;              // file name, or "frame N" for video / device frames
-  int source_index = 0;          // 0-based index in the natural order (frame counter for video / device)
-  bool rotated_180 = false;      // true when the image was rotated 180 deg in-plane
+  std::string name;          // file name, or "frame N" for video / device frames
+  int source_index = 0;      // 0-based index in the natural order (frame counter for video / device)
+  bool rotated_180 = false;  // true when the image was rotated 180 deg in-plane
 };
 
 enum class ReadResult { kFrame, kSkipped, kEnd };

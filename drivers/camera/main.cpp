@@ -33,7 +33,6 @@ int main(int argc, char** argv) {
     CameraNode node(*bus, options);
     RunOptions run;
     run.tick_ms = node.SuggestedTickMs();
-    run.stop_at_end_of_log = false;  // the input bus only carries lockstep messages
     return RunNode(*bus, node, run);
   } catch (const std::exception& e) {
     LogError(e.what());
