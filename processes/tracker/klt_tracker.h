@@ -25,21 +25,25 @@ struct KltTrackerOptions {
   int border_margin_px = 8;            // px, tracks closer than this to the image border are dropped / not born
   double min_distance_px = 8.0;        // px, a new corner must be at least this far from live tracks and new corners
   double duplicate_distance_px = 1.0;  // px, of two tracks closer than this the younger is dropped (0 = never)
-  double quality_level = 0.01;         // Shi-Tomasi: min eigenvalue >= quality_level * strongest in the frame
-  double min_eigenvalue = 1e-4;        // Shi-Tomasi absolute floor on the min eigenvalue (gradient units / 255^2)
+  double quality_level = 0.01;         // Shi-Tomasi: response >= quality_level * strongest recent response (0, 1)
+  double min_eigenvalue = 1e-4;        // Shi-Tomasi absolute floor on the response (cv::cornerMinEigenVal units)
   int corner_block_size = 3;           // px, Shi-Tomasi structure-tensor window (odd, >= 3)
   int subpix_half_window = 3;          // px, cornerSubPix half window for new corners (0 = no refinement)
   int detect_interval = 1;             // frames; detection runs every this many frames (always on the first)
-  double min_cell_fill = 1.0;          // detect only when some cell holds < min_cell_fill * quota tracks (0..1]
+  double min_cell_fill = 1.0;          // detect when a cell holds < min_cell_fill * quota tracks; (0, 1]; then all
+                                       // cells below quota are topped up, emptiest first
   int win_size = 21;                   // px, Lucas-Kanade window side (odd, >= 5)
   int max_level = 3;                   // pyramid levels above the base image (0 = no pyramid)
+  bool predict_motion = true;          // start LK at the position predicted by the track's last displacement
+                                       // (new tracks: the median displacement of the previous frame); tracks
+                                       // that fail from there are retried from zero motion
+  int coarse_win_size = 9;             // px, window on pyramid levels >= 1 (odd, <= win_size; 0 = win_size there)
   int max_iterations = 30;             // Lucas-Kanade iterations per level
   double epsilon = 0.01;               // px, Lucas-Kanade convergence threshold
   double lk_min_eigenvalue = 1e-4;     // Lucas-Kanade: drop a point when its normalised min eigenvalue is below
   bool forward_backward_check = true;  // track back from the new frame and drop points that do not come home
   double fb_threshold_px = 0.5;        // px, max forward-backward round trip error
-  int fb_max_level = -1;               // pyramid levels of the backward pass (starts at the old point); -1 = max_level
-  double max_patch_error = 0.0;        // gray levels, max mean |difference| of the LK window after tracking (0 = off)
+  double max_patch_error = 15.0;       // gray levels, max mean |difference| of the LK window after tracking (0 = off)
   int threads = 1;                     // cv::setNumThreads value set on every Track() call (>= 1)
 };
 
@@ -48,11 +52,14 @@ bool ValidateKltTrackerOptions(const KltTrackerOptions& options, std::string* wh
 
 // Figures of the most recent Track() call.
 struct KltTrackStats {
-  int live = 0;        // tracks in the returned frame
-  int born = 0;        // new tracks in this frame (age 0)
-  int lost = 0;        // tracks of the previous frame that were dropped
+  int live = 0;           // tracks in the returned frame
+  int born = 0;           // new tracks in this frame (age 0)
+  int lost = 0;           // tracks of the previous frame that were dropped
   bool detected = false;  // corner detection ran on this frame
   bool reset = false;     // the frame size changed (or first frame): all previous tracks were dropped
+  double pyramid_ms = 0;  // ms (wall clock), gray conversion and pyramid
+  double lk_ms = 0;       // ms (wall clock), Lucas-Kanade forward and backward passes and track culling
+  double detect_ms = 0;   // ms (wall clock), corner detection and replenishment
 };
 
 class KltTracker {
@@ -77,22 +84,36 @@ class KltTracker {
  private:
   struct LiveTrack {
     int64_t id;
-    cv::Point2f pt;
-    int32_t age;
+    cv::Point2f pt;        // px, position in the last frame
+    int32_t age;           // frames since birth
+    cv::Point2f velocity;  // px/frame, last displacement (valid when age > 0)
   };
   int CellOf(const cv::Point2f& p) const;
+  // Pyramidal LK of pts from one pyramid to the other (coarse-to-fine, see coarse_win_size), starting at
+  // *initial when given (else at pts). *out, *status and *err get one entry per point (err: mean absolute
+  // difference of the base-level window, gray levels).
+  void TrackPoints(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to,
+                   const std::vector<cv::Point2f>& pts, const std::vector<cv::Point2f>* initial,
+                   std::vector<cv::Point2f>* out, std::vector<uchar>* status, std::vector<float>* err) const;
+  // Tracks pts starting at pts + offset, then applies the border, patch-error and forward-backward checks.
+  // *out: tracked positions; *keep: 1 where every check passed.
+  void TrackAndCheck(const std::vector<cv::Mat>& from_pyramid, const std::vector<cv::Mat>& to_pyramid,
+                     const std::vector<cv::Point2f>& pts, const std::vector<cv::Point2f>& offset,
+                     std::vector<cv::Point2f>* out, std::vector<uchar>* keep) const;
   void RemoveDuplicates(std::vector<LiveTrack>* tracks) const;
   void Detect(const cv::Mat& gray, std::vector<LiveTrack>* tracks);
 
   KltTrackerOptions options_;
   int quota_ = 1;
   int64_t next_id_ = 0;
-  int frames_ = 0;              // frames processed in total
-  int frames_since_reset_ = 0;  // frames processed since the last reset
+  int frames_ = 0;                   // frames processed in total
+  int frames_since_reset_ = 0;       // frames processed since the last reset
+  cv::Point2f median_velocity_;      // px/frame, median displacement of the tracks continued into the last frame
   double response_reference_ = 0.0;  // strongest Shi-Tomasi response seen recently (see Detect)
   cv::Size size_;
   cv::Mat prev_gray_;
-  std::vector<cv::Mat> prev_pyramid_;
+  std::vector<cv::Mat> prev_pyramid_;  // image and derivative levels (cv::buildOpticalFlowPyramid layout)
+  int levels_ = 0;                     // levels above the base in prev_pyramid_ (and in the current pyramid)
   std::vector<LiveTrack> tracks_;
   KltTrackStats stats_;
 };

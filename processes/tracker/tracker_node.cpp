@@ -31,7 +31,8 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.Add("klt-max-per-cell", &k->max_per_cell, "live-track quota per grid cell (0 = ceil(max_tracks / cells))");
   p.Add("klt-border-margin", &k->border_margin_px, "px, tracks closer to the border are dropped / not born");
   p.Add("klt-min-distance", &k->min_distance_px, "px, min distance of a new corner to other tracks");
-  p.Add("klt-duplicate-distance", &k->duplicate_distance_px, "px, the younger of two closer tracks is dropped (0 = off)");
+  p.Add("klt-duplicate-distance", &k->duplicate_distance_px,
+        "px, the younger of two closer tracks is dropped (0 = off)");
   p.Add("klt-quality-level", &k->quality_level, "Shi-Tomasi quality relative to the strongest corner, (0, 1)");
   p.Add("klt-min-eigenvalue", &k->min_eigenvalue, "Shi-Tomasi absolute min eigenvalue floor");
   p.Add("klt-corner-block-size", &k->corner_block_size, "px, Shi-Tomasi window (odd >= 3)");
@@ -40,12 +41,13 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.Add("klt-min-cell-fill", &k->min_cell_fill, "detect when a cell holds < this fraction of its quota, (0, 1]");
   p.Add("klt-win-size", &k->win_size, "px, Lucas-Kanade window side (odd)");
   p.Add("klt-max-level", &k->max_level, "pyramid levels above the base image");
+  p.Add("klt-predict-motion", &k->predict_motion, "start LK at the position predicted from the last displacement");
+  p.Add("klt-coarse-win-size", &k->coarse_win_size, "px, LK window on pyramid levels >= 1 (odd; 0 = klt-win-size)");
   p.Add("klt-max-iterations", &k->max_iterations, "Lucas-Kanade iterations per level");
   p.Add("klt-epsilon", &k->epsilon, "px, Lucas-Kanade convergence threshold");
   p.Add("klt-lk-min-eigenvalue", &k->lk_min_eigenvalue, "Lucas-Kanade min normalised eigenvalue");
   p.Add("klt-forward-backward-check", &k->forward_backward_check, "drop tracks failing the forward-backward check");
   p.Add("klt-fb-threshold", &k->fb_threshold_px, "px, max forward-backward round-trip error");
-  p.Add("klt-fb-max-level", &k->fb_max_level, "pyramid levels of the backward pass (-1 = klt-max-level)");
   p.Add("klt-max-patch-error", &k->max_patch_error, "gray levels, max mean LK window residual (0 = off)");
   p.Add("threads", &k->threads, "OpenCV threads (cv::setNumThreads)");
 }
@@ -151,8 +153,10 @@ void TrackerNode::OnImage(const image_t& msg) {
     return;
   }
   const double track_ms = (MonotonicMicros() - track_start_us) * 1e-3;
-  if (bus_.PublishMessage(options_.tracks_channel, TracksToMessage(tracks))) status_.CountOut();
-  else LogWarning("publishing on " + options_.tracks_channel + " failed");
+  if (bus_.PublishMessage(options_.tracks_channel, TracksToMessage(tracks)))
+    status_.CountOut();
+  else
+    LogWarning("publishing on " + options_.tracks_channel + " failed");
   last_seq_ = msg.seq;
   last_utime_ = msg.utime;
   ++frames_tracked_;
@@ -161,6 +165,8 @@ void TrackerNode::OnImage(const image_t& msg) {
   status_.SetValue("new_tracks", s.born);
   status_.SetValue("lost_tracks", s.lost);
   status_.SetValue("track_ms", track_ms);
+  status_.SetValue("lk_ms", s.lk_ms);
+  status_.SetValue("detect_ms", s.detect_ms);
   status_.SetValue("frames_tracked", static_cast<double>(frames_tracked_));
   if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
     status_.SetState(+process_status_t::STATE_RUNNING);
@@ -181,8 +187,10 @@ void TrackerNode::OnControl(const control_t& msg) {
   reply.command = control_t::COMMAND_FINISHED;
   reply.last_seq = last_seq_;
   reply.argument = "";
-  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
-  else LogWarning("publishing on " + options_.control_channel + " failed");
+  if (bus_.PublishMessage(options_.control_channel, reply))
+    status_.CountOut();
+  else
+    LogWarning("publishing on " + options_.control_channel + " failed");
   finished_ = true;
   status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
   status_.PublishIfDue(WallTimeMicros(), true);

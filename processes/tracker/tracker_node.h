@@ -10,7 +10,7 @@
 // End of stream: control_t COMMAND_END_OF_STREAM on OBJSCAN_CONTROL (target "*", "" or this process) makes it
 // publish control_t COMMAND_FINISHED (sender = process name, last_seq = seq of the last frame tracked, -1 if none,
 // utime = that frame's utime) and, with exit_when_finished, Finished() becomes true.
-// Status values: live_tracks, new_tracks, lost_tracks, track_ms (wall clock), frames_tracked.
+// Status values: live_tracks, new_tracks, lost_tracks, track_ms, lk_ms, detect_ms (wall clock), frames_tracked.
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
@@ -30,16 +30,16 @@ class Bus;
 class OptionParser;
 
 struct TrackerNodeOptions {
-  std::string name = "tracker";                  // process name (status name, control sender)
-  std::string image_channel = "CAMERA_IMAGE";    // input images (image_t)
-  std::string info_channel = "CAMERA_INFO";      // optional camera calibration (camera_info_t); "" = ignore
-  std::string tracks_channel = "FEATURE_TRACKS"; // output tracks (feature_tracks_t)
+  std::string name = "tracker";                     // process name (status name, control sender)
+  std::string image_channel = "CAMERA_IMAGE";       // input images (image_t)
+  std::string info_channel = "CAMERA_INFO";         // optional camera calibration (camera_info_t); "" = ignore
+  std::string tracks_channel = "FEATURE_TRACKS";    // output tracks (feature_tracks_t)
   std::string control_channel = "OBJSCAN_CONTROL";  // end of stream in, finished out (control_t)
-  std::string status_channel = "PROCESS_STATUS"; // process status (process_status_t)
-  int image_queue_capacity = 30;                 // frames the image subscription buffers before dropping (>= 1)
-  double status_period_s = 1.0;                  // s, status publication period (> 0)
-  bool exit_when_finished = true;                // Finished() turns true after end of stream was answered
-  KltTrackerOptions tracker;                     // the KLT tracker's options
+  std::string status_channel = "PROCESS_STATUS";    // process status (process_status_t)
+  int image_queue_capacity = 30;                    // frames the image subscription buffers before dropping (>= 1)
+  double status_period_s = 1.0;                     // s, status publication period (> 0)
+  bool exit_when_finished = true;                   // Finished() turns true after end of stream was answered
+  KltTrackerOptions tracker;                        // the KLT tracker's options
 };
 
 // Registers every option field (tracker options with prefix "klt-").
@@ -73,8 +73,8 @@ class TrackerNode : public Node {
   int expected_width_ = 0;   // px, from CAMERA_INFO or the first good frame (0 = unknown yet)
   int expected_height_ = 0;  // px
   bool size_from_info_ = false;
-  int64_t last_seq_ = -1;    // seq of the last frame tracked
-  int64_t last_utime_ = 0;   // utime of the last frame tracked
+  int64_t last_seq_ = -1;   // seq of the last frame tracked
+  int64_t last_utime_ = 0;  // utime of the last frame tracked
   int64_t frames_tracked_ = 0;
   bool finished_ = false;
 };

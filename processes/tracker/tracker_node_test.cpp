@@ -27,15 +27,13 @@ class TrackerNodeTest : public ::testing::Test {
  protected:
   void SetUp() override {
     bus_ = MakeLcmBus("memq://");
-    bus_->SubscribeMessage<feature_tracks_t>("FEATURE_TRACKS", [this](const feature_tracks_t& m, const RawMessage&) {
-      tracks_.push_back(m);
-    });
+    bus_->SubscribeMessage<feature_tracks_t>(
+        "FEATURE_TRACKS", [this](const feature_tracks_t& m, const RawMessage&) { tracks_.push_back(m); });
     bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
       if (m.command == control_t::COMMAND_FINISHED) finished_.push_back(m);
     });
-    bus_->SubscribeMessage<process_status_t>("PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) {
-      statuses_.push_back(m);
-    });
+    bus_->SubscribeMessage<process_status_t>(
+        "PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) { statuses_.push_back(m); });
     options_.tracker.max_tracks = 300;
     options_.tracker.grid_cols = 8;
     options_.tracker.grid_rows = 6;
@@ -317,8 +315,7 @@ TEST(TrackerNodeOptionsTest, ValidationAndParsing) {
   EXPECT_TRUE(ValidateTrackerNodeOptions(o, &why)) << why;
   OptionParser parser("tracker", "test");
   AddTrackerNodeOptions(parser, &o);
-  ASSERT_TRUE(parser.ParseArgs({"--klt-win-size", "15", "--image-queue-capacity", "5", "--threads", "2"}, &why))
-      << why;
+  ASSERT_TRUE(parser.ParseArgs({"--klt-win-size", "15", "--image-queue-capacity", "5", "--threads", "2"}, &why)) << why;
   EXPECT_EQ(o.tracker.win_size, 15);
   EXPECT_EQ(o.image_queue_capacity, 5);
   EXPECT_EQ(o.tracker.threads, 2);
