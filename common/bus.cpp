@@ -106,8 +106,12 @@ class DataLogBus final : public Bus {
     const auto* bytes = static_cast<const uint8_t*>(data);
     uint64_t utime = 0;
     for (int i = 8; i < 16; ++i) utime = (utime << 8) | bytes[i];
-    // Keep event times non-decreasing (lcm-logplayer sleeps on the differences).
-    last_timestamp_ = std::max<int64_t>(last_timestamp_, static_cast<int64_t>(utime));
+    // Keep event times non-decreasing (lcm-logplayer sleeps on the differences), and do not let one message with a
+    // far-off utime (garbage, wall clock) push every later event into the future.
+    constexpr int64_t kMaxJumpUs = 3600LL * 1000000LL;
+    const auto data_time = static_cast<int64_t>(utime);
+    if (next_event_ == 0) last_timestamp_ = std::max<int64_t>(0, data_time);
+    else if (data_time > last_timestamp_ && data_time - last_timestamp_ <= kMaxJumpUs) last_timestamp_ = data_time;
     lcm_eventlog_event_t event{};
     event.eventnum = next_event_++;
     event.timestamp = last_timestamp_;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <string>
@@ -61,7 +62,15 @@ class Bus {
         channel,
         [on_message, on_malformed](const RawMessage& raw) {
           Msg msg;
-          if (msg.decode(raw.data, 0, raw.size) != raw.size) {
+          bool decoded = false;
+          try {
+            // LCM's generated decoders size arrays from the count fields before checking them against the
+            // message size: a corrupted count can throw (bad_alloc, length_error). That is malformed input.
+            decoded = msg.decode(raw.data, 0, raw.size) == raw.size;
+          } catch (const std::exception&) {
+            decoded = false;
+          }
+          if (!decoded) {
             if (on_malformed) on_malformed(raw);
             return;
           }
@@ -74,7 +83,9 @@ class Bus {
 // A bus on one LCM instance (any LCM URL). Throws std::runtime_error when LCM cannot start on the URL.
 // Also accepts "datalog://PATH[?exclude=CH1,CH2]": a publish-only log writer whose event timestamps are the
 // messages' own data time (the int64 utime every objscan type starts with), so that lcm-logplayer replays it at
-// the data rate. Channels in exclude (default PROCESS_STATUS, whose utime is wall clock) are not written.
+// the data rate. Channels in exclude (default PROCESS_STATUS, whose utime is wall clock) are not written. Event
+// times never decrease, and a message whose utime jumps more than an hour past the previous event (garbage, or a
+// wall-clock field) keeps the previous event time.
 // Subscriptions on a datalog bus never fire and Handle() returns 0.
 std::unique_ptr<Bus> MakeLcmBus(const std::string& url);
 

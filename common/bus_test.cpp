@@ -53,6 +53,25 @@ TEST(BusTest, MalformedMessageGoesToErrorHandler) {
   EXPECT_EQ(bad, 2);
 }
 
+TEST(BusTest, CorruptedArrayCountIsMalformedNotACrash) {
+  auto bus = MakeLcmBus("memq://");
+  int good = 0, bad = 0;
+  bus->SubscribeMessage<control_t>(
+      "CTRL", [&](const control_t&, const RawMessage&) { ++good; }, [&](const RawMessage&) { ++bad; });
+  control_t m{};
+  m.sender = "abc";
+  std::vector<uint8_t> bytes(m.getEncodedSize());
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  // The sender string's length field follows the fingerprint and utime: claim ~2 GB.
+  bytes[16] = 0x7f;
+  bytes[17] = 0xff;
+  ASSERT_TRUE(bus->Publish("CTRL", bytes.data(), static_cast<int>(bytes.size())));
+  while (bus->Handle(0) > 0) {
+  }
+  EXPECT_EQ(good, 0);
+  EXPECT_EQ(bad, 1);
+}
+
 TEST(BusTest, LogWriteThenReplayToEndSplitBus) {
   const std::string path = TempPath("log.lcmlog");
   {
@@ -107,6 +126,26 @@ TEST(BusTest, DataLogStampsEventsWithDataTimeAndSkipsStatus) {
   }
   lcm_eventlog_destroy(log);
   EXPECT_EQ(stamps, (std::vector<int64_t>{1000000, 1033333, 1066666}));
+  // A far-off utime (garbage) does not move the clock.
+  {
+    auto writer = MakeLcmBus("datalog://" + path);
+    odometry_t m{};
+    m.utime = 1000;
+    ASSERT_TRUE(writer->PublishMessage("ODOM", m));
+    m.utime = int64_t{1} << 60;
+    ASSERT_TRUE(writer->PublishMessage("ODOM", m));
+    m.utime = 2000;
+    ASSERT_TRUE(writer->PublishMessage("ODOM", m));
+  }
+  log = lcm_eventlog_create(path.c_str(), "r");
+  ASSERT_NE(log, nullptr);
+  stamps.clear();
+  while (lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(log)) {
+    stamps.push_back(e->timestamp);
+    lcm_eventlog_free_event(e);
+  }
+  lcm_eventlog_destroy(log);
+  EXPECT_EQ(stamps, (std::vector<int64_t>{1000, 1000, 2000}));
   std::remove(path.c_str());
 }
 

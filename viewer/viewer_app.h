@@ -1,0 +1,73 @@
+// ViewerApp: the "viewer" process. A GLFW window with the 3-D scene (SceneRenderer) and Dear ImGui panels
+// (playback, layers, camera image with tracks, channel table, process status table), fed either from a live LCM bus
+// (every channel is subscribed; MessageDispatcher decodes the known ones) or from a log file read directly
+// (LogPlayer: play / pause / step / seek / speed).
+// Headless use: --screenshot FILE.png renders once the chosen log time / message count / end of log is reached,
+// writes the window (scene + panels) as PNG and returns. --benchmark-voxels N renders a synthetic N-voxel model for
+// benchmark_seconds and prints frames/s.
+// Needs an X display (Xvfb works, with Mesa llvmpipe). Run() does not throw; it returns the process exit code.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "viewer/scene_renderer.h"
+#include "viewer/view_camera.h"
+#include "viewer/viewer_state.h"
+
+namespace objscan {
+
+class OptionParser;
+
+struct ViewerOptions {
+  std::string name = "viewer";                    // process name (status name, log prefix)
+  std::string lcm_url;                            // live LCM URL ("" = the objscan default); ignored with log
+  std::string log;                                // LCM log file to play instead of a live bus
+  ViewerChannels channels;                        // channels decoded (others are listed as unknown)
+  std::string status_channel = "PROCESS_STATUS";  // where the viewer publishes its own status (live only)
+  int window_width = 1280;                        // px, window width
+  int window_height = 800;                        // px, window height
+  int panel_width = 500;                          // px, right-hand panel column (0 = no panels)
+  bool vsync = true;                              // wait for vertical sync (interactive use)
+  std::string view = "iso";                       // view preset: iso, top, front, side
+  double view_yaw_deg = std::numeric_limits<double>::quiet_NaN();    // deg, overrides the preset's yaw
+  double view_pitch_deg = std::numeric_limits<double>::quiet_NaN();  // deg, overrides the preset's pitch
+  double view_distance_mm = 3000.0;                                  // mm, eye distance from the view target (> 0)
+  double view_target_x_mm = 0.0;                                     // mm, view target in world
+  double view_target_y_mm = 0.0;                                     // mm
+  double view_target_z_mm = 0.0;                                     // mm
+  double view_fov_deg = 50.0;                                        // deg, vertical field of view (1..170)
+  bool follow = false;                      // start in follow-camera mode (target tracks the newest pose)
+  double speed = 1.0;                       // log playback speed (> 0)
+  bool paused = false;                      // start the log paused
+  std::string screenshot;                   // PNG path: take a screenshot and exit
+  int64_t screenshot_at_utime = -1;         // µs, log time to take the screenshot at (-1 = unused)
+  int64_t screenshot_after_messages = -1;   // take it after this many messages (-1 = unused)
+  double screenshot_timeout_s = 30.0;       // s, live only: take it anyway after this wall time
+  int benchmark_voxels = 0;                 // > 0: render a synthetic model of this many voxels and print fps
+  double benchmark_seconds = 5.0;           // s, benchmark duration
+  std::string benchmark_shape = "ball";     // benchmark model: ball (solid) or scatter (no voxel touches another)
+  int min_votes = 0;                        // initial voxel display threshold (votes)
+  bool cull_hidden_voxels = true;           // skip voxel faces hidden by neighbours
+  std::string voxel_style = "auto";         // voxels as cubes, points, or auto (points above max_cube_instances)
+  int64_t max_cube_instances = 100000;      // auto style: most visible voxels drawn as cubes
+  int64_t max_mesh_faces = 300000;          // exposed voxel faces drawn as one static mesh at most (else instanced)
+  std::string landmark_coloring = "error";  // landmark colours: error, age or rgb
+  double max_reprojection_error_px = 3.0;   // px, reprojection error drawn full red (> 0)
+  int max_events_per_frame = 20000;         // messages handled per rendered frame at most (>= 1)
+};
+
+void AddViewerOptions(OptionParser& parser, ViewerOptions* options);
+bool ValidateViewerOptions(const ViewerOptions& options, std::string* why);
+
+// The view camera the options describe (preset, then the explicit overrides).
+OrbitView InitialView(const ViewerOptions& options);
+// The scene viewport for a framebuffer: the left part, right of it the panel column.
+Viewport SceneViewport(int framebuffer_width, int framebuffer_height, int panel_width);
+
+// Runs the viewer until the window is closed (or the screenshot/benchmark is done). Returns the exit code.
+int RunViewer(const ViewerOptions& options);
+
+}  // namespace objscan
