@@ -1,7 +1,8 @@
 // Kinematics of the robot: a differential-drive base with a pan-tilt camera on a mast.
 //
 // Frames (all right-handed, lengths in mm, angles in rad):
-//   world   z up, floor is z = 0. The odometry frame is the world frame as the robot believes it.
+//   world   z up, floor is z = 0. The odometry frame (odometry_t) is the robot base frame at its start pose, as
+//           the robot believes it; estimators start their world frame there.
 //   base    on the floor under the robot's centre: x forward, y left, z up.
 //           world_from_base = [Rz(theta) | (x, y, 0)].
 //   pan     at (mast_offset_x_mm, mast_offset_y_mm, mast_height_mm) in base, rotated by Rz(pan) (pan > 0 = left).

@@ -1,0 +1,464 @@
+#include "drivers/robot_sim/robot_sim_node.h"
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "common/time.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/odometry_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/process_status_t.hpp"
+#include "objscan/robot_command_t.hpp"
+
+namespace objscan {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+bool EncodingFromName(const std::string& name, int8_t* encoding) {
+  if (name == "gray8")
+    *encoding = image_t::ENCODING_GRAY8;
+  else if (name == "rgb8")
+    *encoding = image_t::ENCODING_RGB8;
+  else if (name == "bgr8")
+    *encoding = image_t::ENCODING_BGR8;
+  else if (name == "jpeg")
+    *encoding = image_t::ENCODING_JPEG;
+  else
+    return false;
+  return true;
+}
+
+// Parses "a,b" / "a,b,c" into values; false on a wrong count or a non-finite number.
+bool ParseList(const std::string& text, size_t count, double* values) {
+  std::stringstream in(text);
+  std::string part;
+  size_t n = 0;
+  while (std::getline(in, part, ',')) {
+    if (n >= count) return false;
+    try {
+      size_t used = 0;
+      values[n] = std::stod(part, &used);
+      if (used != part.size() || !std::isfinite(values[n])) return false;
+    } catch (const std::exception&) {
+      return false;
+    }
+    ++n;
+  }
+  return n == count;
+}
+
+bool ReadRawSeq(const RawMessage& raw, int64_t* seq) {
+  if (raw.size < 24) return false;
+  const auto* bytes = static_cast<const uint8_t*>(raw.data);
+  uint64_t value = 0;
+  for (int i = 16; i < 24; ++i) value = (value << 8) | bytes[i];
+  *seq = static_cast<int64_t>(value);
+  return true;
+}
+
+}  // namespace
+
+void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
+  p.Add("scene", &o->scene, "scene file (drivers/robot_sim/scenes/*.scene; format in drivers/robot_sim/README.md)");
+  p.Add("mode", &o->mode, "orbit (scripted circle around the target) or command (follow ROBOT_COMMAND)");
+  p.Add("frames", &o->frames, "frames to publish (command mode: 0 = until stopped)");
+  p.Add("rate", &o->rate_hz, "Hz, frame rate: utime = llround(i * 1e6 / rate)");
+  p.Add("realtime", &o->realtime, "publish at the rate in wall time (false: as fast as possible)");
+  p.Add("seed", &o->seed, "seed (>= 0) of the odometry errors and the image noise");
+  p.Add("orbit-radius", &o->orbit_radius_mm, "mm, orbit radius");
+  p.Add("orbit-center", &o->orbit_center, "x,y mm of the orbit centre (empty: target centre projected on the floor)");
+  p.Add("orbit-degrees", &o->orbit_degrees, "deg, angle covered over all frames (negative = clockwise)");
+  p.Add("orbit-start-deg", &o->orbit_start_deg, "deg, robot's angle around the orbit centre at frame 0");
+  p.Add("look-at", &o->look_at, "x,y,z mm the camera aims at in orbit mode (empty: the target centre)");
+  p.Add("mast-height", &o->mast_height_mm, "mm, height of the pan/tilt axes above the floor");
+  p.Add("mast-offset-x", &o->mast_offset_x_mm, "mm, mast position forward of the base centre");
+  p.Add("mast-offset-y", &o->mast_offset_y_mm, "mm, mast position left of the base centre");
+  p.Add("camera-offset-x", &o->camera_offset_x_mm, "mm, optical centre in front of the tilt axis");
+  p.Add("wheel-base", &o->wheel_base_mm, "mm, distance between the drive wheels");
+  p.Add("width", &o->width, "px, image width");
+  p.Add("height", &o->height, "px, image height");
+  p.Add("fx", &o->fx, "px, focal length along u");
+  p.Add("fy", &o->fy, "px, focal length along v");
+  p.Add("cx", &o->cx, "px, principal point u");
+  p.Add("cy", &o->cy, "px, principal point v");
+  p.Add("camera-name", &o->camera_name, "camera_name in image_t and camera_info_t");
+  p.Add("noise-sigma", &o->noise_sigma, "grey levels, std of the Gaussian image noise per channel (0 = none)");
+  p.Add("trilinear", &o->trilinear, "trilinear texture filtering between mip levels (slower)");
+  p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
+  p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
+  p.Add("odometry-scale-error", &o->odometry_scale_error, "relative odometry distance error (wheel slip), 0.02 = 2 %");
+  p.Add("odometry-yaw-scale-error", &o->odometry_yaw_scale_error, "relative error of odometry heading changes");
+  p.Add("heading-drift-deg-per-m", &o->heading_drift_deg_per_m, "deg of odometry heading drift per metre travelled");
+  p.Add("distance-noise", &o->distance_noise, "per-frame odometry distance noise std, fraction of the step");
+  p.Add("heading-noise-deg-per-sqrt-m", &o->heading_noise_deg_per_sqrt_m, "odometry heading random walk, deg/sqrt(m)");
+  p.Add("pan-bias-deg", &o->pan_bias_deg, "deg, pan encoder bias");
+  p.Add("tilt-bias-deg", &o->tilt_bias_deg, "deg, tilt encoder bias");
+  p.Add("head-noise-deg", &o->head_noise_deg, "deg, std of the pan/tilt reading noise");
+  p.Add("sync-offset-ms", &o->sync_offset_ms, "ms, odometry utime minus image utime (time-stamping error)");
+  p.Add("odometry-origin", &o->odometry_origin, "start (odometry frame = robot start pose) or world");
+  p.Add("max-speed", &o->max_speed_mm_s, "mm/s, command mode speed limit");
+  p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, command mode yaw rate limit");
+  p.Add("max-head-rate-deg-s", &o->max_head_rate_deg_s, "deg/s, command mode pan/tilt slew limit");
+  p.Add("command-timeout-ms", &o->command_timeout_ms,
+        "ms of sim time without a command before the base stops (0 = never)");
+  p.Add("lockstep-channel", &o->lockstep_channel,
+        "publish frame i+1 only after a message with seq >= i - lockstep-lag on this channel (empty = off)");
+  p.Add("lockstep-lag", &o->lockstep_lag, "frames the lockstep consumer may lag behind");
+  p.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms, "ms, go on after waiting this long for lockstep (0 = forever)");
+  p.Add("ground-truth-dir", &o->ground_truth_dir,
+        "write target_surface.ply, scene.txt, poses_gt.txt, robot_gt.txt here (empty = off)");
+  p.Add("surface-density", &o->surface_density_per_mm2, "points per mm^2 in target_surface.ply");
+  p.Add("publish-ground-truth", &o->publish_ground_truth, "publish GROUND_TRUTH_POSE");
+  p.Add("image-channel", &o->image_channel, "output channel for image_t");
+  p.Add("info-channel", &o->info_channel, "output channel for camera_info_t");
+  p.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
+  p.Add("ground-truth-channel", &o->ground_truth_channel, "output channel for the true camera poses (pose_t)");
+  p.Add("command-channel", &o->command_channel, "input channel of robot_command_t (command mode)");
+  p.Add("control-channel", &o->control_channel, "channel of control_t (END_OF_STREAM out, SHUTDOWN in)");
+  p.Add("status-channel", &o->status_channel, "output channel for process_status_t");
+  p.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
+}
+
+RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
+  RobotSimOptions s;
+  s.mode = o.mode;
+  s.frames = o.frames;
+  s.rate_hz = o.rate_hz;
+  s.orbit_radius_mm = o.orbit_radius_mm;
+  double values[3] = {0, 0, 0};
+  s.orbit_center_auto = o.orbit_center.empty();
+  if (!s.orbit_center_auto && ParseList(o.orbit_center, 2, values)) s.orbit_center_mm = {values[0], values[1]};
+  s.orbit_degrees = o.orbit_degrees;
+  s.orbit_start_deg = o.orbit_start_deg;
+  s.look_at_auto = o.look_at.empty();
+  if (!s.look_at_auto && ParseList(o.look_at, 3, values)) s.look_at_mm = {values[0], values[1], values[2]};
+  s.geometry.mast_height_mm = o.mast_height_mm;
+  s.geometry.mast_offset_x_mm = o.mast_offset_x_mm;
+  s.geometry.mast_offset_y_mm = o.mast_offset_y_mm;
+  s.geometry.camera_offset_mm = Eigen::Vector3d(o.camera_offset_x_mm, 0, 0);
+  s.geometry.wheel_base_mm = o.wheel_base_mm;
+  s.errors.scale_error = o.odometry_scale_error;
+  s.errors.yaw_scale_error = o.odometry_yaw_scale_error;
+  s.errors.heading_drift_rad_per_mm = o.heading_drift_deg_per_m * kDeg / 1000.0;
+  s.errors.distance_noise = o.distance_noise;
+  s.errors.heading_noise_rad_per_sqrt_m = o.heading_noise_deg_per_sqrt_m * kDeg;
+  s.errors.pan_bias_rad = o.pan_bias_deg * kDeg;
+  s.errors.tilt_bias_rad = o.tilt_bias_deg * kDeg;
+  s.errors.head_noise_rad = o.head_noise_deg * kDeg;
+  s.errors.sync_offset_us = std::isfinite(o.sync_offset_ms) ? std::llround(o.sync_offset_ms * 1000.0) : 0;
+  s.odometry_origin = o.odometry_origin;
+  s.seed = static_cast<uint64_t>(o.seed);
+  s.max_speed_mm_s = o.max_speed_mm_s;
+  s.max_omega_rad_s = o.max_omega_deg_s * kDeg;
+  s.max_head_rate_rad_s = o.max_head_rate_deg_s * kDeg;
+  s.command_timeout_us = static_cast<int64_t>(o.command_timeout_ms) * 1000;
+  return s;
+}
+
+PinholeCamera ToCamera(const RobotSimNodeOptions& o) {
+  PinholeCamera c;
+  c.name = o.camera_name;
+  c.width = o.width;
+  c.height = o.height;
+  c.fx = o.fx;
+  c.fy = o.fy;
+  c.cx = o.cx;
+  c.cy = o.cy;
+  return c;
+}
+
+bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why) {
+  auto fail = [why](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  int8_t encoding = 0;
+  double values[3];
+  if (o.scene.empty()) return fail("--scene is required");
+  if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("--orbit-center must be x,y");
+  if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("--look-at must be x,y,z");
+  if (o.seed < 0) return fail("--seed must be >= 0");
+  if (!std::isfinite(o.sync_offset_ms) || std::abs(o.sync_offset_ms) > 1e6)
+    return fail("--sync-offset-ms out of range");
+  if (!std::isfinite(o.max_omega_deg_s) || !std::isfinite(o.max_head_rate_deg_s))
+    return fail("rate limits must be finite");
+  std::string sim_why;
+  if (!ValidateRobotSimOptions(ToRobotSimOptions(o), &sim_why)) return fail(sim_why);
+  std::string camera_why;
+  if (!ToCamera(o).IsValid(&camera_why)) return fail("camera: " + camera_why);
+  if (o.width > 8192 || o.height > 8192) return fail("--width/--height must be <= 8192");
+  if (!std::isfinite(o.noise_sigma) || o.noise_sigma < 0 || o.noise_sigma > 100)
+    return fail("--noise-sigma must be in [0, 100]");
+  if (!EncodingFromName(o.encoding, &encoding)) return fail("--encoding must be rgb8, bgr8, gray8 or jpeg");
+  if (o.jpeg_quality < 1 || o.jpeg_quality > 100) return fail("--jpeg-quality must be in 1..100");
+  if (o.lockstep_lag < 0) return fail("--lockstep-lag must be >= 0");
+  if (o.lockstep_timeout_ms < 0) return fail("--lockstep-timeout-ms must be >= 0");
+  if (o.command_timeout_ms < 0) return fail("--command-timeout-ms must be >= 0");
+  if (!std::isfinite(o.surface_density_per_mm2) || o.surface_density_per_mm2 <= 0 || o.surface_density_per_mm2 > 100)
+    return fail("--surface-density must be in (0, 100]");
+  if (o.camera_name.empty()) return fail("--camera-name must not be empty");
+  if (o.image_channel.empty() || o.info_channel.empty() || o.odometry_channel.empty() ||
+      o.ground_truth_channel.empty() || o.command_channel.empty() || o.control_channel.empty() ||
+      o.status_channel.empty())
+    return fail("channel names must not be empty");
+  return true;
+}
+
+RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
+    : bus_(bus), options_(options), status_(&bus, kProcessName, options.status_channel) {
+  std::string why;
+  if (!ValidateRobotSimNodeOptions(options_, &why)) throw std::invalid_argument(why);
+  EncodingFromName(options_.encoding, &encoding_);
+  sim_options_ = ToRobotSimOptions(options_);
+  camera_ = ToCamera(options_);
+  scene_ = std::make_unique<Scene>(LoadScene(options_.scene));
+  RenderOptions render_options;
+  render_options.noise_sigma = options_.noise_sigma;
+  render_options.noise_seed = static_cast<uint64_t>(options_.seed);
+  render_options.trilinear = options_.trilinear;
+  renderer_ = std::make_unique<Renderer>(*scene_, render_options);
+  sim_ = std::make_unique<RobotSimulator>(*scene_, sim_options_);
+  LogInfo("scene " + options_.scene + ": " + std::to_string(scene_->objects.size()) + " objects, target '" +
+          scene_->target().name + "'");
+
+  if (!options_.ground_truth_dir.empty()) {
+    const std::string& dir = options_.ground_truth_dir;
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const auto samples = SampleSurface(scene_->target(), options_.surface_density_per_mm2,
+                                       MixSeed(static_cast<uint64_t>(options_.seed), 0x9f));
+    std::vector<Eigen::Vector3f> points, normals;
+    for (const auto& s : samples) {
+      points.push_back(s.position);
+      normals.push_back(s.normal);
+    }
+    if (!WritePly(dir + "/target_surface.ply", points, normals, {}))
+      throw std::runtime_error("cannot write " + dir + "/target_surface.ply");
+    std::ofstream scene_txt(dir + "/scene.txt");
+    scene_txt << scene_->Describe();
+    scene_txt << "# robot_sim: seed=" << options_.seed << " mode=" << options_.mode << " frames=" << options_.frames
+              << " rate=" << options_.rate_hz << " orbit_radius=" << options_.orbit_radius_mm
+              << " orbit_center=" << sim_->orbit_center().x() << "," << sim_->orbit_center().y()
+              << " orbit_degrees=" << options_.orbit_degrees << " orbit_start_deg=" << options_.orbit_start_deg
+              << " look_at=" << sim_->look_at().x() << "," << sim_->look_at().y() << "," << sim_->look_at().z()
+              << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx
+              << " fy=" << camera_.fy << " cx=" << camera_.cx << " cy=" << camera_.cy
+              << " noise_sigma=" << options_.noise_sigma << "\n# robot: mast_height=" << options_.mast_height_mm
+              << " camera_offset_x=" << options_.camera_offset_x_mm
+              << "\n# odometry errors: scale=" << options_.odometry_scale_error
+              << " yaw_scale=" << options_.odometry_yaw_scale_error
+              << " heading_drift_deg_per_m=" << options_.heading_drift_deg_per_m
+              << " distance_noise=" << options_.distance_noise
+              << " heading_noise_deg_per_sqrt_m=" << options_.heading_noise_deg_per_sqrt_m
+              << " pan_bias_deg=" << options_.pan_bias_deg << " tilt_bias_deg=" << options_.tilt_bias_deg
+              << " head_noise_deg=" << options_.head_noise_deg << " sync_offset_ms=" << options_.sync_offset_ms
+              << " odometry_origin=" << options_.odometry_origin << "\n";
+    if (!scene_txt) throw std::runtime_error("cannot write " + dir + "/scene.txt");
+    poses_gt_.open(dir + "/poses_gt.txt");
+    robot_gt_.open(dir + "/robot_gt.txt");
+    if (!poses_gt_ || !robot_gt_) throw std::runtime_error("cannot write poses_gt.txt / robot_gt.txt in " + dir);
+    poses_gt_ << "# robot_sim true camera poses, TUM format: t tx ty tz qx qy qz qw; t = utime / 1e6 s, "
+                 "camera-to-world (world_from_camera), positions in mm (not metres)\n";
+    robot_gt_ << "# robot_sim true robot state per frame: t seq x_mm y_mm theta_rad pan_rad tilt_rad v_mm_s "
+                 "omega_rad_s (world frame, t = image utime / 1e6 s)\n";
+    poses_gt_ << std::setprecision(10);
+    robot_gt_ << std::setprecision(10);
+    LogInfo("ground truth in " + dir + " (" + std::to_string(points.size()) + " surface points)");
+  }
+
+  if (options_.mode == "command") {
+    bus_.SubscribeMessage<robot_command_t>(
+        options_.command_channel,
+        [this](const robot_command_t& msg, const RawMessage&) {
+          status_.CountIn();
+          status_.ObserveSeq("command", msg.seq);
+          const bool finite = std::isfinite(msg.v_mm_s) && std::isfinite(msg.omega_rad_s) &&
+                              std::isfinite(msg.goal_x_mm) && std::isfinite(msg.goal_y_mm) &&
+                              std::isfinite(msg.goal_theta_rad) && std::isfinite(msg.pan_rad) &&
+                              std::isfinite(msg.tilt_rad);
+          if (!finite) {
+            status_.Reject("command: non-finite value", "seq " + std::to_string(msg.seq));
+            return;
+          }
+          if (msg.mode < robot_command_t::MODE_STOP || msg.mode > robot_command_t::MODE_HEAD_ONLY) {
+            status_.Reject("command: unknown mode", std::to_string(msg.mode));
+            return;
+          }
+          SimCommand command;
+          command.mode = static_cast<SimCommand::Mode>(msg.mode);
+          command.v_mm_s = msg.v_mm_s;
+          command.omega_rad_s = msg.omega_rad_s;
+          command.goal_x_mm = msg.goal_x_mm;
+          command.goal_y_mm = msg.goal_y_mm;
+          command.goal_theta_rad = msg.goal_theta_rad;
+          command.has_pan_tilt = msg.has_pan_tilt || msg.mode == robot_command_t::MODE_HEAD_ONLY;
+          command.pan_rad = msg.pan_rad;
+          command.tilt_rad = msg.tilt_rad;
+          sim_->SetCommand(command, last_utime_);
+          ++commands_;
+        },
+        [this](const RawMessage& raw) {
+          status_.CountIn();
+          status_.Reject("command: malformed", raw.channel);
+        });
+  }
+  bus_.SubscribeMessage<control_t>(
+      options_.control_channel,
+      [this](const control_t& msg, const RawMessage&) {
+        if (msg.command != control_t::COMMAND_SHUTDOWN) return;
+        if (msg.target != "*" && msg.target != kProcessName) return;
+        status_.CountIn();
+        if (!stop_requested_) LogInfo("shutdown requested by " + msg.sender);
+        stop_requested_ = true;
+      },
+      [this](const RawMessage& raw) {
+        status_.CountIn();
+        status_.Reject("control: malformed", raw.channel);
+      });
+  if (!options_.lockstep_channel.empty()) {
+    bus_.Subscribe(options_.lockstep_channel, [this](const RawMessage& raw) {
+      int64_t seq = 0;
+      if (!ReadRawSeq(raw, &seq)) {
+        status_.Reject("lockstep: message too short", raw.channel);
+        return;
+      }
+      if (seq > lockstep_max_seq_) lockstep_max_seq_ = seq;
+    });
+  }
+  status_.SetState(process_status_t::STATE_STARTING, options_.scene);
+  status_.SetValue("frames_published", 0);
+}
+
+RobotSimNode::~RobotSimNode() = default;
+
+template <class Msg>
+void RobotSimNode::Publish(const std::string& channel, const Msg& msg) {
+  if (bus_.PublishMessage(channel, msg)) {
+    status_.CountOut();
+  } else if (publish_failures_++ == 0) {
+    LogError("publishing on " + channel + " failed (further failures are only counted)");
+  }
+}
+
+bool RobotSimNode::LockstepReady(int64_t wall_utime) {
+  if (options_.lockstep_channel.empty() || frames_published_ == 0) return true;
+  const int64_t needed = frames_published_ - 1 - options_.lockstep_lag;
+  if (needed < 0 || lockstep_max_seq_ >= needed || lockstep_released_ >= needed) {
+    lockstep_waiting_for_ = -1;
+    return true;
+  }
+  if (lockstep_waiting_for_ != needed) {
+    lockstep_waiting_for_ = needed;
+    lockstep_wait_start_ = wall_utime;
+  }
+  if (options_.lockstep_timeout_ms > 0 &&
+      wall_utime - lockstep_wait_start_ >= static_cast<int64_t>(options_.lockstep_timeout_ms) * 1000) {
+    ++lockstep_timeouts_;
+    if (!lockstep_warned_) {
+      LogWarning("no seq >= " + std::to_string(needed) + " on " + options_.lockstep_channel + " within " +
+                 std::to_string(options_.lockstep_timeout_ms) + " ms; going on (further timeouts are only counted)");
+      lockstep_warned_ = true;
+    }
+    lockstep_released_ = needed;
+    lockstep_waiting_for_ = -1;
+    return true;
+  }
+  return false;
+}
+
+void RobotSimNode::PublishFrame() {
+  const SimFrame frame = sim_->Step();
+  const int64_t render_start = MonotonicMicros();
+  renderer_->Render(camera_, frame.world_from_camera, &render_, static_cast<uint64_t>(frame.seq));
+  render_ms_ = (MonotonicMicros() - render_start) / 1000.0;
+  status_.RecordLatencyMs(render_ms_);
+
+  Publish(options_.info_channel, CameraToMessage(camera_, frame.utime));
+  Publish(options_.odometry_channel, OdometryToMessage(frame.odometry));
+  if (options_.publish_ground_truth) {
+    CameraPoseEstimate pose;
+    pose.utime = frame.utime;
+    pose.seq = frame.seq;
+    pose.world_from_camera = frame.world_from_camera;
+    pose.status = PoseStatus::kGroundTruth;
+    pose.scale_source = ScaleSource::kTrue;
+    Publish(options_.ground_truth_channel, PoseToMessage(pose, "world", "camera"));
+  }
+  ImageFrame image;
+  image.utime = frame.utime;
+  image.seq = frame.seq;
+  image.camera_name = camera_.name;
+  image.image = render_.rgb;
+  Publish(options_.image_channel, ImageToMessage(image, encoding_, options_.jpeg_quality));
+
+  if (poses_gt_.is_open()) {
+    const Eigen::Quaterniond q(frame.world_from_camera.linear());
+    const Eigen::Vector3d t = frame.world_from_camera.translation();
+    poses_gt_ << frame.utime / 1e6 << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y()
+              << " " << q.z() << " " << q.w() << "\n";
+    const RobotState& s = frame.truth;
+    robot_gt_ << frame.utime / 1e6 << " " << frame.seq << " " << s.x_mm << " " << s.y_mm << " " << s.theta_rad << " "
+              << s.pan_rad << " " << s.tilt_rad << " " << s.v_mm_s << " " << s.omega_rad_s << "\n";
+  }
+  truth_history_.push_back(frame.truth);
+  last_utime_ = frame.utime;
+  ++frames_published_;
+  status_.SetLastDataUtime(frame.utime);
+  status_.SetValue("frames_published", static_cast<double>(frames_published_));
+  status_.SetValue("render_ms", render_ms_);
+}
+
+void RobotSimNode::FinishStream() {
+  if (end_of_stream_sent_) return;
+  control_t msg;
+  msg.utime = last_utime_;
+  msg.sender = kProcessName;
+  msg.target = "*";
+  msg.command = control_t::COMMAND_END_OF_STREAM;
+  msg.last_seq = frames_published_ - 1;
+  msg.argument = "";
+  Publish(options_.control_channel, msg);
+  end_of_stream_sent_ = true;
+  if (poses_gt_.is_open()) poses_gt_.flush();
+  if (robot_gt_.is_open()) robot_gt_.flush();
+  status_.SetState(process_status_t::STATE_FINISHED, std::to_string(frames_published_) + " frames published");
+  LogInfo("end of stream after " + std::to_string(frames_published_) + " frames");
+}
+
+void RobotSimNode::Tick(int64_t wall_utime) {
+  if (!end_of_stream_sent_) {
+    if (!started_) {
+      started_ = true;
+      start_wall_ = wall_utime;
+      status_.SetState(process_status_t::STATE_RUNNING, options_.mode);
+    }
+    const bool at_end = sim_->Done() || stop_requested_;
+    const bool due = !options_.realtime || at_end || wall_utime >= start_wall_ + sim_->UtimeOf(sim_->frames_produced());
+    if (due && LockstepReady(wall_utime)) {
+      if (at_end)
+        FinishStream();
+      else
+        PublishFrame();
+    }
+  }
+  status_.SetValue("lockstep_timeouts", static_cast<double>(lockstep_timeouts_));
+  status_.SetValue("commands", static_cast<double>(commands_));
+  status_.PublishIfDue(wall_utime);
+}
+
+void RobotSimNode::OnShutdown() {
+  if (!end_of_stream_sent_) FinishStream();
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+}  // namespace objscan

@@ -1,0 +1,333 @@
+#include "drivers/robot_sim/robot_sim_node.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/geometry.h"
+#include "common/robot_model.h"
+#include "common/time.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/odometry_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/process_status_t.hpp"
+#include "objscan/robot_command_t.hpp"
+
+namespace objscan {
+namespace {
+
+// Collects everything the node publishes.
+struct Recorder {
+  std::vector<image_t> images;
+  std::vector<camera_info_t> infos;
+  std::vector<odometry_t> odometry;
+  std::vector<pose_t> poses;
+  std::vector<control_t> controls;
+  std::vector<process_status_t> statuses;
+  std::vector<std::string> order;  // channel of every data message in publication order
+
+  explicit Recorder(Bus& bus) {
+    bus.SubscribeMessage<image_t>("CAMERA_IMAGE", [this](const image_t& m, const RawMessage&) {
+      images.push_back(m);
+      order.push_back("CAMERA_IMAGE");
+    });
+    bus.SubscribeMessage<camera_info_t>("CAMERA_INFO", [this](const camera_info_t& m, const RawMessage&) {
+      infos.push_back(m);
+      order.push_back("CAMERA_INFO");
+    });
+    bus.SubscribeMessage<odometry_t>("ROBOT_ODOMETRY", [this](const odometry_t& m, const RawMessage&) {
+      odometry.push_back(m);
+      order.push_back("ROBOT_ODOMETRY");
+    });
+    bus.SubscribeMessage<pose_t>("GROUND_TRUTH_POSE", [this](const pose_t& m, const RawMessage&) {
+      poses.push_back(m);
+      order.push_back("GROUND_TRUTH_POSE");
+    });
+    bus.SubscribeMessage<process_status_t>(
+        "PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) { statuses.push_back(m); });
+    bus.SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
+      if (m.command == control_t::COMMAND_END_OF_STREAM) controls.push_back(m);
+    });
+  }
+};
+
+RobotSimNodeOptions FastOptions(int frames) {
+  RobotSimNodeOptions o;
+  o.frames = frames;
+  o.realtime = false;
+  return o;
+}
+
+void Drain(Bus& bus) {
+  while (bus.Handle(0) > 0) {
+  }
+}
+
+// Runs the node until it finishes (at most max_ticks ticks).
+void RunToEnd(Bus& bus, RobotSimNode& node, int max_ticks = 1000) {
+  for (int i = 0; i < max_ticks && !node.Finished(); ++i) {
+    node.Tick(WallTimeMicros());
+    Drain(bus);
+  }
+  Drain(bus);
+}
+
+TEST(RobotSimNodeTest, PublishesTenFramesWithTruthAndErroneousOdometry) {
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  RobotSimNodeOptions options = FastOptions(10);
+  options.orbit_degrees = 18;  // the first 10 frames of the default 200-frame orbit (25 mm per frame)
+  const std::string gt_dir = ::testing::TempDir() + "/robot_sim_gt";
+  std::filesystem::remove_all(gt_dir);
+  options.ground_truth_dir = gt_dir;
+  RobotSimNode node(*bus, options);
+  RunToEnd(*bus, node);
+  ASSERT_TRUE(node.Finished());
+  ASSERT_EQ(rec.images.size(), 10u);
+  ASSERT_EQ(rec.infos.size(), 10u);
+  ASSERT_EQ(rec.odometry.size(), 10u);
+  ASSERT_EQ(rec.poses.size(), 10u);
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].sender, "robot_sim");
+  EXPECT_EQ(rec.controls[0].last_seq, 9);
+  EXPECT_EQ(rec.controls[0].utime, std::llround(9 * 1e6 / 30));
+  EXPECT_EQ(rec.order[0], "CAMERA_INFO");
+  EXPECT_EQ(rec.order[3], "CAMERA_IMAGE");
+  const auto& truth = node.truth_history();
+  ASSERT_EQ(truth.size(), 10u);
+  const Eigen::Isometry3d start_from_world = WorldFromBase(truth[0].x_mm, truth[0].y_mm, truth[0].theta_rad).inverse();
+  for (int i = 0; i < 10; ++i) {
+    const int64_t utime = std::llround(i * 1e6 / 30);
+    EXPECT_EQ(rec.images[i].seq, i);
+    EXPECT_EQ(rec.images[i].utime, utime);
+    EXPECT_EQ(rec.images[i].width, 640);
+    EXPECT_EQ(rec.images[i].height, 480);
+    EXPECT_EQ(rec.images[i].encoding, +image_t::ENCODING_RGB8);
+    EXPECT_EQ(rec.infos[i].utime, utime);
+    EXPECT_EQ(rec.infos[i].fx, 800);
+    EXPECT_EQ(rec.infos[i].cx, 319.5);
+    EXPECT_EQ(rec.odometry[i].seq, i);
+    EXPECT_EQ(rec.odometry[i].utime, utime + 15000);  // sync offset
+    EXPECT_EQ(rec.poses[i].seq, i);
+    EXPECT_EQ(rec.poses[i].utime, utime);
+    EXPECT_EQ(rec.poses[i].status, +pose_t::STATUS_GROUND_TRUTH);
+    EXPECT_EQ(rec.poses[i].scale_source, +pose_t::SCALE_TRUE);
+    // GROUND_TRUTH_POSE = WorldFromCamera of the true state
+    const Eigen::Isometry3d gt = PoseFromArrays(rec.poses[i].position_mm, rec.poses[i].orientation);
+    const Eigen::Isometry3d expected = WorldFromCamera(node.geometry(), truth[i].x_mm, truth[i].y_mm,
+                                                       truth[i].theta_rad, truth[i].pan_rad, truth[i].tilt_rad);
+    EXPECT_LT((gt.translation() - expected.translation()).norm(), 1e-6);
+    EXPECT_LT(RotationAngle(gt.linear().transpose() * expected.linear()), 1e-9);
+    // head readings: 0.5 deg bias + 0.05 deg noise
+    const double pan_error = (rec.odometry[i].pan_rad - truth[i].pan_rad) * 180 / M_PI;
+    const double tilt_error = (rec.odometry[i].tilt_rad - truth[i].tilt_rad) * 180 / M_PI;
+    EXPECT_NEAR(pan_error, 0.5, 0.25);
+    EXPECT_NEAR(tilt_error, 0.5, 0.25);
+    EXPECT_GT(rec.odometry[i].v_mm_s, truth[i].v_mm_s);  // +2 % scale error
+  }
+  // Odometry (start frame) vs truth after 9 steps of 25 mm: ~2 % longer path, but not wildly off.
+  const Eigen::Vector3d true_end = start_from_world * Eigen::Vector3d(truth[9].x_mm, truth[9].y_mm, 0);
+  const double true_dist = true_end.head<2>().norm();
+  const double odo_dist = std::hypot(rec.odometry[9].x_mm, rec.odometry[9].y_mm);
+  EXPECT_GT(odo_dist / true_dist, 1.005);
+  EXPECT_LT(odo_dist / true_dist, 1.04);
+  EXPECT_GT(std::hypot(rec.odometry[9].x_mm - true_end.x(), rec.odometry[9].y_mm - true_end.y()), 1.0);
+  EXPECT_LT(std::hypot(rec.odometry[9].x_mm - true_end.x(), rec.odometry[9].y_mm - true_end.y()), 15.0);
+  // the image shows the target in the middle
+  ImageFrame frame;
+  std::string error;
+  ASSERT_TRUE(ImageFromMessage(rec.images[0], &frame, &error)) << error;
+  EXPECT_EQ(frame.image.type(), CV_8UC3);
+  // status
+  EXPECT_EQ(node.status().value("frames_published"), 10);
+  EXPECT_GT(node.status().value("render_ms"), 0);
+  EXPECT_EQ(node.status().messages_out(), 41);
+  node.OnShutdown();  // forces a final status message
+  Drain(*bus);
+  ASSERT_GE(rec.statuses.size(), 1u);
+  const process_status_t& last = rec.statuses.back();
+  EXPECT_EQ(last.name, "robot_sim");
+  EXPECT_EQ(last.state, +process_status_t::STATE_FINISHED);
+  bool has_frames = false;
+  for (int k = 0; k < last.num_values; ++k)
+    if (last.value_name[k] == "frames_published") has_frames = last.value[k] == 10;
+  EXPECT_TRUE(has_frames);
+  // ground-truth files
+  std::ifstream poses(gt_dir + "/poses_gt.txt");
+  std::string line;
+  int data_lines = 0, comments = 0;
+  while (std::getline(poses, line)) (line[0] == '#' ? comments : data_lines)++;
+  EXPECT_EQ(data_lines, 10);
+  EXPECT_EQ(comments, 1);
+  EXPECT_TRUE(std::filesystem::exists(gt_dir + "/robot_gt.txt"));
+  // scene.txt is the resolved scene and loads again as a scene file
+  const Scene reloaded = LoadScene(gt_dir + "/scene.txt");
+  ASSERT_EQ(reloaded.objects.size(), node.scene().objects.size());
+  EXPECT_EQ(reloaded.target().name, node.scene().target().name);
+  EXPECT_LT((reloaded.TargetCenter() - node.scene().TargetCenter()).norm(), 1e-6);
+  EXPECT_EQ(reloaded.target().texture.seed, node.scene().target().texture.seed);
+  const auto ply_size = std::filesystem::file_size(gt_dir + "/target_surface.ply");
+  EXPECT_GT(ply_size, 24u * 120000u);  // ~4 pi 100^2 points of 24 bytes
+  EXPECT_LT(ply_size, 24u * 132000u);
+}
+
+TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {
+  std::vector<std::vector<uint8_t>> runs;
+  for (int run = 0; run < 2; ++run) {
+    auto bus = MakeLcmBus("memq://");
+    Recorder rec(*bus);
+    RobotSimNode node(*bus, FastOptions(3));
+    RunToEnd(*bus, node);
+    ASSERT_EQ(rec.images.size(), 3u);
+    runs.push_back(rec.images[2].data);
+    runs.back().push_back(static_cast<uint8_t>(rec.odometry[2].x_mm));
+  }
+  EXPECT_EQ(runs[0], runs[1]);
+  for (const char* encoding : {"gray8", "jpeg"}) {
+    auto bus = MakeLcmBus("memq://");
+    Recorder rec(*bus);
+    RobotSimNodeOptions options = FastOptions(2);
+    options.encoding = encoding;
+    RobotSimNode node(*bus, options);
+    RunToEnd(*bus, node);
+    ASSERT_EQ(rec.images.size(), 2u);
+    ImageFrame frame;
+    std::string error;
+    ASSERT_TRUE(ImageFromMessage(rec.images[1], &frame, &error)) << error;
+    EXPECT_EQ(frame.image.cols, 640);
+    if (std::string(encoding) == "gray8") {
+      EXPECT_EQ(frame.image.type(), CV_8UC1);
+    }
+  }
+}
+
+TEST(RobotSimNodeTest, LockstepWaitsForTheConsumerAndTimesOut) {
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  RobotSimNodeOptions options = FastOptions(4);
+  options.lockstep_channel = "FEATURE_TRACKS";
+  options.lockstep_timeout_ms = 0;  // forever
+  RobotSimNode node(*bus, options);
+  for (int i = 0; i < 5; ++i) {
+    node.Tick(WallTimeMicros());
+    Drain(*bus);
+  }
+  EXPECT_EQ(rec.images.size(), 1u);
+  feature_tracks_t tracks;
+  tracks.utime = 0;
+  tracks.seq = 0;
+  tracks.camera_name = "sim";
+  tracks.image_width = 640;
+  tracks.image_height = 480;
+  tracks.num_tracks = 0;
+  bus->PublishMessage("FEATURE_TRACKS", tracks);
+  Drain(*bus);
+  for (int i = 0; i < 5; ++i) {
+    node.Tick(WallTimeMicros());
+    Drain(*bus);
+  }
+  EXPECT_EQ(rec.images.size(), 2u);
+  tracks.seq = 3;  // covers everything
+  bus->PublishMessage("FEATURE_TRACKS", tracks);
+  Drain(*bus);
+  RunToEnd(*bus, node, 20);
+  EXPECT_EQ(rec.images.size(), 4u);
+  EXPECT_TRUE(node.Finished());
+
+  // with a timeout: goes on after waiting
+  auto bus2 = MakeLcmBus("memq://");
+  Recorder rec2(*bus2);
+  options.lockstep_timeout_ms = 20;
+  options.frames = 2;
+  RobotSimNode node2(*bus2, options);
+  node2.Tick(WallTimeMicros());
+  node2.Tick(WallTimeMicros());
+  Drain(*bus2);
+  EXPECT_EQ(rec2.images.size(), 1u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  node2.Tick(WallTimeMicros());
+  Drain(*bus2);
+  EXPECT_EQ(rec2.images.size(), 2u);
+  EXPECT_EQ(node2.lockstep_timeouts(), 1);
+}
+
+TEST(RobotSimNodeTest, CommandModeFollowsRobotCommandAndStopsOnShutdown) {
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  RobotSimNodeOptions options = FastOptions(0);
+  options.mode = "command";
+  RobotSimNode node(*bus, options);
+  robot_command_t command{};
+  command.utime = 0;
+  command.seq = 0;
+  command.mode = robot_command_t::MODE_VELOCITY;
+  command.v_mm_s = 300;
+  command.omega_rad_s = 0;
+  command.has_pan_tilt = false;
+  bus->PublishMessage("ROBOT_COMMAND", command);
+  robot_command_t bad = command;
+  bad.seq = 1;
+  bad.v_mm_s = NAN;
+  bus->PublishMessage("ROBOT_COMMAND", bad);
+  bad.seq = 2;
+  bad.v_mm_s = 0;
+  bad.mode = 9;
+  bus->PublishMessage("ROBOT_COMMAND", bad);
+  bus->Publish("ROBOT_COMMAND", "xx", 2);
+  Drain(*bus);
+  EXPECT_EQ(node.status().rejected("command: non-finite value"), 1);
+  EXPECT_EQ(node.status().rejected("command: unknown mode"), 1);
+  EXPECT_EQ(node.status().rejected("command: malformed"), 1);
+  for (int i = 0; i < 11; ++i) {
+    node.Tick(WallTimeMicros());
+    Drain(*bus);
+  }
+  ASSERT_EQ(rec.images.size(), 11u);
+  const auto& truth = node.truth_history();
+  const double moved = std::hypot(truth[10].x_mm - truth[0].x_mm, truth[10].y_mm - truth[0].y_mm);
+  EXPECT_NEAR(moved, 300.0 * 10 / 30, 1e-6);
+  EXPECT_FALSE(node.Finished());
+  control_t shutdown;
+  shutdown.utime = 0;
+  shutdown.sender = "test";
+  shutdown.target = "robot_sim";
+  shutdown.command = control_t::COMMAND_SHUTDOWN;
+  shutdown.last_seq = -1;
+  bus->PublishMessage("OBJSCAN_CONTROL", shutdown);
+  Drain(*bus);
+  RunToEnd(*bus, node, 5);
+  EXPECT_TRUE(node.Finished());
+  ASSERT_EQ(rec.controls.size(), 1u);
+  EXPECT_EQ(rec.controls[0].last_seq, static_cast<int64_t>(rec.images.size()) - 1);
+}
+
+TEST(RobotSimNodeTest, InvalidOptionsAreRejected) {
+  auto bus = MakeLcmBus("memq://");
+  RobotSimNodeOptions options;
+  options.encoding = "png";
+  EXPECT_THROW(RobotSimNode(*bus, options), std::invalid_argument);
+  options = RobotSimNodeOptions();
+  options.orbit_center = "1,2,3";
+  std::string why;
+  EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why));
+  options = RobotSimNodeOptions();
+  options.fx = -1;
+  EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why));
+  options = RobotSimNodeOptions();
+  options.scene = "/nonexistent.scene";
+  EXPECT_THROW(RobotSimNode(*bus, options), std::runtime_error);
+  EXPECT_TRUE(ValidateRobotSimNodeOptions(RobotSimNodeOptions(), &why)) << why;
+}
+
+}  // namespace
+}  // namespace objscan
