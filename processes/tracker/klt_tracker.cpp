@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -55,6 +57,164 @@ struct Candidate {
 
 }  // namespace
 
+// Reference template of a track: the (2h+1)^2 pixels of its anchor frame around the anchor position p0, on that
+// frame's integer pixel grid (no resampling). Template pixel (c, r) lies at y = origin + (c, r) relative to p0.
+struct KltTracker::Anchor {
+  int side = 0;                             // 2h + 1
+  cv::Point2f origin;                       // px, template pixel (0, 0) relative to the anchor position
+  std::vector<float> value;                 // side * side gray levels minus their mean
+  std::vector<float> sd;                    // 6 per pixel: steepest-descent images grad(T) * dW/dp (see AlignToAnchor)
+  Eigen::Matrix<double, 6, 6> inv_hessian;  // inverse of sum sd^T sd
+  double rms = 0.0;                         // gray levels, RMS of value (the template's contrast)
+};
+
+namespace {
+
+// Anchor template of `gray` around p (px) with half side h; null when it is too flat or its affine Hessian is
+// singular (e.g. a straight edge), so that the alignment would be ill-posed. Pixels outside the image are clamped.
+std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const cv::Point2f& p, int h) {
+  auto a = std::make_shared<KltTracker::Anchor>();
+  a->side = 2 * h + 1;
+  const int c0 = static_cast<int>(std::lround(p.x)) - h, r0 = static_cast<int>(std::lround(p.y)) - h;
+  a->origin = cv::Point2f(static_cast<float>(c0) - p.x, static_cast<float>(r0) - p.y);
+  const int s = a->side, n = s * s;
+  auto at = [&gray](int r, int c) {
+    return static_cast<float>(gray.at<uchar>(std::clamp(r, 0, gray.rows - 1), std::clamp(c, 0, gray.cols - 1)));
+  };
+  a->value.resize(static_cast<size_t>(n));
+  a->sd.resize(static_cast<size_t>(6 * n));
+  double sum = 0.0;
+  Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int r = 0; r < s; ++r) {
+    for (int c = 0; c < s; ++c) {
+      const int k = r * s + c;
+      const float v = at(r0 + r, c0 + c);
+      a->value[static_cast<size_t>(k)] = v;
+      sum += v;
+      const float gx = 0.5f * (at(r0 + r, c0 + c + 1) - at(r0 + r, c0 + c - 1));
+      const float gy = 0.5f * (at(r0 + r + 1, c0 + c) - at(r0 + r - 1, c0 + c));
+      const float yx = a->origin.x + static_cast<float>(c), yy = a->origin.y + static_cast<float>(r);
+      float* d = &a->sd[static_cast<size_t>(6 * k)];
+      d[0] = gx * yx;
+      d[1] = gx * yy;
+      d[2] = gy * yx;
+      d[3] = gy * yy;
+      d[4] = gx;
+      d[5] = gy;
+      Eigen::Matrix<double, 6, 1> dv;
+      dv << d[0], d[1], d[2], d[3], d[4], d[5];
+      hessian.selfadjointView<Eigen::Lower>().rankUpdate(dv);
+    }
+  }
+  hessian = hessian.selfadjointView<Eigen::Lower>();
+  const float mean = static_cast<float>(sum / n);
+  double ss = 0.0;
+  for (float& v : a->value) {
+    v -= mean;
+    ss += static_cast<double>(v) * v;
+  }
+  a->rms = std::sqrt(ss / n);
+  // Flat patches and (near-)singular systems cannot be aligned: translation block min eigenvalue per pixel below
+  // 1 gray level^2 per px^2, or a failing Cholesky factorisation.
+  const double txx = hessian(4, 4) / n, tyy = hessian(5, 5) / n, txy = hessian(4, 5) / n;
+  const double min_eig = 0.5 * (txx + tyy - std::sqrt((txx - tyy) * (txx - tyy) + 4 * txy * txy));
+  if (!(a->rms > 1.0) || !(min_eig > 1.0)) return nullptr;
+  Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(hessian);
+  if (llt.info() != Eigen::Success) return nullptr;
+  a->inv_hessian = llt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+  return a;
+}
+
+// Result of aligning an anchor template to an image.
+enum class AlignResult { kOk, kOutside, kFlat, kNoConvergence };
+
+// Inverse-compositional Lucas-Kanade (Baker and Matthews, 2004) of the anchor template to `gray` with the warp
+// W(y) = *p + *affine * y (y relative to the anchor position) and a gain/bias compensation (the warped patch is
+// normalised to the template's mean and RMS contrast). *p and *affine are the start and the result; *rel_residual is
+// the final RMS residual divided by the template's RMS contrast. `buffer` is scratch space.
+AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int max_iterations, double epsilon,
+                          cv::Point2f* p, cv::Matx22f* affine, double* rel_residual, std::vector<float>* buffer) {
+  const int s = a.side, n = s * s;
+  buffer->resize(static_cast<size_t>(n));
+  float* w = buffer->data();
+  const float max_x = static_cast<float>(gray.cols - 1), max_y = static_cast<float>(gray.rows - 1);
+  const size_t step = gray.step[0];
+  const float e2 = static_cast<float>(epsilon * epsilon);
+  const cv::Point2f corners[4] = {a.origin, a.origin + cv::Point2f(static_cast<float>(s - 1), 0.0f),
+                                  a.origin + cv::Point2f(0.0f, static_cast<float>(s - 1)),
+                                  a.origin + cv::Point2f(static_cast<float>(s - 1), static_cast<float>(s - 1))};
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    const cv::Matx22f& A = *affine;
+    // The warp is affine, so the template lies inside the image when its corners do.
+    for (const cv::Point2f& y : corners) {
+      const float zx = p->x + A(0, 0) * y.x + A(0, 1) * y.y, zy = p->y + A(1, 0) * y.x + A(1, 1) * y.y;
+      if (!(zx >= 0.0f && zy >= 0.0f && zx < max_x && zy < max_y)) return AlignResult::kOutside;
+    }
+    double sum = 0.0;
+    for (int r = 0; r < s; ++r) {
+      const float yy = a.origin.y + static_cast<float>(r);
+      float zx = p->x + A(0, 0) * a.origin.x + A(0, 1) * yy;
+      float zy = p->y + A(1, 0) * a.origin.x + A(1, 1) * yy;
+      for (int c = 0; c < s; ++c, zx += A(0, 0), zy += A(1, 0)) {
+        const int x0 = std::min(static_cast<int>(zx), gray.cols - 2),
+                  y0 = std::min(static_cast<int>(zy), gray.rows - 2);
+        const float ax = zx - static_cast<float>(x0), ay = zy - static_cast<float>(y0);
+        const uchar* q = gray.data + static_cast<size_t>(y0) * step + static_cast<size_t>(x0);
+        const float top = static_cast<float>(q[0]) + ax * static_cast<float>(q[1] - q[0]);
+        const float bottom = static_cast<float>(q[step]) + ax * static_cast<float>(q[step + 1] - q[step]);
+        const float v = top + ay * (bottom - top);
+        w[r * s + c] = v;
+        sum += v;
+      }
+    }
+    const float mean = static_cast<float>(sum / n);
+    double ss = 0.0;
+    for (int k = 0; k < n; ++k) {
+      w[k] -= mean;
+      ss += static_cast<double>(w[k]) * w[k];
+    }
+    const double rms = std::sqrt(ss / n);
+    if (!(rms > 1e-3 * a.rms) || !(rms > 0.1)) return AlignResult::kFlat;
+    const float gain = static_cast<float>(a.rms / rms);
+    // Float sums over at most 51^2 terms of moderate size: ample precision, and the loop vectorises.
+    float bf[6] = {0, 0, 0, 0, 0, 0};
+    float err2 = 0.0f;
+    const float* value = a.value.data();
+    const float* d = a.sd.data();
+    for (int k = 0; k < n; ++k, d += 6) {
+      const float e = gain * w[k] - value[k];
+      err2 += e * e;
+      for (int j = 0; j < 6; ++j) bf[j] += d[j] * e;
+    }
+    const double b[6] = {bf[0], bf[1], bf[2], bf[3], bf[4], bf[5]};
+    *rel_residual = std::sqrt(static_cast<double>(err2) / n) / a.rms;
+    const Eigen::Matrix<double, 6, 1> delta = a.inv_hessian * Eigen::Map<const Eigen::Matrix<double, 6, 1>>(b);
+    // W <- W o dW^-1 with dW(y) = (I + dA) y + dt: A' = A (I + dA)^-1, t' = t - A' dt.
+    const cv::Matx22f I_plus(static_cast<float>(1.0 + delta(0)), static_cast<float>(delta(1)),
+                             static_cast<float>(delta(2)), static_cast<float>(1.0 + delta(3)));
+    const float det = I_plus(0, 0) * I_plus(1, 1) - I_plus(0, 1) * I_plus(1, 0);
+    if (!(std::abs(det) > 1e-3f)) return AlignResult::kNoConvergence;
+    const cv::Matx22f inv(I_plus(1, 1) / det, -I_plus(0, 1) / det, -I_plus(1, 0) / det, I_plus(0, 0) / det);
+    const cv::Matx22f A_new = A * inv;
+    const cv::Vec2f dt(static_cast<float>(delta(4)), static_cast<float>(delta(5)));
+    const cv::Vec2f shift = A_new * dt;
+    *p -= cv::Point2f(shift(0), shift(1));
+    *affine = A_new;
+    // Converged when the update moves no template corner (in the template frame) by more than epsilon.
+    float worst = 0.0f;
+    for (const cv::Point2f& y : corners) {
+      const float ux = static_cast<float>(delta(0)) * y.x + static_cast<float>(delta(1)) * y.y + dt(0);
+      const float uy = static_cast<float>(delta(2)) * y.x + static_cast<float>(delta(3)) * y.y + dt(1);
+      worst = std::max(worst, ux * ux + uy * uy);
+    }
+    if (!std::isfinite(worst)) return AlignResult::kNoConvergence;
+    if (worst <= e2) return AlignResult::kOk;
+  }
+  return AlignResult::kNoConvergence;
+}
+
+}  // namespace
+
 bool ValidateKltTrackerOptions(const KltTrackerOptions& o, std::string* why) {
   std::ostringstream e;
   if (o.max_tracks < 1) e << "max_tracks must be >= 1 (is " << o.max_tracks << "); ";
@@ -81,6 +241,15 @@ bool ValidateKltTrackerOptions(const KltTrackerOptions& o, std::string* why) {
   if (o.coarse_win_size != 0 && (o.coarse_win_size < 5 || o.coarse_win_size % 2 == 0 || o.coarse_win_size > o.win_size))
     e << "coarse_win_size must be 0 or odd in [5, win_size]; ";
   if (o.threads < 1) e << "threads must be >= 1; ";
+  if (o.anchor_half_window < 2 || o.anchor_half_window > 25) e << "anchor_half_window must be in [2, 25]; ";
+  if (o.anchor_max_iterations < 1) e << "anchor_max_iterations must be >= 1; ";
+  if (!(o.anchor_epsilon > 0.0) || !std::isfinite(o.anchor_epsilon)) e << "anchor_epsilon must be > 0; ";
+  if (!(o.anchor_max_residual > 0.0 && o.anchor_max_residual <= 2.0)) e << "anchor_max_residual must be in (0, 2]; ";
+  if (!(o.anchor_reanchor_residual >= 0.0 && o.anchor_reanchor_residual <= 2.0))
+    e << "anchor_reanchor_residual must be in [0, 2] (0 = off); ";
+  if (!(o.anchor_max_shift_px > 0.0) || !std::isfinite(o.anchor_max_shift_px)) e << "anchor_max_shift_px must be > 0; ";
+  if (!(o.anchor_max_distortion > 1.0) || !std::isfinite(o.anchor_max_distortion))
+    e << "anchor_max_distortion must be > 1; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = "invalid tracker options: " + msg.substr(0, msg.size() - 2);
@@ -163,11 +332,17 @@ TrackFrame KltTracker::Track(const ImageFrame& frame) {
         next_pts[retry[k]] = retry_next[k];
       }
     }
+    if (options_.anchor_refine) {
+      const int64 t_refine = cv::getTickCount();
+      RefineToAnchors(gray, &next_pts, &keep);
+      stats_.refine_ms = static_cast<double>(cv::getTickCount() - t_refine) * 1e3 / cv::getTickFrequency();
+    }
     std::vector<LiveTrack> survivors;
     survivors.reserve(n_prev);
     for (size_t i = 0; i < n_prev; ++i) {
       if (!keep[i]) continue;
-      survivors.push_back({tracks_[i].id, next_pts[i], tracks_[i].age + 1, next_pts[i] - prev_pts[i]});
+      survivors.push_back({tracks_[i].id, next_pts[i], tracks_[i].age + 1, next_pts[i] - prev_pts[i],
+                           std::move(tracks_[i].anchor), tracks_[i].affine});
     }
     // Median displacement of the continued tracks: the motion prior of tracks born in this frame.
     if (!survivors.empty()) {
@@ -288,6 +463,64 @@ void KltTracker::TrackPoints(const std::vector<cv::Mat>& from, const std::vector
   cv::calcOpticalFlowPyrLK(from, to, pts, *out, *status, *err, win, 0, criteria, cv::OPTFLOW_USE_INITIAL_FLOW,
                            options_.lk_min_eigenvalue);
   for (size_t i = 0; i < n; ++i) (*status)[i] = (*status)[i] && coarse_status[i];
+}
+
+void KltTracker::RefineToAnchors(const cv::Mat& gray, std::vector<cv::Point2f>* pts, std::vector<uchar>* keep) {
+  std::vector<float> buffer;
+  const double max_shift2 = options_.anchor_max_shift_px * options_.anchor_max_shift_px;
+  const float lo = static_cast<float>(options_.border_margin_px);
+  const float hi_u = static_cast<float>(size_.width - 1 - options_.border_margin_px);
+  const float hi_v = static_cast<float>(size_.height - 1 - options_.border_margin_px);
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    if (!(*keep)[i]) continue;
+    LiveTrack& t = tracks_[i];
+    if (!t.anchor) continue;  // not refined (cannot happen while anchor_refine stays on)
+    cv::Point2f p = (*pts)[i];
+    cv::Matx22f affine = t.affine;
+    double residual = 0.0;
+    const AlignResult r = AlignToAnchor(*t.anchor, gray, options_.anchor_max_iterations, options_.anchor_epsilon, &p,
+                                        &affine, &residual, &buffer);
+    const cv::Point2f d = p - (*pts)[i];
+    if (r == AlignResult::kOk && residual > options_.anchor_max_residual &&
+        residual <= options_.anchor_reanchor_residual) {
+      // The template no longer matches well but not badly either: keep the LK position and start a new anchor.
+      std::shared_ptr<const Anchor> anchor = MakeAnchor(gray, (*pts)[i], options_.anchor_half_window);
+      if (anchor) {
+        t.anchor = std::move(anchor);
+        t.affine = cv::Matx22f::eye();
+        ++stats_.reanchored;
+        continue;
+      }
+    }
+    if (r != AlignResult::kOk || !(residual <= options_.anchor_max_residual) ||
+        !(static_cast<double>(d.x) * d.x + static_cast<double>(d.y) * d.y <= max_shift2) || p.x < lo || p.y < lo ||
+        p.x > hi_u || p.y > hi_v) {
+      (*keep)[i] = 0;
+      ++stats_.anchor_rejected;
+      continue;
+    }
+    // Scale change since the anchor: the singular values of the affine map.
+    const cv::Matx22f& A = affine;
+    const double a = A(0, 0), b = A(0, 1), c = A(1, 0), e = A(1, 1);
+    const double s1 = a * a + b * b + c * c + e * e, det = a * e - b * c;
+    const double disc = std::sqrt(std::max(0.0, s1 * s1 - 4 * det * det));
+    const double sigma_max = std::sqrt(0.5 * (s1 + disc)), sigma_min = std::sqrt(std::max(0.0, 0.5 * (s1 - disc)));
+    const double limit = options_.anchor_max_distortion;
+    if (sigma_max > limit || sigma_min * limit < 1.0) {
+      std::shared_ptr<const Anchor> anchor =
+          options_.anchor_reanchor ? MakeAnchor(gray, p, options_.anchor_half_window) : nullptr;
+      if (!anchor) {
+        (*keep)[i] = 0;
+        ++stats_.anchor_rejected;
+        continue;
+      }
+      t.anchor = std::move(anchor);
+      affine = cv::Matx22f::eye();
+      ++stats_.reanchored;
+    }
+    (*pts)[i] = p;
+    t.affine = affine;
+  }
 }
 
 void KltTracker::RemoveDuplicates(std::vector<LiveTrack>* tracks) const {
@@ -435,8 +668,13 @@ void KltTracker::Detect(const cv::Mat& gray, std::vector<LiveTrack>* tracks) {
         }
         int& n = count[static_cast<size_t>(CellOf(p))];
         if (n >= quota_) continue;
+        std::shared_ptr<const Anchor> anchor;
+        if (options_.anchor_refine) {
+          anchor = MakeAnchor(gray, p, options_.anchor_half_window);
+          if (!anchor) continue;  // the position could not be refined later
+        }
         occupied.Insert(p);
-        tracks->push_back({next_id_++, p, 0, cv::Point2f()});
+        tracks->push_back({next_id_++, p, 0, cv::Point2f(), std::move(anchor), cv::Matx22f::eye()});
         ++n;
         ++total;
         break;

@@ -1,7 +1,7 @@
 // Speed of KltTracker::Track on 640x480 textured frames with realistic motion (about 3 px/frame translation,
 // slow rotation and zoom, sensor noise sigma 2), one OpenCV thread, max_tracks 1000.
 // Counters: median_ms (thread CPU time per frame, so other load on the machine matters less), p90_ms, live (mean live
-// tracks), born (mean new tracks per frame).
+// tracks), born (mean new tracks per frame), refine_ms (mean wall-clock ms of the anchor template alignment).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -45,7 +45,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   const std::vector<cv::Mat>& frames = Frames();
   KltTracker tracker(options);
   std::vector<double> ms;
-  double live = 0, born = 0;
+  double live = 0, born = 0, refine = 0;
   int64_t seq = 0;
   // Warm up past the first (detection-only) frame.
   ImageFrame frame;
@@ -60,6 +60,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
     benchmark::DoNotOptimize(out.features.data());
     live += static_cast<double>(out.features.size());
     born += tracker.last_stats().born;
+    refine += tracker.last_stats().refine_ms;
   }
   std::sort(ms.begin(), ms.end());
   const double n = static_cast<double>(std::max<size_t>(ms.size(), 1));
@@ -67,6 +68,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   state.counters["p90_ms"] = ms.empty() ? 0 : ms[ms.size() * 9 / 10];
   state.counters["live"] = live / n;
   state.counters["born"] = born / n;
+  state.counters["refine_ms"] = refine / n;
 }
 
 void BM_Default(benchmark::State& state) { Run(state, KltTrackerOptions()); }
@@ -83,6 +85,20 @@ void BM_Config(benchmark::State& state) {
 void BM_NoForwardBackward(benchmark::State& state) {
   KltTrackerOptions o;
   o.forward_backward_check = false;
+  Run(state, o);
+}
+
+// Without the anchor template alignment (frame-to-frame LK only, as before it existed).
+void BM_NoAnchorRefine(benchmark::State& state) {
+  KltTrackerOptions o;
+  o.anchor_refine = false;
+  Run(state, o);
+}
+
+// Anchor template half window (the alignment cost grows with its area).
+void BM_AnchorHalfWindow(benchmark::State& state) {
+  KltTrackerOptions o;
+  o.anchor_half_window = static_cast<int>(state.range(0));
   Run(state, o);
 }
 
@@ -133,6 +149,8 @@ BENCHMARK(BM_Config)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(400);
 BENCHMARK(BM_NoForwardBackward)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK(BM_NoAnchorRefine)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK(BM_AnchorHalfWindow)->ArgName("half")->Arg(5)->Arg(7)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_DetectEvery3HalfFill)->Unit(benchmark::kMillisecond)->Iterations(400);
 
 }  // namespace

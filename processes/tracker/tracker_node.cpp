@@ -50,6 +50,21 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.Add("klt-fb-threshold", &k->fb_threshold_px, "px, max forward-backward round-trip error");
   p.Add("klt-max-patch-error", &k->max_patch_error, "gray levels, max mean LK window residual (0 = off)");
   p.Add("threads", &k->threads, "OpenCV threads (cv::setNumThreads)");
+  p.Add("klt-anchor-refine", &k->anchor_refine,
+        "refine LK positions by affine alignment of each track's anchor template (no drift)");
+  p.Add("klt-anchor-half-window", &k->anchor_half_window, "px, anchor template half side, [2, 25]");
+  p.Add("klt-anchor-max-iterations", &k->anchor_max_iterations, "anchor alignment iterations per track and frame");
+  p.Add("klt-anchor-epsilon", &k->anchor_epsilon, "px, anchor alignment convergence threshold");
+  p.Add("klt-anchor-max-residual", &k->anchor_max_residual,
+        "max aligned RMS residual / template RMS contrast; worse tracks are dropped, (0, 2]");
+  p.Add("klt-anchor-reanchor-residual", &k->anchor_reanchor_residual,
+        "tracks with a residual between klt-anchor-max-residual and this are re-anchored at the LK position "
+        "instead of dropped, [0, 2] (0 = never)");
+  p.Add("klt-anchor-max-shift", &k->anchor_max_shift_px, "px, max distance of the refined from the LK position");
+  p.Add("klt-anchor-max-distortion", &k->anchor_max_distortion,
+        "max scale change since the anchor in any direction before re-anchoring (> 1)");
+  p.Add("klt-anchor-reanchor", &k->anchor_reanchor,
+        "re-take templates whose distortion exceeds klt-anchor-max-distortion (false = drop the track)");
 }
 
 bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
@@ -167,6 +182,9 @@ void TrackerNode::OnImage(const image_t& msg) {
   status_.SetValue("track_ms", track_ms);
   status_.SetValue("lk_ms", s.lk_ms);
   status_.SetValue("detect_ms", s.detect_ms);
+  status_.SetValue("refine_ms", s.refine_ms);
+  status_.SetValue("anchor_rejected", s.anchor_rejected);
+  status_.SetValue("reanchored", s.reanchored);
   status_.SetValue("frames_tracked", static_cast<double>(frames_tracked_));
   if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
     status_.SetState(+process_status_t::STATE_RUNNING);
