@@ -1,0 +1,145 @@
+#include "processes/pose_solver/output.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <unordered_map>
+
+namespace objscan {
+
+namespace {
+bool Fail(std::string* error, const std::string& reason) {
+  if (error) *error = reason;
+  return false;
+}
+bool Good(PoseStatus s) { return s == PoseStatus::kTracking || s == PoseStatus::kRelocalized; }
+}  // namespace
+
+bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
+                        bool include_all_statuses) {
+  std::ofstream out(path);
+  if (!out) return Fail(error, "cannot write " + path);
+  out << "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions in mm\n";
+  out << std::fixed;
+  for (const auto& p : poses) {
+    if (!include_all_statuses && !Good(p.status)) continue;
+    const Eigen::Quaterniond q(p.world_from_camera.linear());
+    const Eigen::Vector3d t = p.world_from_camera.translation();
+    out << std::setprecision(6) << p.utime / 1e6 << ' ' << std::setprecision(4) << t.x() << ' ' << t.y() << ' '
+        << t.z() << ' ' << std::setprecision(9) << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  }
+  out.flush();
+  if (!out) return Fail(error, "write error on " + path);
+  return true;
+}
+
+bool ReadTumTrajectory(const std::string& path, std::vector<CameraPoseEstimate>* poses, std::string* error) {
+  std::ifstream in(path);
+  if (!in) return Fail(error, "cannot read " + path);
+  poses->clear();
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    if (!(s >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) return Fail(error, "malformed line in " + path);
+    CameraPoseEstimate p;
+    p.utime = std::llround(t * 1e6);
+    p.world_from_camera.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+    p.world_from_camera.translation() = Eigen::Vector3d(x, y, z);
+    p.status = PoseStatus::kTracking;
+    poses->push_back(p);
+  }
+  return true;
+}
+
+bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, std::string* error) {
+  std::ofstream out(path);
+  if (!out) return Fail(error, "cannot write " + path);
+  out << "ply\nformat ascii 1.0\ncomment objscan pose_solver landmarks, mm, world frame\nelement vertex "
+      << landmarks.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+         "property uchar blue\nproperty int nobs\nproperty float error\nend_header\n";
+  out << std::fixed << std::setprecision(3);
+  for (const auto& l : landmarks)
+    out << l.position_mm.x() << ' ' << l.position_mm.y() << ' ' << l.position_mm.z() << " 200 200 200 "
+        << l.num_observations << ' ' << l.reprojection_rms_px << '\n';
+  out.flush();
+  if (!out) return Fail(error, "write error on " + path);
+  return true;
+}
+
+bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const std::vector<ColmapImage>& images,
+                     const std::vector<Landmark>& landmarks, std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Fail(error, "cannot create " + dir + ": " + ec.message());
+  {
+    std::ofstream out(dir + "/cameras.txt");
+    if (!out) return Fail(error, "cannot write " + dir + "/cameras.txt");
+    out << "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
+           "# Number of cameras: 1\n";
+    out << std::setprecision(12);
+    if (camera.HasDistortion())
+      out << "1 OPENCV " << camera.width << ' ' << camera.height << ' ' << camera.fx << ' ' << camera.fy << ' '
+          << camera.cx << ' ' << camera.cy << ' ' << camera.k1 << ' ' << camera.k2 << ' ' << camera.p1 << ' '
+          << camera.p2 << '\n';
+    else
+      out << "1 PINHOLE " << camera.width << ' ' << camera.height << ' ' << camera.fx << ' ' << camera.fy << ' '
+          << camera.cx << ' ' << camera.cy << '\n';
+    if (!out) return Fail(error, "write error on cameras.txt");
+  }
+  std::unordered_map<int64_t, size_t> landmark_index;
+  for (size_t i = 0; i < landmarks.size(); ++i) landmark_index[landmarks[i].id] = i;
+  std::vector<std::vector<std::pair<int, int>>> tracks(landmarks.size());
+  {
+    std::ofstream out(dir + "/images.txt");
+    if (!out) return Fail(error, "cannot write " + dir + "/images.txt");
+    out << "# Image list with two lines of data per image:\n"
+           "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
+           "#   POINTS2D[] as (X, Y, POINT3D_ID)\n# Units: mm; pose is cam_from_world\n";
+    out << std::setprecision(12);
+    int image_id = 0;
+    for (const auto& im : images) {
+      if (!Good(im.pose.status)) continue;
+      ++image_id;
+      const Eigen::Isometry3d cw = im.pose.world_from_camera.inverse();
+      const Eigen::Quaterniond q(cw.linear());
+      const Eigen::Vector3d t = cw.translation();
+      out << image_id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x() << ' '
+          << t.y() << ' ' << t.z() << " 1 " << im.name << '\n';
+      int idx = 0;
+      for (const auto& f : im.features) {
+        auto it = landmark_index.find(f.id);
+        const int64_t pid = it == landmark_index.end() ? -1 : f.id;
+        if (idx > 0) out << ' ';
+        out << f.u << ' ' << f.v << ' ' << pid;
+        if (it != landmark_index.end()) tracks[it->second].push_back({image_id, idx});
+        ++idx;
+      }
+      out << '\n';
+    }
+    if (!out) return Fail(error, "write error on images.txt");
+  }
+  {
+    std::ofstream out(dir + "/points3D.txt");
+    if (!out) return Fail(error, "cannot write " + dir + "/points3D.txt");
+    out << "# 3D point list with one line of data per point:\n"
+           "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n# Units: mm\n";
+    out << std::setprecision(10);
+    for (size_t i = 0; i < landmarks.size(); ++i) {
+      const Landmark& l = landmarks[i];
+      out << l.id << ' ' << l.position_mm.x() << ' ' << l.position_mm.y() << ' ' << l.position_mm.z()
+          << " 200 200 200 " << l.reprojection_rms_px;
+      for (const auto& [im, idx] : tracks[i]) out << ' ' << im << ' ' << idx;
+      out << '\n';
+    }
+    if (!out) return Fail(error, "write error on points3D.txt");
+  }
+  return true;
+}
+
+}  // namespace objscan

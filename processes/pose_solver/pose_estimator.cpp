@@ -1,0 +1,884 @@
+#include "processes/pose_solver/pose_estimator.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <limits>
+#include <cmath>
+#include <random>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <ctime>
+
+namespace objscan {
+
+namespace {
+// CPU time of the calling thread (µs): timing figures that do not depend on machine load.
+int64_t MonotonicMicros() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------------
+bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* why) {
+  std::ostringstream e;
+  std::string robot_why;
+  if (!o.robot.IsValid(&robot_why)) e << robot_why << "; ";
+  if (o.start_span.min_common_tracks < 6) e << "start span min common tracks must be >= 6; ";
+  if (o.start_span.min_frames < 3) e << "start span min frames must be >= 3; ";
+  if (o.start_span.max_frames < o.start_span.min_frames) e << "start span max frames must be >= min frames; ";
+  if (!(o.start_span.min_rotation_deg > 0)) e << "start span min rotation must be > 0; ";
+  if (o.pnp.min_inliers < 6) e << "pnp min inliers must be >= 6; ";
+  if (!(o.pnp.ransac_threshold_px > 0) || !(o.pnp.inlier_threshold_px > 0)) e << "pnp thresholds must be > 0; ";
+  if (o.pnp.ransac_iterations < 1) e << "pnp ransac iterations must be >= 1; ";
+  if (o.min_triangulation_views < 2) e << "min triangulation views must be >= 2; ";
+  if (o.max_triangulation_views < o.min_triangulation_views) e << "max triangulation views must be >= min; ";
+  if (!(o.triangulation.max_reprojection_px > 0)) e << "triangulation max reprojection must be > 0; ";
+  if (o.keyframe_interval < 1) e << "keyframe interval must be >= 1; ";
+  if (!(o.keyframe_track_ratio >= 0 && o.keyframe_track_ratio <= 1)) e << "keyframe track ratio must be in [0, 1]; ";
+  if (o.local_window_keyframes < 2) e << "local window keyframes must be >= 2; ";
+  if (o.local_fixed_keyframes < 1) e << "local fixed keyframes must be >= 1; ";
+  if (o.local_ba_iterations < 0 || o.global_ba_iterations < 0 || o.init_ba_iterations < 1)
+    e << "BA iterations must be >= 0 (init >= 1); ";
+  if (o.ba_loss != "huber" && o.ba_loss != "cauchy") e << "ba loss must be huber or cauchy; ";
+  if (!(o.ba_loss_px > 0)) e << "ba loss scale must be > 0; ";
+  if (!(o.max_landmark_error_px > 0)) e << "max landmark error must be > 0; ";
+  if (!(o.floor_tolerance_mm > 0)) e << "floor tolerance must be > 0; ";
+  if (o.min_floor_points < 3) e << "min floor points must be >= 3; ";
+  if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
+  if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+bool OdometryBuffer::Add(const OdometryReading& r) {
+  if (!readings_.empty() && r.utime <= readings_.back().utime) return false;
+  readings_.push_back(r);
+  while (readings_.size() > capacity_) readings_.pop_front();
+  return true;
+}
+
+bool OdometryBuffer::At(int64_t utime, OdometryReading* out, int64_t max_gap_us) const {
+  if (readings_.empty()) return false;
+  if (utime <= readings_.front().utime) {
+    if (readings_.front().utime - utime > max_gap_us) return false;
+    *out = readings_.front();
+    out->utime = utime;
+    return true;
+  }
+  if (utime >= readings_.back().utime) {
+    if (utime - readings_.back().utime > max_gap_us) return false;
+    *out = readings_.back();
+    out->utime = utime;
+    return true;
+  }
+  const auto it = std::lower_bound(readings_.begin(), readings_.end(), utime,
+                                   [](const OdometryReading& r, int64_t t) { return r.utime < t; });
+  const OdometryReading& b = *it;
+  const OdometryReading& a = *(it - 1);
+  const double w = static_cast<double>(utime - a.utime) / static_cast<double>(b.utime - a.utime);
+  auto lerp = [w](double x, double y) { return x + w * (y - x); };
+  OdometryReading r = a;
+  r.utime = utime;
+  r.x_mm = lerp(a.x_mm, b.x_mm);
+  r.y_mm = lerp(a.y_mm, b.y_mm);
+  r.theta_rad = a.theta_rad + w * std::remainder(b.theta_rad - a.theta_rad, 2 * M_PI);
+  r.pan_rad = lerp(a.pan_rad, b.pan_rad);
+  r.tilt_rad = lerp(a.tilt_rad, b.tilt_rad);
+  r.v_mm_s = lerp(a.v_mm_s, b.v_mm_s);
+  r.omega_rad_s = lerp(a.omega_rad_s, b.omega_rad_s);
+  *out = r;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+int PoseEstimator::Frame::Find(int64_t id) const {
+  const auto it = std::lower_bound(ids.begin(), ids.end(), id);
+  return it != ids.end() && *it == id ? static_cast<int>(it - ids.begin()) : -1;
+}
+
+PoseEstimator::PoseEstimator(const PinholeCamera& camera, const PoseEstimatorOptions& options)
+    : camera_(camera), options_(options) {
+  std::string why;
+  if (!camera_.IsValid(&why)) throw std::invalid_argument("pose estimator: " + why);
+  if (!ValidatePoseEstimatorOptions(options_, &why)) throw std::invalid_argument("pose estimator: " + why);
+  options_.pnp.model = options_.model;
+}
+
+int PoseEstimator::num_keyframes() const {
+  int n = 0;
+  for (const auto& f : frames_) n += f.keyframe ? 1 : 0;
+  return n;
+}
+
+BaOptions PoseEstimator::MakeBaOptions(int iterations) const {
+  BaOptions b;
+  b.model = options_.model;
+  b.loss = options_.ba_loss;
+  b.loss_scale_px = options_.ba_loss_px;
+  b.max_iterations = iterations;
+  b.num_threads = 1;
+  return b;
+}
+
+CameraPoseEstimate PoseEstimator::Estimate(int f) const {
+  const Frame& fr = frames_[f];
+  CameraPoseEstimate p;
+  p.utime = fr.utime;
+  p.seq = fr.seq;
+  p.world_from_camera = fr.world_from_camera;
+  p.status = fr.status;
+  p.scale_source = fr.posed ? scale_source_ : ScaleSource::kNone;
+  p.num_inliers = fr.posed ? fr.inliers : 0;
+  p.reprojection_rms_px = fr.posed ? fr.rms : 0.0;
+  return p;
+}
+
+FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReading* odometry) {
+  const int f = static_cast<int>(frames_.size());
+  Frame fr;
+  fr.utime = input.utime;
+  fr.seq = input.seq;
+  std::vector<std::pair<int64_t, Eigen::Vector2d>> feats;
+  feats.reserve(input.features.size());
+  for (const auto& t : input.features) {
+    if (!std::isfinite(t.u) || !std::isfinite(t.v)) continue;
+    feats.emplace_back(t.id, UndistortPixel(camera_, Eigen::Vector2d(t.u, t.v)));
+  }
+  std::sort(feats.begin(), feats.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  feats.erase(std::unique(feats.begin(), feats.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+              feats.end());
+  for (const auto& [id, px] : feats) {
+    fr.ids.push_back(id);
+    fr.pixels.push_back(px);
+    track_frames_[id].push_back(f);
+  }
+  fr.outlier.assign(fr.ids.size(), 0);
+  if (odometry) {
+    fr.has_odometry = true;
+    fr.odometry_world_from_camera = WorldFromCamera(options_.robot, odometry->x_mm, odometry->y_mm,
+                                                    odometry->theta_rad, odometry->pan_rad, odometry->tilt_rad);
+  }
+  // Until posed: initializing frames carry the odometry pose (or identity), lost ones the last good pose.
+  fr.status = recovering_ ? PoseStatus::kLost : PoseStatus::kInitializing;
+  if (recovering_ && last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
+  else if (fr.has_odometry) fr.world_from_camera = fr.odometry_world_from_camera;
+  frames_.push_back(std::move(fr));
+
+  FrameResult result;
+  if (phase_ == Phase::kInitializing) {
+    if (TryInitialize(f)) {
+      result.initialized_now = true;
+      result.keyframe = true;
+    }
+  } else if ([&] {
+               const int64_t t0 = MonotonicMicros();
+               const bool ok = Track(f, &result);
+               pnp_ms_ += (MonotonicMicros() - t0) * 1e-3;
+               return ok;
+             }()) {
+    lost_count_ = 0;
+    const int tracked = frames_[f].inliers;
+    if (f - last_keyframe_ >= options_.keyframe_interval ||
+        tracked < options_.keyframe_track_ratio * last_keyframe_inliers_) {
+      AddKeyframe(f);
+      result.keyframe = true;
+    }
+  } else {
+    ++lost_count_;
+    if (lost_count_ >= options_.relocalize_after_lost_frames) {
+      phase_ = Phase::kInitializing;
+      recovering_ = true;
+      init_start_ = f + 1;
+      last_message_ = "lost: restarting the preliminary phase at frame " + std::to_string(f + 1);
+    }
+  }
+  result.pose = Estimate(f);
+  return result;
+}
+
+bool PoseEstimator::TryInitialize(int newest) {
+  const int first_considered = std::max(init_start_, newest - options_.start_span.max_frames + 1);
+  std::vector<TrackList> lists(newest - first_considered + 1);
+  for (int f = first_considered; f <= newest; ++f) {
+    lists[f - first_considered].ids = frames_[f].ids;
+    lists[f - first_considered].pixels = frames_[f].pixels;
+  }
+  int first = 0, last = 0;
+  std::vector<int64_t> common;
+  if (!SelectStartSpan(lists, options_.start_span, &first, &last, &common)) return false;
+  const int64_t start_us = MonotonicMicros();
+  const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
+  init_ms_ = (MonotonicMicros() - start_us) * 1e-3;
+  return ok;
+}
+
+void PoseEstimator::ApplySimilarity(double scale, const Eigen::Isometry3d& t, int first_frame, int last_frame,
+                                    const std::vector<int64_t>& point_ids) {
+  for (int f = first_frame; f <= last_frame; ++f) {
+    Frame& fr = frames_[f];
+    if (!fr.posed) continue;
+    Eigen::Isometry3d scaled = fr.world_from_camera;
+    scaled.translation() *= scale;
+    fr.world_from_camera = t * scaled;
+  }
+  for (int64_t id : point_ids) {
+    auto it = points_.find(id);
+    if (it != points_.end()) it->second.x = t * (scale * it->second.x);
+  }
+}
+
+bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_t>& common) {
+  const int nf = last - first + 1;
+  const int np = static_cast<int>(common.size());
+  std::vector<std::vector<Eigen::Vector2d>> meas(nf, std::vector<Eigen::Vector2d>(np));
+  for (int f = 0; f < nf; ++f)
+    for (int p = 0; p < np; ++p) meas[f][p] = frames_[first + f].pixels[frames_[first + f].Find(common[p])];
+  BaProblem best;
+  double best_rms = std::numeric_limits<double>::infinity();
+  if (!ReconstructSpan(camera_, meas, MakeBaOptions(options_.init_ba_iterations), &best, &best_rms, &last_message_))
+    return false;
+  if (!(best_rms < 2.0 * options_.max_landmark_error_px)) {
+    last_message_ = "initialization: span BA RMS " + std::to_string(best_rms) + " px too large";
+    return false;
+  }
+  // Commit the span.
+  std::vector<int64_t> new_points;
+  for (int f = 0; f < nf; ++f) {
+    Frame& fr = frames_[first + f];
+    fr.posed = true;
+    fr.world_from_camera = best.world_from_camera[f];
+    fr.keyframe = (f % options_.keyframe_interval == 0) || f == nf - 1;
+  }
+  for (int p = 0; p < np; ++p) {
+    points_[common[p]] = Point{best.points[p], false};
+    new_points.push_back(common[p]);
+  }
+  std::sort(new_points.begin(), new_points.end());
+  std::set<int64_t> existing;
+  for (const auto& kv : points_) existing.insert(kv.first);
+  TriangulateNew(last);
+  for (const auto& kv : points_)
+    if (!existing.count(kv.first)) new_points.push_back(kv.first);
+  // Metric scale and world frame from odometry.
+  const Frame& a = frames_[first];
+  double odo_sum = 0, vis_sum = 0;
+  bool have_odometry = a.has_odometry;
+  for (int f = first + 1; f <= last; ++f) {
+    if (!frames_[f].has_odometry) continue;
+    odo_sum += (frames_[f].odometry_world_from_camera.translation() - a.odometry_world_from_camera.translation()).norm();
+    vis_sum += (frames_[f].world_from_camera.translation() - a.world_from_camera.translation()).norm();
+  }
+  have_odometry = have_odometry && odo_sum > 1e-6 && vis_sum > 1e-9;
+  Eigen::Isometry3d anchor = Eigen::Isometry3d::Identity();  // desired world_from_camera of frame `first`
+  bool have_anchor = false;
+  if (recovering_ && last_good_ >= 0 && a.has_odometry && frames_[last_good_].has_odometry) {
+    anchor = frames_[last_good_].world_from_camera * frames_[last_good_].odometry_world_from_camera.inverse() *
+             a.odometry_world_from_camera;
+    have_anchor = true;
+  } else if (a.has_odometry) {
+    anchor = a.odometry_world_from_camera;
+    have_anchor = true;
+  }
+  const double scale = have_odometry ? odo_sum / vis_sum : 1.0;
+  scale_source_ = have_odometry ? ScaleSource::kOdometry : ScaleSource::kNone;
+  {
+    Eigen::Isometry3d scaled = a.world_from_camera;
+    scaled.translation() *= scale;
+    const Eigen::Isometry3d t = (have_anchor ? anchor : a.world_from_camera) * scaled.inverse();
+    ApplySimilarity(scale, t, first, last, new_points);
+  }
+  if (options_.model == MotionModel::kFourDof) {
+    std::vector<int64_t> floor_ids;
+    Eigen::Vector4d plane;
+    if (options_.use_floor_for_scale && DetectFloor(new_points, &floor_ids, &plane)) {
+      // Level: plane normal -> +z, plane -> z = 0.
+      Eigen::Vector3d n = plane.head<3>();
+      double d = plane(3);
+      if (n.dot(frames_[first].world_from_camera.translation()) + d < 0) {
+        n = -n;
+        d = -d;
+      }
+      Eigen::Isometry3d level = Eigen::Isometry3d::Identity();
+      level.linear() = Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      level.translation() = Eigen::Vector3d(0, 0, d);
+      ApplySimilarity(1.0, level, first, last, new_points);
+      // Scale: cameras at the model height for their tilt.
+      double measured = 0, expected = 0;
+      for (int f = first; f <= last; ++f) {
+        const Eigen::Isometry3d& w = frames_[f].world_from_camera;
+        measured += w.translation().z();
+        expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, w)).translation().z();
+      }
+      if (measured > 1e-6) {
+        ApplySimilarity(expected / measured, Eigen::Isometry3d::Identity(), first, last, new_points);
+        scale_source_ = ScaleSource::kCameraHeight;
+        for (int64_t id : floor_ids) points_[id].on_floor = true;
+        for (int64_t id : new_points)
+          if (std::abs(points_[id].x.z()) < options_.floor_tolerance_mm) points_[id].on_floor = true;
+      }
+    }
+    // Re-anchor in the floor plane: frame `first` at the anchor's (x, y, yaw).
+    if (have_anchor) {
+      const FloorPose cur = FloorPoseFromWorldFromCamera(options_.robot, frames_[first].world_from_camera);
+      const FloorPose want = FloorPoseFromWorldFromCamera(options_.robot, anchor);
+      Eigen::Isometry3d planar = Eigen::Isometry3d::Identity();
+      planar.linear() = Eigen::AngleAxisd(want.yaw_rad - cur.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Vector3d moved = planar.linear() * Eigen::Vector3d(cur.x_mm, cur.y_mm, 0);
+      planar.translation() = Eigen::Vector3d(want.x_mm - moved.x(), want.y_mm - moved.y(), 0);
+      ApplySimilarity(1.0, planar, first, last, new_points);
+    }
+    if (scale_source_ != ScaleSource::kCameraHeight) {
+      // No floor: lift the map so that the first camera sits at the model height (odometry scale kept).
+      const Eigen::Isometry3d& w = frames_[first].world_from_camera;
+      const double h =
+          WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, w)).translation().z();
+      Eigen::Isometry3d lift = Eigen::Isometry3d::Identity();
+      lift.translation() = Eigen::Vector3d(0, 0, h - w.translation().z());
+      ApplySimilarity(1.0, lift, first, last, new_points);
+    }
+  }
+  gauge_frame_ = gauge_frame_ < 0 ? first : gauge_frame_;
+  if (gauge_frame_b_ < 0) gauge_frame_b_ = last;
+  for (int f = first; f <= last; ++f) {
+    frames_[f].status = recovering_ ? PoseStatus::kRelocalized : PoseStatus::kTracking;
+  }
+  map_initialized_ = true;
+  phase_ = Phase::kTracking;
+  recovering_ = false;
+  lost_count_ = 0;
+  last_good_ = last;
+  last_keyframe_ = last;
+  // Span BA in the final model (4-DOF projects the poses onto the robot model here).
+  LocalBundleAdjustment(last);
+  // Per-frame statistics.
+  for (int f = first; f <= last; ++f) {
+    Frame& fr = frames_[f];
+    const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
+    int n = 0;
+    double sum = 0;
+    for (size_t i = 0; i < fr.ids.size(); ++i) {
+      auto it = points_.find(fr.ids[i]);
+      if (it == points_.end()) continue;
+      Eigen::Vector2d uv;
+      if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
+      const double e2 = (uv - fr.pixels[i]).squaredNorm();
+      if (e2 > options_.pnp.inlier_threshold_px * options_.pnp.inlier_threshold_px) continue;
+      ++n;
+      sum += e2;
+    }
+    fr.inliers = n;
+    fr.rms = n > 0 ? std::sqrt(sum / n) : 0.0;
+  }
+  last_keyframe_inliers_ = frames_[last].inliers;
+  std::ostringstream m;
+  m << "initialized on frames " << frames_[first].seq << ".." << frames_[last].seq << " with " << np
+    << " common tracks, " << points_.size() << " landmarks, span RMS " << best_rms << " px, scale source "
+    << static_cast<int>(scale_source_);
+  last_message_ = m.str();
+  return true;
+}
+
+bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<Eigen::Vector2d>>& meas,
+                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why) {
+  FactorizationResult fact;
+  if (!FactorizeWeakPerspective(meas, &fact, why)) return false;
+  const int nf = static_cast<int>(meas.size());
+  const int np = static_cast<int>(meas[0].size());
+  // Perspective upgrade of both depth-reversal candidates and 6-DOF BA; keep the better.
+  const double depth = 1000.0;  // arbitrary working unit until the scale is fixed by the caller
+  const Eigen::Matrix3d k_inv = camera.K().inverse();
+  double best_rms = std::numeric_limits<double>::infinity();
+  for (int candidate = 0; candidate < 2; ++candidate) {
+    const FactorizationResult fr = candidate == 0 ? fact : fact.Mirrored();
+    BaProblem bp;
+    for (int f = 0; f < nf; ++f) {
+      Eigen::Isometry3d cw = Eigen::Isometry3d::Identity();
+      cw.linear() = fr.camera_from_model[f];
+      const double z = depth / std::max(fr.scale[f], 1e-3);
+      cw.translation() = z * (k_inv * fr.centroid_px[f].homogeneous());
+      bp.world_from_camera.push_back(cw.inverse());
+    }
+    for (int p = 0; p < np; ++p) bp.points.push_back(fr.shape.col(p) * depth / camera.fx);
+    for (int f = 0; f < nf; ++f)
+      for (int p = 0; p < np; ++p) bp.observations.push_back({f, p, meas[f][p]});
+    bp.frame_fix.assign(nf, FrameFix::kFree);
+    bp.frame_fix[0] = FrameFix::kFixed;
+    bp.distance_frame_a = 0;
+    bp.distance_frame_b = nf - 1;
+    bp.distance_mm = (bp.world_from_camera[0].translation() - bp.world_from_camera[nf - 1].translation()).norm();
+    BaOptions bo = ba_options;
+    bo.model = MotionModel::kSixDof;
+    const BaSummary s = RunBundleAdjustment(camera, RobotGeometry(), bo, &bp);
+    if (s.ok && s.final_rms_px < best_rms) {
+      best_rms = s.final_rms_px;
+      *out = std::move(bp);
+    }
+  }
+  *rms_px = best_rms;
+  if (!std::isfinite(best_rms)) {
+    if (why) *why = "span BA failed";
+    return false;
+  }
+  return true;
+}
+
+bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
+                                Eigen::Vector4d* plane) const {
+  std::vector<int64_t> ids;
+  std::vector<Eigen::Vector3d> xs;
+  for (int64_t id : candidates) {
+    auto it = points_.find(id);
+    if (it == points_.end()) continue;
+    ids.push_back(id);
+    xs.push_back(it->second.x);
+  }
+  const int n = static_cast<int>(xs.size());
+  if (n < options_.min_floor_points) return false;
+  std::mt19937 rng(static_cast<uint32_t>(options_.seed));
+  std::uniform_int_distribution<int> pick(0, n - 1);
+  int best_count = 0;
+  Eigen::Vector4d best(0, 0, 1, 0);
+  const double cos_max = std::cos(20.0 * M_PI / 180.0);
+  for (int it = 0; it < 300; ++it) {
+    const int i = pick(rng), j = pick(rng), k = pick(rng);
+    Eigen::Vector3d nrm = (xs[j] - xs[i]).cross(xs[k] - xs[i]);
+    if (nrm.norm() < 1e-9) continue;
+    nrm.normalize();
+    if (std::abs(nrm.z()) < cos_max) continue;
+    const double d = -nrm.dot(xs[i]);
+    int count = 0;
+    for (const auto& x : xs) count += std::abs(nrm.dot(x) + d) < options_.floor_tolerance_mm ? 1 : 0;
+    if (count > best_count) {
+      best_count = count;
+      best << nrm, d;
+    }
+  }
+  if (best_count < options_.min_floor_points) return false;
+  // Least-squares refit on the inliers.
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::vector<int> in;
+  for (int i = 0; i < n; ++i)
+    if (std::abs(best.head<3>().dot(xs[i]) + best(3)) < options_.floor_tolerance_mm) {
+      in.push_back(i);
+      centroid += xs[i];
+    }
+  centroid /= static_cast<double>(in.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i : in) cov += (xs[i] - centroid) * (xs[i] - centroid).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d nrm = eig.eigenvectors().col(0);
+  *plane << nrm, -nrm.dot(centroid);
+  inlier_ids->clear();
+  for (int i : in) inlier_ids->push_back(ids[i]);
+  return true;
+}
+
+bool PoseEstimator::Track(int f, FrameResult* result) {
+  (void)result;
+  Frame& fr = frames_[f];
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Eigen::Vector2d> px;
+  std::vector<int> feature_index;
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    auto it = points_.find(fr.ids[i]);
+    if (it == points_.end()) continue;
+    pts.push_back(it->second.x);
+    px.push_back(fr.pixels[i]);
+    feature_index.push_back(static_cast<int>(i));
+  }
+  PnpOptions po = options_.pnp;
+  po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
+  PnpResult r;
+  // Prior: constant-velocity extrapolation from the two previous frames when both are posed, else the last pose.
+  Eigen::Isometry3d prior = last_good_ >= 0 ? frames_[last_good_].world_from_camera : Eigen::Isometry3d::Identity();
+  if (last_good_ == f - 1 && f >= 2 && frames_[f - 2].posed) {
+    const Eigen::Isometry3d& a = frames_[f - 2].world_from_camera;
+    const Eigen::Isometry3d& b = frames_[f - 1].world_from_camera;
+    prior = b * (a.inverse() * b);
+  }
+  if (static_cast<int>(pts.size()) < po.min_inliers ||
+      !SolvePnp(camera_, options_.robot, pts, px, last_good_ >= 0 ? &prior : nullptr, po, &r, &last_message_)) {
+    fr.status = PoseStatus::kLost;
+    if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
+    phase_ = Phase::kLost;
+    return false;
+  }
+  std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
+  std::vector<uint8_t> is_inlier(pts.size(), 0);
+  for (int i : r.inliers) is_inlier[i] = 1;
+  for (size_t c = 0; c < pts.size(); ++c)
+    if (!is_inlier[c]) fr.outlier[feature_index[c]] = 1;
+  fr.posed = true;
+  fr.world_from_camera = r.world_from_camera;
+  fr.inliers = static_cast<int>(r.inliers.size());
+  fr.rms = r.rms_px;
+  fr.status = phase_ == Phase::kLost ? PoseStatus::kRelocalized : PoseStatus::kTracking;
+  phase_ = Phase::kTracking;
+  last_good_ = f;
+  return true;
+}
+
+void PoseEstimator::AddKeyframe(int f) {
+  frames_[f].keyframe = true;
+  int64_t t0 = MonotonicMicros();
+  TriangulateNew(f);
+  tri_ms_ += (MonotonicMicros() - t0) * 1e-3;
+  t0 = MonotonicMicros();
+  LocalBundleAdjustment(f);
+  lba_ms_ += (MonotonicMicros() - t0) * 1e-3;
+  if (options_.model == MotionModel::kSixDof && gauge_frame_ >= 0 && f - gauge_frame_ <= options_.online_scale_frames)
+    RescaleSixDof(gauge_frame_);
+  last_keyframe_ = f;
+  last_keyframe_inliers_ = frames_[f].inliers;
+}
+
+int PoseEstimator::TriangulateNew(int f) {
+  const Frame& fr = frames_[f];
+  int added = 0;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector2d> pixels;
+  std::vector<int> views;
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    const int64_t id = fr.ids[i];
+    if (points_.count(id)) continue;
+    views.clear();
+    for (int g : track_frames_[id])
+      if (g <= f && frames_[g].posed) views.push_back(g);
+    if (static_cast<int>(views.size()) < options_.min_triangulation_views) continue;
+    // Evenly spread subset including the first and last view.
+    const int m = std::min<int>(options_.max_triangulation_views, static_cast<int>(views.size()));
+    poses.clear();
+    pixels.clear();
+    for (int k = 0; k < m; ++k) {
+      const int g = views[static_cast<size_t>(std::llround(static_cast<double>(k) * (views.size() - 1) / (m - 1)))];
+      poses.push_back(frames_[g].world_from_camera);
+      pixels.push_back(frames_[g].pixels[frames_[g].Find(id)]);
+    }
+    TriangulatedPoint tp;
+    if (!TriangulatePoint(camera_, poses, pixels, options_.triangulation, &tp)) continue;
+    Point p{tp.point_in_world, false};
+    if (options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight &&
+        std::abs(p.x.z()) < options_.floor_tolerance_mm)
+      p.on_floor = true;
+    points_[id] = p;
+    ++added;
+  }
+  return added;
+}
+
+void PoseEstimator::LocalBundleAdjustment(int f) {
+  // Window: the last local_window_keyframes posed keyframes up to f.
+  std::vector<int> window;
+  for (int g = f; g >= 0 && static_cast<int>(window.size()) < options_.local_window_keyframes; --g)
+    if (frames_[g].keyframe && frames_[g].posed) window.push_back(g);
+  std::reverse(window.begin(), window.end());
+  if (window.empty()) return;
+  std::set<int64_t> point_set;
+  for (int g : window) {
+    const Frame& fr = frames_[g];
+    for (size_t i = 0; i < fr.ids.size(); ++i)
+      if (!fr.outlier[i] && points_.count(fr.ids[i])) point_set.insert(fr.ids[i]);
+  }
+  std::set<int> observers;
+  for (int64_t id : point_set)
+    for (int g : track_frames_[id])
+      if (frames_[g].keyframe && frames_[g].posed && g < window[0]) observers.insert(g);
+  std::set<int> frame_set(window.begin(), window.end());
+  int taken = 0;
+  for (auto it = observers.rbegin(); it != observers.rend() && taken < options_.local_fixed_keyframes; ++it, ++taken)
+    frame_set.insert(*it);
+  std::vector<int> frame_list(frame_set.begin(), frame_set.end());
+  std::vector<int64_t> point_list(point_set.begin(), point_set.end());
+  std::unordered_map<int64_t, int> point_index;
+  BaProblem bp;
+  for (size_t i = 0; i < point_list.size(); ++i) {
+    point_index[point_list[i]] = static_cast<int>(i);
+    const Point& p = points_[point_list[i]];
+    bp.points.push_back(p.x);
+    bp.point_on_floor.push_back(p.on_floor ? 1 : 0);
+  }
+  int fixed = 0;
+  for (size_t k = 0; k < frame_list.size(); ++k) {
+    const int g = frame_list[k];
+    const Frame& fr = frames_[g];
+    bp.world_from_camera.push_back(fr.world_from_camera);
+    const bool in_window = std::binary_search(window.begin(), window.end(), g) || frame_set.count(g) == 0;
+    const bool free_frame = std::find(window.begin(), window.end(), g) != window.end();
+    (void)in_window;
+    bp.frame_fix.push_back(free_frame ? FrameFix::kFree : FrameFix::kFixed);
+    fixed += free_frame ? 0 : 1;
+    for (size_t i = 0; i < fr.ids.size(); ++i) {
+      if (fr.outlier[i]) continue;
+      auto it = point_index.find(fr.ids[i]);
+      if (it != point_index.end()) bp.observations.push_back({static_cast<int>(k), it->second, fr.pixels[i]});
+    }
+  }
+  // Gauge.
+  const bool floor_mode = options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight;
+  auto index_of = [&](int g) {
+    return static_cast<int>(std::lower_bound(frame_list.begin(), frame_list.end(), g) - frame_list.begin());
+  };
+  if (floor_mode) {
+    if (fixed == 0) bp.frame_fix[index_of(window[0])] = FrameFix::kFixedFloor;
+  } else {
+    for (size_t w = 0; fixed < 2 && w < window.size(); ++w) {
+      bp.frame_fix[index_of(window[w])] = FrameFix::kFixed;
+      ++fixed;
+    }
+  }
+  const BaSummary s = RunBundleAdjustment(camera_, options_.robot, MakeBaOptions(options_.local_ba_iterations), &bp);
+  if (!s.ok) return;
+  for (size_t k = 0; k < frame_list.size(); ++k)
+    if (bp.frame_fix[k] != FrameFix::kFixed) frames_[frame_list[k]].world_from_camera = bp.world_from_camera[k];
+  for (size_t i = 0; i < point_list.size(); ++i) points_[point_list[i]].x = bp.points[i];
+  PruneLandmarks(point_list, frame_list);
+}
+
+void PoseEstimator::PruneLandmarks(const std::vector<int64_t>& ids, const std::vector<int>& frames) {
+  std::set<int> frame_set(frames.begin(), frames.end());
+  for (int64_t id : ids) {
+    auto it = points_.find(id);
+    if (it == points_.end()) continue;
+    double sum = 0;
+    int n = 0;
+    bool behind = false;
+    for (int g : track_frames_[id]) {
+      if (!frame_set.count(g)) continue;
+      const Frame& fr = frames_[g];
+      const int i = fr.Find(id);
+      if (i < 0 || fr.outlier[i]) continue;
+      Eigen::Vector2d uv;
+      if (!ProjectIdeal(camera_, fr.world_from_camera.inverse() * it->second.x, &uv)) {
+        behind = true;
+        break;
+      }
+      sum += (uv - fr.pixels[i]).squaredNorm();
+      ++n;
+    }
+    if (behind || (n > 0 && std::sqrt(sum / n) > options_.max_landmark_error_px)) points_.erase(it);
+  }
+}
+
+void PoseEstimator::GlobalBundleAdjustment() {
+  std::vector<int> frame_list;
+  for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
+    if (frames_[g].posed && (options_.global_ba_all_frames || frames_[g].keyframe || g == gauge_frame_ ||
+                             g == gauge_frame_b_))
+      frame_list.push_back(g);
+  std::vector<int64_t> point_list;
+  std::unordered_map<int64_t, int> point_index;
+  BaProblem bp;
+  for (const auto& [id, p] : points_) {
+    point_index[id] = static_cast<int>(point_list.size());
+    point_list.push_back(id);
+    bp.points.push_back(p.x);
+    bp.point_on_floor.push_back(p.on_floor ? 1 : 0);
+  }
+  int gauge_index = -1, gauge_b_index = -1;
+  for (size_t k = 0; k < frame_list.size(); ++k) {
+    const int g = frame_list[k];
+    const Frame& fr = frames_[g];
+    if (g == gauge_frame_) gauge_index = static_cast<int>(k);
+    if (g == gauge_frame_b_) gauge_b_index = static_cast<int>(k);
+    bp.world_from_camera.push_back(fr.world_from_camera);
+    bp.frame_fix.push_back(FrameFix::kFree);
+    for (size_t i = 0; i < fr.ids.size(); ++i) {
+      if (fr.outlier[i]) continue;
+      auto it = point_index.find(fr.ids[i]);
+      if (it != point_index.end()) bp.observations.push_back({static_cast<int>(k), it->second, fr.pixels[i]});
+    }
+  }
+  if (gauge_index < 0) gauge_index = 0;
+  const bool floor_mode = options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight;
+  bp.frame_fix[gauge_index] = floor_mode ? FrameFix::kFixedFloor : FrameFix::kFixed;
+  if (!floor_mode && gauge_b_index >= 0 && gauge_b_index != gauge_index) {
+    bp.distance_frame_a = gauge_index;
+    bp.distance_frame_b = gauge_b_index;
+    bp.distance_mm =
+        (bp.world_from_camera[gauge_index].translation() - bp.world_from_camera[gauge_b_index].translation()).norm();
+  }
+  const BaSummary s = RunBundleAdjustment(camera_, options_.robot, MakeBaOptions(options_.global_ba_iterations), &bp);
+  last_message_ = "global BA: " + s.message;
+  if (!s.ok) return;
+  for (size_t k = 0; k < frame_list.size(); ++k) frames_[frame_list[k]].world_from_camera = bp.world_from_camera[k];
+  for (size_t i = 0; i < point_list.size(); ++i) points_[point_list[i]].x = bp.points[i];
+  PruneLandmarks(point_list, frame_list);
+  if (options_.global_ba_all_frames) return;
+  // The other frames: pose-only refit against the adjusted map (inliers of their PnP kept).
+  BaOptions bo = MakeBaOptions(options_.pnp.refine_iterations);
+  for (int g = 0; g < static_cast<int>(frames_.size()); ++g) {
+    Frame& fr = frames_[g];
+    if (!fr.posed || std::binary_search(frame_list.begin(), frame_list.end(), g)) continue;
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<Eigen::Vector2d> px;
+    std::vector<int> use;
+    for (size_t i = 0; i < fr.ids.size(); ++i) {
+      if (fr.outlier[i]) continue;
+      auto it = points_.find(fr.ids[i]);
+      if (it == points_.end()) continue;
+      use.push_back(static_cast<int>(pts.size()));
+      pts.push_back(it->second.x);
+      px.push_back(fr.pixels[i]);
+    }
+    if (static_cast<int>(use.size()) >= options_.pnp.min_inliers)
+      RefinePose(camera_, options_.robot, bo, pts, px, use, &fr.world_from_camera);
+  }
+}
+
+void PoseEstimator::RescaleSixDof(int first_frame) {
+  if (options_.use_floor_for_scale && RescaleToFloorHeight()) return;
+  if (options_.refine_scale_with_odometry) RescaleToOdometryPath(first_frame);
+}
+
+bool PoseEstimator::RescaleToFloorHeight() {
+  if (gauge_frame_ < 0 || !frames_[gauge_frame_].posed) return false;
+  std::vector<int64_t> all;
+  all.reserve(points_.size());
+  for (const auto& kv : points_) all.push_back(kv.first);
+  std::vector<int64_t> floor_ids;
+  Eigen::Vector4d plane;
+  if (!DetectFloor(all, &floor_ids, &plane)) return false;
+  const Eigen::Vector3d c0 = frames_[gauge_frame_].world_from_camera.translation();
+  Eigen::Vector3d n = plane.head<3>();
+  double d = plane(3);
+  if (n.dot(c0) + d < 0) {
+    n = -n;
+    d = -d;
+  }
+  double measured = 0, expected = 0;
+  for (const Frame& fr : frames_) {
+    if (!fr.posed) continue;
+    measured += n.dot(fr.world_from_camera.translation()) + d;
+    expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, fr.world_from_camera))
+                    .translation()
+                    .z();
+  }
+  if (!(measured > 1e-6 && expected > 1e-6)) return false;
+  const double s = expected / measured;
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = c0 - s * c0;
+  ApplySimilarity(s, t, 0, static_cast<int>(frames_.size()) - 1, all);
+  scale_source_ = ScaleSource::kCameraHeight;
+  return true;
+}
+
+double PoseEstimator::RescaleToOdometryPath(int first_frame) {
+  if (scale_source_ != ScaleSource::kOdometry || gauge_frame_ < 0) return 1.0;
+  double odo = 0, vis = 0;
+  for (int f = std::max(1, first_frame + 1); f < static_cast<int>(frames_.size()); ++f) {
+    const Frame& a = frames_[f - 1];
+    const Frame& b = frames_[f];
+    if (!a.posed || !b.posed || !a.has_odometry || !b.has_odometry) continue;
+    odo += (b.odometry_world_from_camera.translation() - a.odometry_world_from_camera.translation()).norm();
+    vis += (b.world_from_camera.translation() - a.world_from_camera.translation()).norm();
+  }
+  if (!(odo > 0 && vis > 0)) return 1.0;
+  const double s = odo / vis;
+  const Eigen::Vector3d c0 = frames_[gauge_frame_].world_from_camera.translation();
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = c0 - s * c0;
+  std::vector<int64_t> all;
+  all.reserve(points_.size());
+  for (const auto& kv : points_) all.push_back(kv.first);
+  ApplySimilarity(s, t, 0, static_cast<int>(frames_.size()) - 1, all);
+  return s;
+}
+
+std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
+  const int64_t start_us = MonotonicMicros();
+  if (map_initialized_) {
+    // Register frames never posed (before the first span, lost stretches) against the map.
+    for (int f = 0; f < static_cast<int>(frames_.size()); ++f) {
+      Frame& fr = frames_[f];
+      if (fr.posed) continue;
+      int nearest = -1;
+      for (int d = 1; d < static_cast<int>(frames_.size()) && nearest < 0; ++d) {
+        if (f + d < static_cast<int>(frames_.size()) && frames_[f + d].posed) nearest = f + d;
+        else if (f - d >= 0 && frames_[f - d].posed) nearest = f - d;
+      }
+      if (nearest < 0) break;
+      std::vector<Eigen::Vector3d> pts;
+      std::vector<Eigen::Vector2d> px;
+      for (size_t i = 0; i < fr.ids.size(); ++i) {
+        auto it = points_.find(fr.ids[i]);
+        if (it == points_.end()) continue;
+        pts.push_back(it->second.x);
+        px.push_back(fr.pixels[i]);
+      }
+      PnpOptions po = options_.pnp;
+      po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
+      PnpResult r;
+      const Eigen::Isometry3d prior = frames_[nearest].world_from_camera;
+      if (static_cast<int>(pts.size()) >= po.min_inliers &&
+          SolvePnp(camera_, options_.robot, pts, px, &prior, po, &r)) {
+        fr.posed = true;
+        fr.world_from_camera = r.world_from_camera;
+        fr.status = PoseStatus::kTracking;
+      }
+    }
+    GlobalBundleAdjustment();
+    if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
+    // Final per-frame statistics.
+    for (auto& fr : frames_) {
+      if (!fr.posed) continue;
+      const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
+      int n = 0;
+      double sum = 0;
+      for (size_t i = 0; i < fr.ids.size(); ++i) {
+        auto it = points_.find(fr.ids[i]);
+        if (it == points_.end()) continue;
+        Eigen::Vector2d uv;
+        if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
+        const double e2 = (uv - fr.pixels[i]).squaredNorm();
+        if (e2 > options_.pnp.inlier_threshold_px * options_.pnp.inlier_threshold_px) continue;
+        ++n;
+        sum += e2;
+      }
+      fr.inliers = n;
+      fr.rms = n > 0 ? std::sqrt(sum / n) : 0.0;
+    }
+  }
+  final_ba_ms_ = (MonotonicMicros() - start_us) * 1e-3;
+  std::vector<CameraPoseEstimate> out;
+  out.reserve(frames_.size());
+  for (int f = 0; f < static_cast<int>(frames_.size()); ++f) out.push_back(Estimate(f));
+  return out;
+}
+
+std::vector<Landmark> PoseEstimator::Landmarks() const {
+  std::vector<Landmark> out;
+  out.reserve(points_.size());
+  for (const auto& [id, p] : points_) {
+    Landmark l;
+    l.id = id;
+    l.position_mm = p.x;
+    l.on_floor = p.on_floor;
+    double sum = 0;
+    int n = 0;
+    auto tf = track_frames_.find(id);
+    if (tf != track_frames_.end()) {
+      for (int g : tf->second) {
+        const Frame& fr = frames_[g];
+        if (!fr.posed) continue;
+        const int i = fr.Find(id);
+        Eigen::Vector2d uv;
+        if (i < 0 || fr.outlier[i] || !ProjectIdeal(camera_, fr.world_from_camera.inverse() * p.x, &uv)) continue;
+        sum += (uv - fr.pixels[i]).squaredNorm();
+        ++n;
+      }
+    }
+    l.num_observations = n;
+    l.reprojection_rms_px = n > 0 ? std::sqrt(sum / n) : 0.0;
+    out.push_back(l);
+  }
+  return out;
+}
+
+}  // namespace objscan

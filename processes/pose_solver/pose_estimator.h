@@ -1,0 +1,212 @@
+// PoseEstimator: incremental structure from motion for one camera on the robot, LCM-free.
+//
+// Phases
+//  1. Preliminary (status INITIALIZING): frames are buffered until SelectStartSpan (factorization.h) finds a span
+//     with enough common tracks and rotation; Tomasi–Kanade weak-perspective factorization of the span gives the
+//     rotations and shape, both depth-reversal candidates are upgraded to perspective and bundle-adjusted, the better
+//     one is kept. Metric scale and world frame:
+//       kSixDof:  world_from_camera of the span's first frame = the odometry's WorldFromCamera at that frame; scale =
+//                 odometry baselines / visual baselines over the span (SCALE_ODOMETRY). Refined at keyframes during
+//                 the first online_scale_frames frames and at Finish(): if a floor plane is seen among the landmarks
+//                 (use_floor_for_scale), by the camera height above it (SCALE_CAMERA_HEIGHT), else by the odometry
+//                 path length (refine_scale_with_odometry).
+//       kFourDof: world = odometry frame; if a floor plane is seen among the landmarks (>= min_floor_points within
+//                 floor_tolerance_mm, normal within 20 deg of vertical), the map is levelled onto it (floor z = 0) and
+//                 scaled so that the cameras sit at the robot model's height (SCALE_CAMERA_HEIGHT); floor landmarks
+//                 are then held at z = 0 in every adjustment, which keeps the scale. Otherwise SCALE_ODOMETRY.
+//       Without odometry: world = first camera of the span at an arbitrary scale (SCALE_NONE).
+//  2. Sequential (status TRACKING): per frame PnP (pnp.h) against the landmarks whose track ids are in the frame;
+//     keyframe when keyframe_interval frames passed or the tracked landmarks fell below keyframe_track_ratio of the
+//     last keyframe's; at a keyframe: new landmarks by multi-view triangulation (motion stereo over the posed frames
+//     that saw the track), windowed BA over the last local_window_keyframes keyframes (other keyframes seeing those
+//     points held fixed), landmarks with large reprojection error removed.
+//  3. Lost: fewer than min_inliers PnP inliers -> the frame is reported with status LOST, num_inliers 0 and the LAST
+//     GOOD pose (not a made-up one: consumers must ignore the pose of LOST frames). Every later frame tries PnP against
+//     all landmarks (relocalization works when track ids reappear). After relocalize_after_lost_frames lost frames the
+//     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
+//     last good frame and the new span (no Sim(3) merge from common landmarks: KLT ids do not reappear). The first
+//     pose after recovery has status RELOCALIZED.
+//  4. Finish(): frames never posed get PnP against the final map, then global BA over all posed frames and
+//     landmarks, scale refinement (kSixDof with odometry), final poses for every frame.
+// Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
+// Memory grows with the stream (all frames' observations are kept for the final adjustment).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "common/camera_model.h"
+#include "common/robot_model.h"
+#include "common/sensor_data.h"
+#include "processes/pose_solver/bundle_adjustment.h"
+#include "processes/pose_solver/factorization.h"
+#include "processes/pose_solver/pnp.h"
+#include "processes/pose_solver/triangulation.h"
+
+namespace objscan {
+
+struct PoseEstimatorOptions {
+  MotionModel model = MotionModel::kSixDof;  // camera model of all adjustments
+  RobotGeometry robot;                       // mast height and offsets (4-DOF model, odometry poses)
+  StartSpanOptions start_span;               // choice of the preliminary span
+  PnpOptions pnp;                            // per-frame PnP (model is overridden by `model`)
+  TriangulationOptions triangulation;        // acceptance of new landmarks
+  int min_triangulation_views = 3;           // posed views a track needs before it is triangulated
+  int max_triangulation_views = 8;           // views used (evenly spread over the track)
+  int keyframe_interval = 5;                 // frames: at most this many frames between keyframes
+  double keyframe_track_ratio = 0.7;         // keyframe when tracked landmarks < ratio x those of the last keyframe
+  int local_window_keyframes = 5;            // keyframes optimized by the windowed BA
+  int local_ba_iterations = 5;               // Ceres iterations of the windowed BA
+  int local_fixed_keyframes = 4;             // older keyframes (nearest first) held fixed in the windowed BA
+  bool global_ba_all_frames = false;         // final BA over every frame (slow) instead of keyframes + pose refits
+  int global_ba_iterations = 40;             // Ceres iterations of the final BA
+  int init_ba_iterations = 50;               // Ceres iterations of the span BA
+  std::string ba_loss = "huber";             // robust loss: "huber" or "cauchy"
+  double ba_loss_px = 1.0;                   // px, robust loss scale
+  double max_landmark_error_px = 2.5;        // px, landmarks with a larger RMS after BA are removed
+  bool use_floor_for_scale = true;           // level on (4dof) / scale from (both) the floor plane when it is seen
+  double floor_tolerance_mm = 6.0;           // mm, plane inlier distance / floor landmark |z|
+  int min_floor_points = 20;                 // landmarks needed to accept a floor plane
+  bool refine_scale_with_odometry = true;    // kSixDof: rescale at Finish() by odometry / visual path length
+  int online_scale_frames = 100;             // kSixDof: at keyframes within this many frames of the map start,
+                                             // rescale the map by odometry / visual path length (0 = off)
+  int relocalize_after_lost_frames = 10;     // lost frames before the preliminary phase restarts
+  int64_t seed = 1;                          // RANSAC seeds (seed + frame index)
+};
+bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& options, std::string* why);
+
+// The preliminary-phase reconstruction of a span: weak-perspective factorization of meas[frame][point] (every point
+// in every frame, undistorted px), perspective upgrade of both depth-reversal candidates (depth 1000 units, scale
+// arbitrary), 6-DOF BA of each (frame 0 fixed, baseline 0..last held), the candidate with the lower RMS returned in
+// *out (world = the factorization's model frame) with its RMS in *rms_px. False with *why on failure.
+bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<Eigen::Vector2d>>& meas,
+                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why = nullptr);
+
+struct Landmark {
+  int64_t id = 0;                               // track id
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // world
+  int num_observations = 0;                     // posed frames that observe it
+  double reprojection_rms_px = 0;               // RMS over those
+  bool on_floor = false;                        // held at z = 0 (kFourDof floor mode)
+};
+
+// Odometry readings, interpolated at frame times (linear in x, y, theta (unwrapped), pan, tilt; clamped at the ends).
+class OdometryBuffer {
+ public:
+  explicit OdometryBuffer(size_t capacity = 4096) : capacity_(capacity) {}
+  // Readings older than the newest are ignored (returns false).
+  bool Add(const OdometryReading& reading);
+  // False when empty or utime is more than max_gap_us outside the buffered range.
+  bool At(int64_t utime, OdometryReading* out, int64_t max_gap_us = 500000) const;
+  bool empty() const { return readings_.empty(); }
+
+ private:
+  size_t capacity_;
+  std::deque<OdometryReading> readings_;
+};
+
+struct FrameResult {
+  CameraPoseEstimate pose;     // the pose to publish for this frame now
+  bool keyframe = false;       // a keyframe was added (publish landmarks)
+  bool initialized_now = false;  // the preliminary phase finished with this frame
+};
+
+class PoseEstimator {
+ public:
+  // camera must be valid (PinholeCamera::IsValid); options validated (throws std::invalid_argument otherwise).
+  PoseEstimator(const PinholeCamera& camera, const PoseEstimatorOptions& options);
+
+  // Processes the next frame (seq must increase; the caller rejects others). odometry: reading at the frame time
+  // or null. Returns the pose to publish for it.
+  FrameResult AddFrame(const TrackFrame& frame, const OdometryReading* odometry);
+
+  // End of stream: registers unposed frames, global BA, scale refinement. Returns one pose per frame added (in
+  // order); frames that could not be posed keep status LOST (or INITIALIZING when no map was ever built).
+  std::vector<CameraPoseEstimate> Finish();
+
+  std::vector<Landmark> Landmarks() const;
+  ScaleSource scale_source() const { return scale_source_; }
+  bool initialized() const { return map_initialized_; }
+  int num_frames() const { return static_cast<int>(frames_.size()); }
+  int num_keyframes() const;
+  // Timing figures (CPU time of the calling thread, ms) for benchmarks.
+  double init_ms() const { return init_ms_; }
+  double final_ba_ms() const { return final_ba_ms_; }
+  const std::string& last_message() const { return last_message_; }
+  // Accumulated thread CPU ms of the sequential steps (benchmarks): PnP, triangulation, windowed BA.
+  double pnp_ms_total() const { return pnp_ms_; }
+  double triangulation_ms_total() const { return tri_ms_; }
+  double local_ba_ms_total() const { return lba_ms_; }
+
+ private:
+  struct Frame {
+    int64_t utime = 0, seq = 0;
+    std::vector<int64_t> ids;            // sorted
+    std::vector<Eigen::Vector2d> pixels; // undistorted, same order
+    std::vector<uint8_t> outlier;        // PnP outlier flag per feature
+    bool has_odometry = false;
+    Eigen::Isometry3d odometry_world_from_camera = Eigen::Isometry3d::Identity();
+    bool posed = false;
+    bool keyframe = false;
+    Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+    PoseStatus status = PoseStatus::kInitializing;
+    int inliers = 0;
+    double rms = 0;
+    int Find(int64_t id) const;          // index of id or -1
+  };
+  struct Point {
+    Eigen::Vector3d x;
+    bool on_floor = false;
+  };
+  enum class Phase { kInitializing, kTracking, kLost };
+
+  bool TryInitialize(int newest);
+  bool InitializeSpan(int first, int last, const std::vector<int64_t>& common);
+  bool Track(int f, FrameResult* result);
+  void AddKeyframe(int f);
+  int TriangulateNew(int f);
+  void LocalBundleAdjustment(int f);
+  void GlobalBundleAdjustment();
+  // kSixDof with odometry scale: rescales everything about the gauge camera so that the visual path length from
+  // first_frame on matches the odometry's. Returns the factor applied (1 when not possible).
+  double RescaleToOdometryPath(int first_frame);
+  // kSixDof: rescales everything about the gauge camera so that the cameras' mean height above the floor plane
+  // found among the landmarks equals the robot model's; sets SCALE_CAMERA_HEIGHT. Returns false when no floor.
+  bool RescaleToFloorHeight();
+  void RescaleSixDof(int first_frame);
+  void PruneLandmarks(const std::vector<int64_t>& ids, const std::vector<int>& frames);
+  bool DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
+                   Eigen::Vector4d* plane) const;
+  void ApplySimilarity(double scale, const Eigen::Isometry3d& world_new_from_old, int first_frame, int last_frame,
+                       const std::vector<int64_t>& point_ids);
+  CameraPoseEstimate Estimate(int f) const;
+  BaOptions MakeBaOptions(int iterations) const;
+
+  PinholeCamera camera_;
+  PoseEstimatorOptions options_;
+  std::vector<Frame> frames_;
+  std::map<int64_t, Point> points_;
+  std::unordered_map<int64_t, std::vector<int>> track_frames_;  // track id -> frames that saw it
+  Phase phase_ = Phase::kInitializing;
+  bool map_initialized_ = false;
+  int init_start_ = 0;              // first frame considered by the (re)initialization
+  int gauge_frame_ = -1;            // first frame of the first map (fixed in BA)
+  int gauge_frame_b_ = -1;          // second frame of the 6-DOF scale gauge
+  int last_good_ = -1;              // last frame with a tracked pose
+  int last_keyframe_ = -1;
+  int last_keyframe_inliers_ = 0;
+  int lost_count_ = 0;
+  bool recovering_ = false;         // a restart after loss is in progress (chain through odometry)
+  ScaleSource scale_source_ = ScaleSource::kNone;
+  double init_ms_ = 0, final_ba_ms_ = 0;
+  double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;
+  std::string last_message_;
+};
+
+}  // namespace objscan

@@ -1,0 +1,76 @@
+// Speed of the pose estimator on one core: a 200-frame synthetic orbit with about 1000 live tracks per frame.
+// Counters: seq_ms_per_frame (sequential phase: AddFrame after initialization, keyframe work included),
+// seq_max_ms (all thread CPU time), init_ms (the span factorization + BA), final_ms (Finish: registration + global BA + scale), tracks.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+
+#include <ctime>
+#include "processes/pose_solver/pose_estimator.h"
+#include "processes/pose_solver/synthetic_orbit.h"
+
+namespace objscan {
+namespace {
+
+// Thread CPU time (µs): the figures are for one core and do not depend on the load of the shared machine.
+int64_t CpuMicros() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
+}
+
+const SyntheticOrbit& Scene() {
+  static const SyntheticOrbit s = [] {
+    SyntheticOrbitOptions o;
+    o.num_sphere_points = 1100;
+    o.num_floor_points = 1000;
+    o.floor_max_radius_mm = 420;
+    return MakeSyntheticOrbit(o);
+  }();
+  return s;
+}
+
+void RunEstimator(benchmark::State& state, MotionModel model) {
+  const SyntheticOrbit& s = Scene();
+  double tracks = 0;
+  for (const auto& f : s.frames) tracks += f.features.size();
+  tracks /= s.frames.size();
+  for (auto _ : state) {
+    PoseEstimatorOptions o;
+    o.model = model;
+    PoseEstimator est(s.camera, o);
+    double seq_ms = 0, seq_max = 0;
+    int seq_frames = 0;
+    for (size_t f = 0; f < s.frames.size(); ++f) {
+      const bool was_initialized = est.initialized();
+      const int64_t t0 = CpuMicros();
+      est.AddFrame(s.frames[f], &s.odometry[f]);
+      const double ms = (CpuMicros() - t0) * 1e-3;
+      if (was_initialized) {
+        seq_ms += ms;
+        seq_max = std::max(seq_max, ms);
+        ++seq_frames;
+      }
+    }
+    est.Finish();
+    state.counters["seq_ms_per_frame"] = seq_frames > 0 ? seq_ms / seq_frames : 0;
+    state.counters["seq_max_ms"] = seq_max;
+    state.counters["init_ms"] = est.init_ms();
+    state.counters["final_ms"] = est.final_ba_ms();
+    state.counters["tracks"] = tracks;
+    state.counters["keyframes"] = est.num_keyframes();
+    state.counters["pnp_ms_per_frame"] = seq_frames > 0 ? est.pnp_ms_total() / seq_frames : 0;
+    state.counters["tri_ms_per_frame"] = seq_frames > 0 ? est.triangulation_ms_total() / seq_frames : 0;
+    state.counters["lba_ms_per_frame"] = seq_frames > 0 ? est.local_ba_ms_total() / seq_frames : 0;
+  }
+}
+
+void BM_SixDof(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof); }
+void BM_FourDof(benchmark::State& state) { RunEstimator(state, MotionModel::kFourDof); }
+BENCHMARK(BM_SixDof)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FourDof)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace objscan
+
+BENCHMARK_MAIN();

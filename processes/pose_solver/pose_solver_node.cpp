@@ -1,0 +1,364 @@
+#include "processes/pose_solver/pose_solver_node.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "common/time.h"
+#include "objscan/landmarks_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/process_status_t.hpp"
+
+namespace objscan {
+
+void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
+  p.Add("name", &o->name, "process name (status name, sender of control messages)");
+  p.Add("tracks-channel", &o->tracks_channel, "input feature_tracks_t channel");
+  p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
+  p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel (\"\" = no odometry)");
+  p.Add("pose-channel", &o->pose_channel, "output pose_t channel (one per frame)");
+  p.Add("final-pose-channel", &o->final_pose_channel, "output pose_t channel for the final poses after global BA");
+  p.Add("landmarks-channel", &o->landmarks_channel, "output landmarks_t channel");
+  p.Add("control-channel", &o->control_channel, "control_t channel (finished in and out)");
+  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.Add("finish-on-sender", &o->finish_on_sender, "COMMAND_FINISHED from this sender starts the final phase");
+  p.Add("model", &o->model, "camera motion model: 6dof or 4dof (robot on the floor: x, y, yaw, tilt)");
+  p.Add("pending-tracks-capacity", &o->pending_tracks_capacity, "track frames buffered before camera_info (>= 0)");
+  p.Add("tracks-queue-capacity", &o->tracks_queue_capacity, "messages buffered by the tracks subscription (>= 1)");
+  p.Add("max-odometry-gap", &o->max_odometry_gap_s, "s, odometry further than this from a frame is not used");
+  p.Add("status-period", &o->status_period_s, "s, status publication period");
+  p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
+  p.Add("output-dir", &o->output_dir, "write trajectory.txt, trajectory_online.txt, landmarks.ply, colmap/ here");
+  PoseEstimatorOptions* e = &o->estimator;
+  p.Add("mast-height", &e->robot.mast_height_mm, "mm, pan/tilt axes above the floor");
+  p.Add("mast-offset-x", &e->robot.mast_offset_x_mm, "mm, mast forward of the base centre");
+  p.Add("mast-offset-y", &e->robot.mast_offset_y_mm, "mm, mast left of the base centre");
+  p.Add("camera-offset-x", &e->robot.camera_offset_mm.x(), "mm, optical centre in the tilt frame, forward");
+  p.Add("camera-offset-y", &e->robot.camera_offset_mm.y(), "mm, optical centre in the tilt frame, left");
+  p.Add("camera-offset-z", &e->robot.camera_offset_mm.z(), "mm, optical centre in the tilt frame, up");
+  p.Add("span-min-common-tracks", &e->start_span.min_common_tracks, "tracks common to every frame of the start span");
+  p.Add("span-min-frames", &e->start_span.min_frames, "frames in the start span (>= 3)");
+  p.Add("span-max-frames", &e->start_span.max_frames, "longest start span");
+  p.Add("span-min-rotation", &e->start_span.min_rotation_deg, "deg, rotation across the start span (parallax)");
+  p.Add("pnp-ransac-iterations", &e->pnp.ransac_iterations, "PnP RANSAC hypotheses");
+  p.Add("pnp-ransac-threshold", &e->pnp.ransac_threshold_px, "px, PnP RANSAC inlier threshold");
+  p.Add("pnp-inlier-threshold", &e->pnp.inlier_threshold_px, "px, inlier threshold after refinement");
+  p.Add("pnp-min-inliers", &e->pnp.min_inliers, "fewer PnP inliers = lost");
+  p.Add("pnp-loss-scale", &e->pnp.loss_scale_px, "px, Huber scale of the PnP refinement");
+  p.Add("pnp-refine-iterations", &e->pnp.refine_iterations, "Ceres iterations of the PnP refinement");
+  p.Add("pnp-use-prior-first", &e->pnp.use_prior_first, "refine the previous pose before trying RANSAC");
+  p.Add("tri-min-parallax", &e->triangulation.min_parallax_deg, "deg, parallax a new landmark needs");
+  p.Add("tri-max-reprojection", &e->triangulation.max_reprojection_px, "px, max error in every view of a new landmark");
+  p.Add("tri-refine-iterations", &e->triangulation.refine_iterations, "Gauss-Newton iterations of triangulation");
+  p.Add("tri-min-views", &e->min_triangulation_views, "posed views a track needs to be triangulated");
+  p.Add("tri-max-views", &e->max_triangulation_views, "views used for triangulation");
+  p.Add("keyframe-interval", &e->keyframe_interval, "frames, longest gap between keyframes");
+  p.Add("keyframe-track-ratio", &e->keyframe_track_ratio, "keyframe when tracked landmarks fall below this ratio");
+  p.Add("local-window", &e->local_window_keyframes, "keyframes optimized by the windowed BA");
+  p.Add("local-ba-iterations", &e->local_ba_iterations, "Ceres iterations of the windowed BA");
+  p.Add("global-ba-iterations", &e->global_ba_iterations, "Ceres iterations of the final global BA");
+  p.Add("init-ba-iterations", &e->init_ba_iterations, "Ceres iterations of the start-span BA");
+  p.Add("ba-loss", &e->ba_loss, "robust loss: huber or cauchy");
+  p.Add("ba-loss-scale", &e->ba_loss_px, "px, robust loss scale");
+  p.Add("max-landmark-error", &e->max_landmark_error_px, "px, landmarks with larger RMS are removed");
+  p.Add("use-floor-for-scale", &e->use_floor_for_scale, "4dof: level on and scale from the floor plane");
+  p.Add("floor-tolerance", &e->floor_tolerance_mm, "mm, floor plane inlier distance");
+  p.Add("min-floor-points", &e->min_floor_points, "landmarks needed to accept a floor plane");
+  p.Add("refine-scale-with-odometry", &e->refine_scale_with_odometry, "6dof: rescale at the end by odometry path");
+  p.Add("online-scale-frames", &e->online_scale_frames, "6dof: rescale by odometry path at keyframes this long");
+  p.Add("local-fixed-keyframes", &e->local_fixed_keyframes, "older keyframes held fixed in the windowed BA");
+  p.Add("global-ba-all-frames", &e->global_ba_all_frames, "final BA over all frames instead of keyframes");
+  p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
+  p.Add("seed", &e->seed, "RANSAC seed");
+}
+
+bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (o.name.empty()) e << "name must not be empty; ";
+  if (o.tracks_channel.empty()) e << "tracks-channel must not be empty; ";
+  if (o.info_channel.empty()) e << "info-channel must not be empty; ";
+  if (o.pose_channel.empty()) e << "pose-channel must not be empty; ";
+  if (o.final_pose_channel.empty()) e << "final-pose-channel must not be empty; ";
+  if (o.landmarks_channel.empty()) e << "landmarks-channel must not be empty; ";
+  if (o.control_channel.empty()) e << "control-channel must not be empty; ";
+  if (o.status_channel.empty()) e << "status-channel must not be empty; ";
+  if (o.finish_on_sender.empty()) e << "finish-on-sender must not be empty; ";
+  if (o.model != "6dof" && o.model != "4dof") e << "model must be 6dof or 4dof; ";
+  if (o.pending_tracks_capacity < 0) e << "pending-tracks-capacity must be >= 0; ";
+  if (o.tracks_queue_capacity < 1) e << "tracks-queue-capacity must be >= 1; ";
+  if (!(o.max_odometry_gap_s >= 0) || !std::isfinite(o.max_odometry_gap_s)) e << "max-odometry-gap must be >= 0; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  std::string est_why;
+  if (!ValidatePoseEstimatorOptions(o.estimator, &est_why)) e << est_why << "; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+namespace {
+PoseSolverNodeOptions ValidatedOrThrow(PoseSolverNodeOptions o) {
+  std::string why;
+  if (!ValidatePoseSolverNodeOptions(o, &why)) throw std::invalid_argument("pose_solver node: " + why);
+  o.estimator.model = o.model == "4dof" ? MotionModel::kFourDof : MotionModel::kSixDof;
+  return o;
+}
+}  // namespace
+
+PoseSolverNode::PoseSolverNode(Bus& bus, const PoseSolverNodeOptions& options)
+    : bus_(bus),
+      options_(ValidatedOrThrow(options)),
+      status_(&bus, options_.name, options_.status_channel, options_.status_period_s) {
+  status_.SetState(+process_status_t::STATE_STARTING, "waiting for camera_info and tracks");
+  bus_.SubscribeMessage<feature_tracks_t>(
+      options_.tracks_channel, [this](const feature_tracks_t& m, const RawMessage&) { OnTracks(m); },
+      [this](const RawMessage& raw) {
+        status_.Reject("tracks: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+      },
+      options_.tracks_queue_capacity);
+  bus_.SubscribeMessage<camera_info_t>(
+      options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
+      [this](const RawMessage& raw) {
+        status_.Reject("camera_info: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+      });
+  if (!options_.odometry_channel.empty())
+    bus_.SubscribeMessage<odometry_t>(
+        options_.odometry_channel, [this](const odometry_t& m, const RawMessage&) { OnOdometry(m); },
+        [this](const RawMessage& raw) {
+          status_.Reject("odometry: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+        },
+        1000);
+  bus_.SubscribeMessage<control_t>(
+      options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
+      [this](const RawMessage& raw) {
+        status_.Reject("control: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+      });
+}
+
+void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {
+  PinholeCamera camera;
+  std::string error;
+  if (!CameraFromMessage(msg, &camera, &error)) {
+    status_.Reject(error, "camera " + msg.camera_name);
+    return;
+  }
+  if (have_camera_) {
+    const bool same = camera.width == camera_.width && camera.height == camera_.height && camera.fx == camera_.fx &&
+                      camera.fy == camera_.fy && camera.cx == camera_.cx && camera.cy == camera_.cy &&
+                      camera.skew == camera_.skew && camera.k1 == camera_.k1 && camera.k2 == camera_.k2 &&
+                      camera.p1 == camera_.p1 && camera.p2 == camera_.p2 && camera.k3 == camera_.k3;
+    if (!same) status_.Reject("camera_info: changed", "calibration differs from the first; ignored");
+    else status_.CountIn();
+    return;
+  }
+  status_.CountIn();
+  camera_ = camera;
+  have_camera_ = true;
+  try {
+    estimator_ = std::make_unique<PoseEstimator>(camera_, options_.estimator);
+  } catch (const std::exception& e) {  // IsValid passed in the adapter; keep running regardless
+    have_camera_ = false;
+    status_.Reject("camera_info: unusable", e.what());
+    return;
+  }
+  status_.SetState(+process_status_t::STATE_RUNNING);
+  while (!pending_.empty()) {
+    TrackFrame f = std::move(pending_.front());
+    pending_.pop_front();
+    if ((f.width != camera_.width || f.height != camera_.height) && f.width > 0) {
+      status_.Reject("tracks: image size differs from camera_info", "seq " + std::to_string(f.seq));
+      continue;
+    }
+    ProcessFrame(f);
+  }
+}
+
+void PoseSolverNode::OnOdometry(const odometry_t& msg) {
+  OdometryReading r;
+  std::string error;
+  if (!OdometryFromMessage(msg, &r, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (!odometry_.Add(r)) {
+    status_.Reject("odometry: out of order", "utime " + std::to_string(msg.utime));
+    return;
+  }
+  status_.ObserveSeq("odometry", msg.seq);
+  status_.CountIn();
+}
+
+void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
+  const int64_t start_us = MonotonicMicros();
+  if (finished_) {
+    status_.Reject("tracks: after end of stream", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  TrackFrame frame;
+  std::string error;
+  if (!TracksFromMessage(msg, &frame, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (frame.width <= 0 || frame.height <= 0) {
+    frame.width = have_camera_ ? camera_.width : frame.width;
+    frame.height = have_camera_ ? camera_.height : frame.height;
+  }
+  if (have_camera_ && (frame.width != camera_.width || frame.height != camera_.height)) {
+    status_.Reject("tracks: image size differs from camera_info",
+                   "seq " + std::to_string(msg.seq) + " " + std::to_string(frame.width) + "x" +
+                       std::to_string(frame.height));
+    return;
+  }
+  for (const auto& t : frame.features) {
+    if (t.u < -0.5f || t.v < -0.5f || (frame.width > 0 && t.u > frame.width - 0.5f) ||
+        (frame.height > 0 && t.v > frame.height - 0.5f)) {
+      status_.Reject("tracks: coordinate outside the image", "seq " + std::to_string(msg.seq));
+      return;
+    }
+  }
+  if (!pending_.empty() && msg.seq <= pending_.back().seq) {
+    status_.Reject("tracks: out of order or repeated", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (status_.ObserveSeq("tracks", msg.seq) == SeqResult::kRepeatedOrOld) {
+    status_.Reject("tracks: out of order or repeated", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (!have_camera_) {
+    if (static_cast<int>(pending_.size()) >= options_.pending_tracks_capacity) {
+      status_.Reject("tracks: no camera_info (buffer full)", "seq " + std::to_string(msg.seq));
+      return;
+    }
+    status_.CountIn();
+    pending_.push_back(std::move(frame));
+    return;
+  }
+  status_.CountIn();
+  ProcessFrame(frame);
+  status_.RecordLatencyMs((MonotonicMicros() - start_us) * 1e-3);
+}
+
+void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
+  status_.SetLastDataUtime(frame.utime);
+  OdometryReading odo;
+  const bool have_odo =
+      odometry_.At(frame.utime, &odo, static_cast<int64_t>(options_.max_odometry_gap_s * 1e6));
+  FrameResult r;
+  const int64_t t0 = MonotonicMicros();
+  try {
+    r = estimator_->AddFrame(frame, have_odo ? &odo : nullptr);
+  } catch (const std::exception& e) {
+    status_.Reject("tracks: estimator error", e.what());
+    return;
+  }
+  const double frame_ms = (MonotonicMicros() - t0) * 1e-3;
+  if (r.initialized_now) LogInfo(estimator_->last_message());
+  if (bus_.PublishMessage(options_.pose_channel, PoseToMessage(r.pose))) status_.CountOut();
+  online_poses_.push_back(r.pose);
+  if (!options_.output_dir.empty()) kept_frames_.push_back(frame);
+  if (r.keyframe) PublishLandmarks(frame.utime, frame.seq);
+  if (r.pose.status == PoseStatus::kLost) ++lost_frames_;
+  last_seq_ = frame.seq;
+  last_utime_ = frame.utime;
+  status_.SetValue("frames", estimator_->num_frames());
+  status_.SetValue("inliers", r.pose.num_inliers);
+  status_.SetValue("rms_px", r.pose.reprojection_rms_px);
+  status_.SetValue("lost_frames", static_cast<double>(lost_frames_));
+  status_.SetValue("frame_ms", frame_ms);
+}
+
+void PoseSolverNode::PublishLandmarks(int64_t utime, int64_t seq) {
+  const std::vector<Landmark> lms = estimator_->Landmarks();
+  landmarks_t m;
+  m.utime = utime;
+  m.seq = seq;
+  m.frame = "world";
+  m.num_landmarks = static_cast<int32_t>(lms.size());
+  m.id.reserve(lms.size());
+  for (const auto& l : lms) {
+    m.id.push_back(l.id);
+    m.position_mm.push_back({static_cast<float>(l.position_mm.x()), static_cast<float>(l.position_mm.y()),
+                             static_cast<float>(l.position_mm.z())});
+    m.num_observations.push_back(l.num_observations);
+    m.reprojection_error_px.push_back(static_cast<float>(l.reprojection_rms_px));
+    m.rgb.push_back({200, 200, 200});
+  }
+  if (bus_.PublishMessage(options_.landmarks_channel, m)) status_.CountOut();
+  status_.SetValue("landmarks", static_cast<double>(lms.size()));
+  status_.SetValue("keyframes", estimator_->num_keyframes());
+}
+
+void PoseSolverNode::OnControl(const control_t& msg) {
+  if (msg.command != control_t::COMMAND_FINISHED || msg.sender != options_.finish_on_sender) return;
+  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  status_.CountIn();
+  if (finished_) return;
+  RunFinalPhase(msg);
+}
+
+void PoseSolverNode::RunFinalPhase(const control_t& msg) {
+  for (const auto& f : pending_)
+    status_.Reject("tracks: no camera_info at end of stream", "seq " + std::to_string(f.seq));
+  pending_.clear();
+  std::vector<CameraPoseEstimate> final_poses;
+  if (estimator_) {
+    try {
+      final_poses = estimator_->Finish();
+    } catch (const std::exception& e) {
+      LogError(std::string("final phase failed: ") + e.what());
+    }
+    status_.SetValue("final_ba_ms", estimator_->final_ba_ms());
+    LogInfo(estimator_->last_message());
+    for (const auto& p : final_poses)
+      if (bus_.PublishMessage(options_.final_pose_channel, PoseToMessage(p))) status_.CountOut();
+    PublishLandmarks(last_seq_ >= 0 ? last_utime_ : msg.utime, last_seq_);
+    if (!options_.output_dir.empty()) {
+      std::string error;
+      std::error_code ec;
+      std::filesystem::create_directories(options_.output_dir, ec);
+      const std::vector<Landmark> lms = estimator_->Landmarks();
+      bool ok = WriteTumTrajectory(options_.output_dir + "/trajectory.txt", final_poses, &error) &&
+                WriteTumTrajectory(options_.output_dir + "/trajectory_online.txt", online_poses_, &error) &&
+                WriteLandmarksPly(options_.output_dir + "/landmarks.ply", lms, &error);
+      if (ok) {
+        std::vector<ColmapImage> images;
+        for (size_t i = 0; i < final_poses.size() && i < kept_frames_.size(); ++i) {
+          ColmapImage im;
+          im.pose = final_poses[i];
+          char name[64];
+          std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(final_poses[i].seq));
+          im.name = name;
+          im.features = kept_frames_[i].features;
+          images.push_back(std::move(im));
+        }
+        ok = WriteColmapText(options_.output_dir + "/colmap", camera_, images, lms, &error);
+      }
+      if (!ok) LogError("writing results: " + error);
+      else LogInfo("results written to " + options_.output_dir);
+    }
+  }
+  control_t reply;
+  reply.utime = last_seq_ >= 0 ? last_utime_ : msg.utime;
+  reply.sender = options_.name;
+  reply.target = "*";
+  reply.command = control_t::COMMAND_FINISHED;
+  reply.last_seq = last_seq_;
+  reply.argument = options_.output_dir;
+  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
+  finished_ = true;
+  status_.SetState(+process_status_t::STATE_FINISHED, "final phase done");
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+void PoseSolverNode::Tick(int64_t wall_utime) { status_.PublishIfDue(wall_utime); }
+
+void PoseSolverNode::OnShutdown() { status_.PublishIfDue(WallTimeMicros(), true); }
+
+}  // namespace objscan
