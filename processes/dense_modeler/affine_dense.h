@@ -1,0 +1,125 @@
+// Dense correspondences between two posed views by affine invariance (LCM-free).
+// Given feature points tracked in both views A and B (pixel pairs), the points of A are Delaunay-triangulated;
+// every pixel P of A inside a triangle gets barycentric coordinates (α, β, γ) and is mapped to the presumed
+// correspondence Q = α·b0 + β·b1 + γ·b2 in B (mapping kAffine), or through the plane of the triangle's three
+// triangulated vertices (mapping kPlane: perspective-correct, exact for planar triangles). Q is kept only when it
+// lies within epipolar_threshold_px of the epipolar line of P and its radiance matches P (mean |ΔBGR| and an NCC
+// over a small window warped by the triangle's affine map); optionally Q is refined by a 1-D NCC search along the
+// epipolar line first. P–Q is then triangulated (ray midpoint) into a world point.
+// Frames/units: poses world_from_camera in mm, pixels (u, v) = (column, row) with the origin at the centre of the
+// top-left pixel. Lens distortion is honoured for rays and the epipolar test (PinholeCamera::Unproject); the
+// 1-D refinement searches along the undistorted-model epipolar direction. Never throws for bad data: degenerate
+// input (fewer than 3 matches, invalid camera, coincident centres) gives an empty result.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "common/camera_model.h"
+
+namespace objscan {
+
+// One posed image.
+struct DenseView {
+  int64_t seq = 0;            // frame sequence number
+  int64_t utime = 0;          // µs, capture time
+  PinholeCamera camera;       // intrinsics matching image
+  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
+  cv::Mat image;              // CV_8UC3 (BGR) or CV_8UC1
+  cv::Mat gray;               // optional CV_32FC1 gray of image (computed per call when empty)
+};
+
+// The same feature seen in both views (px).
+struct PointMatch {
+  Eigen::Vector2d a;  // px in view A
+  Eigen::Vector2d b;  // px in view B
+};
+
+// A reconstructed surface point with the colour of its pixel in A.
+struct DensePoint {
+  Eigen::Vector3d point_in_world;  // mm
+  std::array<uint8_t, 3> bgr{{0, 0, 0}};
+  Eigen::Vector2f pixel_a = Eigen::Vector2f::Zero();  // px, P in A
+  Eigen::Vector2f pixel_b = Eigen::Vector2f::Zero();  // px, the accepted (possibly refined) Q in B
+};
+
+enum class DenseMapping : int { kAffine = 0, kPlane = 1 };
+
+struct AffineDenseOptions {
+  int mapping = 0;                        // 0 = affine barycentric map, 1 = plane of the triangle (perspective-correct)
+  int pixel_step = 1;                     // px, sample every pixel_step-th row and column of A (>= 1)
+  double epipolar_threshold_px = 1.0;     // px, max distance of Q to the epipolar line of P (> 0)
+  double max_color_difference = 30.0;     // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
+  int ncc_half_window = 2;                // px, half side of the NCC window (0 = no NCC check)
+  double min_ncc = 0.7;                   // min NCC of the warped window, [-1, 1]
+  double min_window_stddev = 2.0;         // gray levels, windows flatter than this skip the NCC test (textureless)
+  bool refine_along_epipolar = false;     // refine Q by a 1-D NCC search along the epipolar line
+  double refine_search_px = 1.5;          // px, half length of the refinement search (> 0)
+  double refine_step_px = 0.25;           // px, refinement search step (> 0)
+  double min_triangle_area_px2 = 4.0;     // px², smaller triangles are skipped
+  double max_triangle_edge_px = 80.0;     // px, triangles with a longer edge in A or B are skipped
+  double min_triangle_angle_deg = 10.0;   // deg, thinner triangles (smallest angle in A) are skipped
+  double max_vertex_depth_ratio = 1.15;   // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
+  double max_triangle_slant_deg = 80.0;   // deg, max angle between the 3-D triangle's normal and the view ray of
+                                          // its centroid in A; more oblique = likely spans a depth edge, skipped
+  double min_triangulation_angle_deg = 1.0;  // deg, rays meeting at a smaller angle are rejected
+  double max_reprojection_px = 1.0;       // px, max reprojection error of the triangulated point in A or B
+  double min_feature_separation_px = 0.5; // px, features closer than this to an earlier one are dropped
+  bool use_world_box = false;             // keep only points inside [box_min, box_max] (world, mm)
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero();  // mm, world
+  Eigen::Vector3d box_max = Eigen::Vector3d::Zero();  // mm, world
+  cv::Rect roi_a;                         // px, only pixels of A inside this rectangle (empty = whole image)
+};
+
+// Counters of one pair (for status, tests and tuning).
+struct DensePairStats {
+  int features = 0;                 // matches used after deduplication
+  int triangles = 0;                // Delaunay triangles
+  int triangles_skipped_shape = 0;  // too small, too large or too thin
+  int triangles_skipped_depth = 0;  // depth ratio or slant over the limit, or a vertex failed to triangulate
+  int64_t pixels = 0;               // pixels of A inside used triangles (and the ROI)
+  int64_t rejected_outside = 0;     // Q outside B
+  int64_t rejected_epipolar = 0;
+  int64_t rejected_color = 0;
+  int64_t rejected_ncc = 0;
+  int64_t rejected_triangulation = 0;  // small angle, behind a camera or reprojection error
+  int64_t rejected_box = 0;
+  int64_t accepted = 0;
+  double mean_refine_shift_px = 0;  // mean |Q_refined - Q| (refinement on)
+};
+
+// True when usable; otherwise false with *why set.
+bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* why);
+
+// Dense points for the pair (A, B). a.image and b.image must have the same type (gray or BGR) and match their
+// cameras' sizes (else the result is empty). Output order is deterministic (triangle by triangle, raster inside).
+std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
+                                         const AffineDenseOptions& options, DensePairStats* stats = nullptr);
+
+// Essential matrix E with nb^T E na = 0 for normalized coordinates (x/z, y/z, 1) of the same point in A and B.
+Eigen::Matrix3d EssentialMatrix(const Eigen::Isometry3d& world_from_a, const Eigen::Isometry3d& world_from_b);
+
+// Distance (px of B, using fx of B) of pixel q of B from the epipolar line of pixel p of A.
+double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera& camera_a, const PinholeCamera& camera_b,
+                          const Eigen::Vector2d& p, const Eigen::Vector2d& q);
+
+// Midpoint of the shortest segment between two rays (origin, unit direction). False when (nearly) parallel or when
+// the point lies behind either origin. *angle_rad (optional) gets the angle between the rays.
+bool TriangulateMidpoint(const Eigen::Vector3d& origin_a, const Eigen::Vector3d& dir_a, const Eigen::Vector3d& origin_b,
+                         const Eigen::Vector3d& dir_b, Eigen::Vector3d* point, double* angle_rad = nullptr);
+
+// NCC between the window of gray image A around p (offsets d in [-h, h]²) and gray image B at q + J·d
+// (bilinear). Returns -2 when a window leaves an image. *stddev_a/*stddev_b (optional) get the window std-devs.
+double WarpedNcc(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b, const Eigen::Vector2d& q,
+                 const Eigen::Matrix2d& jacobian, int half_window, double* stddev_a = nullptr,
+                 double* stddev_b = nullptr);
+
+// CV_32FC1 gray of a CV_8UC1 / CV_8UC3 (BGR) image.
+cv::Mat GrayFloat(const cv::Mat& image);
+
+}  // namespace objscan

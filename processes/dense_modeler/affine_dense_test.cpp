@@ -1,0 +1,203 @@
+#include "processes/dense_modeler/affine_dense.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "processes/dense_modeler/synthetic_scene.h"
+
+namespace objscan {
+namespace {
+
+// A textured plane n . X = d (world) seen by two cameras.
+struct PlaneScene {
+  Eigen::Vector3d n;
+  double d;
+  PinholeCamera camera = testing_scene::DefaultCamera();
+
+  bool Intersect(const Eigen::Isometry3d& pose, const Eigen::Vector2d& px, Eigen::Vector3d* x) const {
+    const Eigen::Vector3d o = pose.translation();
+    const Eigen::Vector3d r = pose.linear() * camera.Unproject(px).homogeneous();
+    const double den = n.dot(r);
+    if (std::abs(den) < 1e-12) return false;
+    const double s = (d - n.dot(o)) / den;
+    if (s <= 0) return false;
+    *x = o + s * r;
+    return true;
+  }
+  cv::Mat Render(const Eigen::Isometry3d& pose) const {
+    cv::Mat img(camera.height, camera.width, CV_8UC3, cv::Scalar(0, 0, 0));
+    for (int v = 0; v < camera.height; ++v)
+      for (int u = 0; u < camera.width; ++u) {
+        Eigen::Vector3d x;
+        if (!Intersect(pose, Eigen::Vector2d(u, v), &x)) continue;
+        const auto t = testing_scene::Texture(x);
+        img.at<cv::Vec3b>(v, u) = cv::Vec3b(t[0], t[1], t[2]);
+      }
+    return img;
+  }
+  // Matches: 3-D points on a grid over A's image, projected into both.
+  std::vector<PointMatch> Matches(const Eigen::Isometry3d& pa, const Eigen::Isometry3d& pb, int spacing_px) const {
+    std::vector<PointMatch> out;
+    for (int v = 20; v < camera.height - 20; v += spacing_px)
+      for (int u = 20; u < camera.width - 20; u += spacing_px) {
+        const Eigen::Vector2d p(u + 0.37 * ((v / spacing_px) % 3), v + 0.21 * ((u / spacing_px) % 4));
+        Eigen::Vector3d x;
+        Eigen::Vector2d q;
+        if (!Intersect(pa, p, &x) || !camera.Project(pb.inverse() * x, &q) || !camera.InImage(q, 5)) continue;
+        out.push_back({p, q});
+      }
+    return out;
+  }
+};
+
+DenseView View(const PinholeCamera& cam, const Eigen::Isometry3d& pose, const cv::Mat& image) {
+  DenseView v;
+  v.camera = cam;
+  v.world_from_camera = pose;
+  v.image = image;
+  return v;
+}
+
+struct Errors {
+  double max_px = 0, max_plane_mm = 0, mean_plane_mm = 0;
+  size_t n = 0;
+};
+
+Errors Check(const PlaneScene& scene, const Eigen::Isometry3d& pa, const Eigen::Isometry3d& pb,
+             const std::vector<DensePoint>& pts) {
+  Errors e;
+  for (const DensePoint& p : pts) {
+    Eigen::Vector3d x;
+    Eigen::Vector2d q_true;
+    if (!scene.Intersect(pa, p.pixel_a.cast<double>(), &x) || !scene.camera.Project(pb.inverse() * x, &q_true))
+      continue;
+    e.max_px = std::max(e.max_px, (q_true - p.pixel_b.cast<double>()).norm());
+    const double dist = std::abs(scene.n.dot(p.point_in_world) - scene.d);
+    e.max_plane_mm = std::max(e.max_plane_mm, dist);
+    e.mean_plane_mm += dist;
+    ++e.n;
+  }
+  if (e.n) e.mean_plane_mm /= e.n;
+  return e;
+}
+
+TEST(AffineDense, AffineMapExactOnFrontoParallelPlane) {
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(120, 25, 60);  // same orientation: the plane maps affinely
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  AffineDenseOptions o;
+  DensePairStats st;
+  const auto pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &st);
+  const Errors e = Check(scene, pa, pb, pts);
+  std::printf("fronto-parallel: %zu points of %lld pixels, max map error %.4f px, plane dist max %.4f mm\n", e.n,
+              static_cast<long long>(st.pixels), e.max_px, e.max_plane_mm);
+  ASSERT_GT(e.n, 100000u);
+  EXPECT_GT(st.accepted, 0.95 * st.pixels);
+  EXPECT_LT(e.max_px, 0.1);
+  EXPECT_LT(e.max_plane_mm, 0.5);
+}
+
+TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
+  PlaneScene scene{Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 900.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.linear() = Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  pb.translation() = Eigen::Vector3d(110, 10, 5);
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  AffineDenseOptions o;
+  o.mapping = static_cast<int>(DenseMapping::kPlane);
+  const auto plane_pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
+  const Errors ep = Check(scene, pa, pb, plane_pts);
+  o.mapping = static_cast<int>(DenseMapping::kAffine);
+  const auto affine_pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
+  const Errors ea = Check(scene, pa, pb, affine_pts);
+  std::printf("tilted plane, plane mapping: %zu points, max %.4f px, plane dist max %.4f mm\n", ep.n, ep.max_px,
+              ep.max_plane_mm);
+  std::printf("tilted plane, affine mapping: %zu points, max %.4f px, plane dist max %.4f mm mean %.4f\n", ea.n,
+              ea.max_px, ea.max_plane_mm, ea.mean_plane_mm);
+  ASSERT_GT(ep.n, 100000u);
+  EXPECT_LT(ep.max_px, 0.1);
+  EXPECT_LT(ep.max_plane_mm, 0.5);
+  ASSERT_GT(ea.n, 100000u);
+  EXPECT_LT(ea.max_px, 0.5);  // affine is only first order on a perspective-viewed plane
+}
+
+TEST(AffineDense, EpipolarCheckRejectsWrongMatches) {
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(150, 0, 0);  // horizontal baseline: epipolar lines are rows
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  auto matches = scene.Matches(pa, pb, 40);
+  for (auto& m : matches) m.b.y() += 4.0;  // 4 px off the epipolar line
+  AffineDenseOptions o;
+  DensePairStats st;
+  const auto pts = ComputeDensePair(a, b, matches, o, &st);
+  EXPECT_TRUE(pts.empty());
+  EXPECT_GT(st.rejected_epipolar, 100000);
+  EXPECT_LT(EpipolarDistancePx(EssentialMatrix(pa, pb), scene.camera, scene.camera, Eigen::Vector2d(100, 200),
+                               Eigen::Vector2d(30, 200)),
+            1e-9);
+}
+
+TEST(AffineDense, RadianceCheckRejectsWrongTexture) {
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(150, 0, 0);
+  cv::Mat img_b = scene.Render(pb);
+  cv::Mat wrong;
+  cv::flip(img_b, wrong, 0);  // right geometry, wrong radiance
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, wrong);
+  AffineDenseOptions o;
+  DensePairStats st;
+  const auto pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &st);
+  std::printf("wrong radiance: %zu of %lld accepted (colour %lld, ncc %lld rejected)\n", pts.size(),
+              static_cast<long long>(st.pixels), static_cast<long long>(st.rejected_color),
+              static_cast<long long>(st.rejected_ncc));
+  EXPECT_LT(pts.size(), 0.05 * st.pixels);
+  EXPECT_GT(st.rejected_color + st.rejected_ncc, 0.9 * st.pixels);
+}
+
+TEST(AffineDense, EpipolarRefinementFixesAlongLineErrors) {
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(150, 0, 0);
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  auto matches = scene.Matches(pa, pb, 40);
+  for (size_t i = 0; i < matches.size(); ++i) matches[i].b.x() += (i % 2 ? 0.8 : -0.8);  // along the epipolar line
+  AffineDenseOptions o;
+  o.min_ncc = -1;  // keep everything: compare the geometry only
+  o.max_color_difference = -1;
+  const Errors plain = Check(scene, pa, pb, ComputeDensePair(a, b, matches, o));
+  o.refine_along_epipolar = true;
+  DensePairStats st;
+  const Errors refined = Check(scene, pa, pb, ComputeDensePair(a, b, matches, o, &st));
+  std::printf("vertex errors 0.8 px along the line: without refinement mean plane dist %.3f mm (max map %.3f px), "
+              "with %.3f mm (max map %.3f px), mean shift %.3f px\n",
+              plain.mean_plane_mm, plain.max_px, refined.mean_plane_mm, refined.max_px, st.mean_refine_shift_px);
+  EXPECT_LT(refined.mean_plane_mm, 0.5 * plain.mean_plane_mm);
+}
+
+TEST(AffineDense, TriangulateMidpointAndDegenerateInput) {
+  Eigen::Vector3d x;
+  ASSERT_TRUE(TriangulateMidpoint(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(100, 0, 0),
+                                  Eigen::Vector3d(-100, 0, 1000).normalized(), &x));
+  EXPECT_NEAR((x - Eigen::Vector3d(0, 0, 1000)).norm(), 0, 1e-9);
+  EXPECT_FALSE(TriangulateMidpoint(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0),
+                                   Eigen::Vector3d(0, 0, 1), &x));
+  DenseView a;
+  EXPECT_TRUE(ComputeDensePair(a, a, {}, AffineDenseOptions()).empty());
+  AffineDenseOptions bad;
+  bad.pixel_step = 0;
+  std::string why;
+  EXPECT_FALSE(ValidateAffineDenseOptions(bad, &why));
+}
+
+}  // namespace
+}  // namespace objscan

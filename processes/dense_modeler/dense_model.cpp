@@ -1,0 +1,130 @@
+#include "processes/dense_modeler/dense_model.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <unordered_map>
+
+#include "processes/dense_modeler/export.h"
+
+namespace objscan {
+
+bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
+  std::ostringstream e;
+  std::string w;
+  if (!ValidateAffineDenseOptions(o.dense, &w)) e << w << "; ";
+  if (!ValidateVoxelVoteOptions(o.votes, &w)) e << w << "; ";
+  if (!ValidateSpaceCarvingOptions(o.carving, &w)) e << w << "; ";
+  if (!(o.min_relative_votes >= 0 && o.min_relative_votes <= 1)) e << "min relative votes must be in [0, 1]; ";
+  if (o.vote_threshold < 1) e << "vote threshold must be >= 1; ";
+  if (o.smoothing_passes < 0 || o.smoothing_passes > 5) e << "smoothing passes must be in [0, 5]; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+std::vector<PointMatch> MatchTracks(const TrackFrame& a, const TrackFrame& b) {
+  std::unordered_map<int64_t, const TrackedFeature*> by_id;
+  by_id.reserve(b.features.size() * 2);
+  for (const TrackedFeature& f : b.features) by_id.emplace(f.id, &f);
+  std::vector<PointMatch> out;
+  for (const TrackedFeature& f : a.features) {
+    auto it = by_id.find(f.id);
+    if (it == by_id.end()) continue;
+    out.push_back({Eigen::Vector2d(f.u, f.v), Eigen::Vector2d(it->second->u, it->second->v)});
+  }
+  return out;
+}
+
+FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
+                           const DenseModelOptions& o, bool use_box, const Eigen::Vector3d& box_min,
+                           const Eigen::Vector3d& box_max) {
+  FinalModel model;
+  std::vector<VoxelRecord> seeds = grid.Extract(o.vote_threshold);
+  {
+    std::vector<VoxelRecord> kept;
+    for (const VoxelRecord& r : seeds) {
+      const Eigen::Vector3d c = grid.CenterOf(r.ijk);
+      if (use_box && !((c.array() >= box_min.array()).all() && (c.array() <= box_max.array()).all())) continue;
+      if (o.min_relative_votes > 0) {
+        int32_t best = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+              if (dx || dy || dz) best = std::max(best, grid.Votes(r.ijk + Eigen::Vector3i(dx, dy, dz)));
+        if (r.votes < o.min_relative_votes * best) continue;
+      }
+      kept.push_back(r);
+    }
+    seeds.swap(kept);
+  }
+  model.seeds = static_cast<int64_t>(seeds.size());
+  if (o.carve) {
+    model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving);
+  } else {
+    for (const VoxelRecord& r : seeds) {
+      CarvedVoxel c;
+      c.ijk = r.ijk;
+      c.votes = r.votes;
+      c.bgr = r.bgr;
+      model.voxels.push_back(c);
+    }
+    model.carving.seeds = model.carving.kept = model.seeds;
+  }
+  model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
+  if (!model.voxels.empty()) {
+    Eigen::Vector3i lo = model.voxels[0].ijk, hi = lo;
+    for (const CarvedVoxel& v : model.voxels) {
+      lo = lo.cwiseMin(v.ijk);
+      hi = hi.cwiseMax(v.ijk);
+    }
+    model.bbox_min = lo.cast<double>() * grid.voxel_size();
+    model.bbox_max = (hi.cast<double>() + Eigen::Vector3d::Ones()) * grid.voxel_size();
+  }
+  return model;
+}
+
+bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size, ModelPaths* paths,
+                     std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    if (error) *error = "cannot create " + dir + ": " + ec.message();
+    return false;
+  }
+  ModelPaths p;
+  p.voxels_ply = (std::filesystem::path(dir) / "model_voxels.ply").string();
+  p.mesh_ply = (std::filesystem::path(dir) / "model_mesh.ply").string();
+  p.octomap = (std::filesystem::path(dir) / "model.bt").string();
+  if (!WriteVoxelPly(p.voxels_ply, model.voxels, voxel_size, error)) return false;
+  if (!WriteMeshPly(p.mesh_ply, model.mesh, error)) return false;
+  if (!WriteOctomap(p.octomap, model.voxels, voxel_size, error)) return false;
+  if (paths) *paths = p;
+  return true;
+}
+
+CarvingView MakeCarvingView(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                            const cv::Mat& image, int downsample) {
+  CarvingView v;
+  v.world_from_camera = world_from_camera;
+  v.camera = camera;
+  if (downsample <= 1) {
+    v.image = image.clone();
+    return v;
+  }
+  const int w = image.cols / downsample, h = image.rows / downsample;
+  cv::resize(image(cv::Rect(0, 0, w * downsample, h * downsample)), v.image, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  const double s = 1.0 / downsample;
+  v.camera.width = w;
+  v.camera.height = h;
+  v.camera.fx *= s;
+  v.camera.fy *= s;
+  v.camera.skew *= s;
+  v.camera.cx = (camera.cx + 0.5) * s - 0.5;
+  v.camera.cy = (camera.cy + 0.5) * s - 0.5;
+  return v;
+}
+
+}  // namespace objscan

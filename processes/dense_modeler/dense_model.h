@@ -1,0 +1,63 @@
+// The dense modeler's final phase and helpers shared by the node, the tests and the replay tools (LCM-free):
+// matching tracks of two frames by id, extracting the seed voxels from the vote grid, carving, meshing and writing
+// the model files.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "common/sensor_data.h"
+#include "processes/dense_modeler/affine_dense.h"
+#include "processes/dense_modeler/marching_cubes.h"
+#include "processes/dense_modeler/space_carving.h"
+#include "processes/dense_modeler/voxel_votes.h"
+
+namespace objscan {
+
+struct DenseModelOptions {
+  AffineDenseOptions dense;       // dense pair matching
+  VoxelVoteOptions votes;         // vote grid
+  SpaceCarvingOptions carving;    // final photometric carving
+  int vote_threshold = 16;        // votes a voxel needs to seed the final model / appear on VOXEL_MAP (>= 1)
+  double min_relative_votes = 0.5;  // seeds also need votes >= this fraction of their strongest 26-neighbour
+                                    // (thins the voted shell to the surface; 0 = off), [0, 1]
+  bool carve = true;              // run space carving in the final phase
+  int smoothing_passes = 1;       // occupancy smoothing passes before meshing (>= 0)
+};
+
+bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
+
+// Features present in both frames (same track id), in the order of frame a.
+std::vector<PointMatch> MatchTracks(const TrackFrame& a, const TrackFrame& b);
+
+struct FinalModel {
+  std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
+  TriangleMesh mesh;
+  SpaceCarvingStats carving;
+  int64_t seeds = 0;                // voxels over the vote threshold (inside the box)
+  Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)
+  Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
+};
+
+// Seeds = voxels with votes >= threshold and >= min_relative_votes x the largest neighbour count (and centre inside [box_min, box_max] when use_box), carved against the
+// views (when options.carve), meshed.
+FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
+                           const DenseModelOptions& options, bool use_box = false,
+                           const Eigen::Vector3d& box_min = Eigen::Vector3d::Zero(),
+                           const Eigen::Vector3d& box_max = Eigen::Vector3d::Zero());
+
+struct ModelPaths {
+  std::string voxels_ply, mesh_ply, octomap;
+};
+
+// Writes DIR/model_voxels.ply, DIR/model_mesh.ply, DIR/model.bt (creating DIR). False with *error on failure.
+bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size_mm, ModelPaths* paths,
+                     std::string* error);
+
+// Downsamples a view by an integer factor (area average) and scales the camera accordingly
+// (pixel centres: u' = (u + 0.5) / f - 0.5).
+CarvingView MakeCarvingView(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                            const cv::Mat& image, int downsample);
+
+}  // namespace objscan

@@ -1,0 +1,94 @@
+// Speed figures: one dense pair at 640x480, voting one pair, carving ~60 000 voxels x 200 views.
+#include <benchmark/benchmark.h>
+
+#include "processes/dense_modeler/dense_model.h"
+#include "processes/dense_modeler/synthetic_scene.h"
+
+namespace objscan {
+namespace {
+
+using testing_scene::SphereScene;
+
+struct PairData {
+  DenseView a, b;
+  std::vector<PointMatch> matches;
+};
+
+const PairData& SpherePair() {
+  static const PairData data = [] {
+    SphereScene scene;
+    PairData d;
+    const auto features = scene.SurfacePoints(2500);
+    for (int k = 0; k < 2; ++k) {
+      DenseView& v = k == 0 ? d.a : d.b;
+      const Eigen::Isometry3d pose = scene.RingPose(k * 2, 48);  // 15 degrees apart
+      v.camera = scene.camera;
+      v.world_from_camera = pose;
+      v.image = scene.Render(pose);
+    }
+    d.matches = MatchTracks(scene.Tracks(d.a.world_from_camera, features, 0),
+                            scene.Tracks(d.b.world_from_camera, features, 1));
+    return d;
+  }();
+  return data;
+}
+
+void BM_DensePairSphere(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  AffineDenseOptions o;
+  o.refine_along_epipolar = state.range(0) != 0;
+  DensePairStats st;
+  for (auto _ : state) benchmark::DoNotOptimize(ComputeDensePair(d.a, d.b, d.matches, o, &st));
+  state.counters["pixels"] = static_cast<double>(st.pixels);
+  state.counters["points"] = static_cast<double>(st.accepted);
+}
+BENCHMARK(BM_DensePairSphere)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_VotePair(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  const auto points = ComputeDensePair(d.a, d.b, d.matches, AffineDenseOptions());
+  VoxelVoteGrid grid;
+  for (auto _ : state) grid.AddPoints(points);
+  state.counters["points"] = static_cast<double>(points.size());
+  state.counters["voxels"] = static_cast<double>(grid.num_voxels());
+}
+BENCHMARK(BM_VotePair)->Unit(benchmark::kMillisecond);
+
+void BM_Carve60kVoxels200Views(benchmark::State& state) {
+  static const std::vector<CarvingView> views = [] {
+    SphereScene scene;
+    std::vector<CarvingView> v;
+    for (int i = 0; i < 200; ++i) {
+      const Eigen::Isometry3d pose = scene.RingPose(i, 200);
+      v.push_back(MakeCarvingView(scene.camera, pose, scene.Render(pose), 2));
+    }
+    return v;
+  }();
+  SphereScene scene;
+  std::vector<VoxelRecord> seeds;
+  const double size = 2.0;
+  for (int k = -2; k < 103; ++k)
+    for (int j = -52; j < 52; ++j)
+      for (int i = -52; i < 52; ++i) {
+        const Eigen::Vector3d c = (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5)) * size;
+        const double r = (c - scene.center).norm();
+        if (r > scene.radius - 3.0 && r <= scene.radius + 0.5) {
+          VoxelRecord rec;
+          rec.ijk = Eigen::Vector3i(i, j, k);
+          rec.votes = 20;
+          seeds.push_back(rec);
+        }
+      }
+  SpaceCarvingStats st;
+  for (auto _ : state) benchmark::DoNotOptimize(CarveVoxels(seeds, size, views, SpaceCarvingOptions(), &st));
+  state.counters["voxels"] = static_cast<double>(seeds.size());
+  state.counters["views"] = static_cast<double>(views.size());
+  state.counters["passes"] = st.iterations;
+  state.counters["removed"] = static_cast<double>(st.removed);
+}
+BENCHMARK(BM_Carve60kVoxels200Views)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+}  // namespace
+}  // namespace objscan
+
+BENCHMARK_MAIN();

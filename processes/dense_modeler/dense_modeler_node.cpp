@@ -1,0 +1,479 @@
+#include "processes/dense_modeler/dense_modeler_node.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "common/time.h"
+#include "objscan/model_t.hpp"
+#include "objscan/process_status_t.hpp"
+#include "objscan/voxel_map_t.hpp"
+
+namespace objscan {
+
+void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
+  p.Add("name", &o->name, "process name (status name, sender of control messages)");
+  p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
+  p.Add("info-channel", &o->info_channel, "camera_info_t channel");
+  p.Add("tracks-channel", &o->tracks_channel, "feature_tracks_t channel");
+  p.Add("pose-channel", &o->pose_channel, "live camera pose channel (pose_t)");
+  p.Add("final-pose-channel", &o->final_pose_channel, "final adjusted camera poses (pose_t, \"\" = ignore)");
+  p.Add("target-channel", &o->target_channel, "target_t channel (\"\" = ignore)");
+  p.Add("voxel-map-channel", &o->voxel_map_channel, "output voxel_map_t channel");
+  p.Add("model-channel", &o->model_channel, "output model_t channel");
+  p.Add("control-channel", &o->control_channel, "control_t channel (in and out)");
+  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.Add("finish-sender", &o->finish_sender, "COMMAND_FINISHED from this sender starts the final phase");
+  p.Add("output-dir", &o->output_dir, "directory for model files and vote snapshots (\"\" = none)");
+  p.Add("buffer-frames", &o->buffer_frames, "frames kept in the ring buffer (> pair-gap)");
+  p.Add("pair-gap", &o->pair_gap, "frame j is paired with frame j - pair-gap");
+  p.Add("pair-every", &o->pair_every, "only frames with seq % pair-every == 0 start a pair");
+  p.Add("voxel-map-every", &o->voxel_map_every, "pairs between VOXEL_MAP publications");
+  p.Add("max-map-voxels", &o->max_map_voxels, "voxels per VOXEL_MAP message at most");
+  p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
+  p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
+  p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
+  p.Add("target-margin", &o->target_margin_mm, "mm, margin around the target box");
+  p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
+  p.Add("threads", &o->threads, "OpenCV threads (cv::setNumThreads)");
+  p.Add("status-period", &o->status_period_s, "s, status publication period");
+  p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
+  DenseModelOptions* m = &o->model;
+  p.Add("vote-threshold", &m->vote_threshold, "votes a voxel needs for VOXEL_MAP and the final model");
+  p.Add("min-relative-votes", &m->min_relative_votes, "final seeds need this fraction of their strongest neighbour's votes");
+  p.Add("carve", &m->carve, "run photometric space carving in the final phase");
+  p.Add("smoothing-passes", &m->smoothing_passes, "occupancy smoothing passes before meshing");
+  AffineDenseOptions* d = &m->dense;
+  p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
+  p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
+  p.Add("dense-epipolar-threshold", &d->epipolar_threshold_px, "px, max distance of Q to the epipolar line");
+  p.Add("dense-max-color-difference", &d->max_color_difference, "gray levels, max mean |dBGR| (< 0 = off)");
+  p.Add("dense-ncc-half-window", &d->ncc_half_window, "px, NCC window half side (0 = off)");
+  p.Add("dense-min-ncc", &d->min_ncc, "min NCC of the warped window");
+  p.Add("dense-min-window-stddev", &d->min_window_stddev, "gray levels, flatter windows skip the NCC test");
+  p.Add("dense-refine", &d->refine_along_epipolar, "refine Q by a 1-D NCC search along the epipolar line");
+  p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
+  p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
+  p.Add("dense-min-triangle-area", &d->min_triangle_area_px2, "px^2, smaller triangles are skipped");
+  p.Add("dense-max-triangle-edge", &d->max_triangle_edge_px, "px, triangles with longer edges are skipped");
+  p.Add("dense-min-triangle-angle", &d->min_triangle_angle_deg, "deg, thinner triangles are skipped");
+  p.Add("dense-max-depth-ratio", &d->max_vertex_depth_ratio, "max/min vertex depth; larger = depth edge");
+  p.Add("dense-max-triangle-slant", &d->max_triangle_slant_deg, "deg, more oblique 3-D triangles are skipped");
+  p.Add("dense-min-triangulation-angle", &d->min_triangulation_angle_deg, "deg, min angle between the rays");
+  p.Add("dense-max-reprojection", &d->max_reprojection_px, "px, max reprojection error of a dense point");
+  p.Add("dense-min-feature-separation", &d->min_feature_separation_px, "px, closer features are dropped");
+  VoxelVoteOptions* v = &m->votes;
+  p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
+  p.Add("vote-neighbourhood", &v->neighbourhood, "0, 6 or 26 neighbours get votes");
+  p.Add("vote-center-weight", &v->center_weight, "votes for the point's own voxel");
+  p.Add("vote-face-weight", &v->face_weight, "votes for each face neighbour");
+  p.Add("vote-edge-weight", &v->edge_weight, "votes for each edge neighbour");
+  p.Add("vote-corner-weight", &v->corner_weight, "votes for each corner neighbour");
+  SpaceCarvingOptions* c = &m->carving;
+  p.Add("carve-max-color-stddev", &c->max_color_stddev, "gray levels, voxels with a larger colour std-dev are carved");
+  p.Add("carve-min-views", &c->min_views, "views a voxel needs before it can be carved");
+  p.Add("carve-max-iterations", &c->max_iterations, "carving passes at most");
+  p.Add("carve-depth-tolerance", &c->depth_tolerance_voxels, "voxels behind the z-buffer still visible");
+  p.Add("carve-footprint-scale", &c->footprint_scale, "z-buffer splat size factor");
+  p.Add("carve-use-normals", &c->use_normals, "require the voxel normal to face the camera");
+  p.Add("carve-min-normal-cos", &c->min_normal_cos, "min cos between the voxel normal and the view ray");
+}
+
+bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::string* why) {
+  std::ostringstream e;
+  for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
+           {"name", o.name}, {"image-channel", o.image_channel}, {"info-channel", o.info_channel},
+           {"tracks-channel", o.tracks_channel}, {"pose-channel", o.pose_channel},
+           {"voxel-map-channel", o.voxel_map_channel}, {"model-channel", o.model_channel},
+           {"control-channel", o.control_channel}, {"status-channel", o.status_channel},
+           {"finish-sender", o.finish_sender}})
+    if (value.empty()) e << name << " must not be empty; ";
+  if (o.pair_gap < 1) e << "pair-gap must be >= 1; ";
+  if (o.buffer_frames <= o.pair_gap) e << "buffer-frames must be > pair-gap; ";
+  if (o.pair_every < 1) e << "pair-every must be >= 1; ";
+  if (o.voxel_map_every < 1) e << "voxel-map-every must be >= 1; ";
+  if (o.max_map_voxels < 1) e << "max-map-voxels must be >= 1; ";
+  if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving-downsample must be in [1, 8]; ";
+  if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
+  if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
+  if (o.image_queue_capacity < 1) e << "image-queue-capacity must be >= 1; ";
+  if (o.threads < 1) e << "threads must be >= 1; ";
+  if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  std::string model_why;
+  if (!ValidateDenseModelOptions(o.model, &model_why)) e << model_why << "; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+namespace {
+const DenseModelerNodeOptions& ValidatedOrThrow(const DenseModelerNodeOptions& o) {
+  std::string why;
+  if (!ValidateDenseModelerNodeOptions(o, &why)) throw std::invalid_argument("dense_modeler node: " + why);
+  return o;
+}
+bool UsableStatus(PoseStatus s) {
+  return s == PoseStatus::kTracking || s == PoseStatus::kRelocalized || s == PoseStatus::kGroundTruth;
+}
+}  // namespace
+
+DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& options)
+    : bus_(bus),
+      options_(ValidatedOrThrow(options)),
+      status_(&bus, options_.name, options_.status_channel, options_.status_period_s),
+      grid_(options_.model.votes) {
+  cv::setNumThreads(options_.threads);
+  status_.SetState(+process_status_t::STATE_STARTING, "waiting for posed images");
+  auto malformed = [this](const std::string& what) {
+    return [this, what](const RawMessage& raw) {
+      status_.Reject(what + ": malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+    };
+  };
+  bus_.SubscribeMessage<image_t>(
+      options_.image_channel, [this](const image_t& m, const RawMessage&) { OnImage(m); }, malformed("image"),
+      options_.image_queue_capacity);
+  bus_.SubscribeMessage<camera_info_t>(
+      options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
+      malformed("camera_info"));
+  bus_.SubscribeMessage<feature_tracks_t>(
+      options_.tracks_channel, [this](const feature_tracks_t& m, const RawMessage&) { OnTracks(m); },
+      malformed("tracks"));
+  bus_.SubscribeMessage<pose_t>(
+      options_.pose_channel, [this](const pose_t& m, const RawMessage&) { OnPose(m, false); }, malformed("pose"));
+  if (!options_.final_pose_channel.empty())
+    bus_.SubscribeMessage<pose_t>(
+        options_.final_pose_channel, [this](const pose_t& m, const RawMessage&) { OnPose(m, true); },
+        malformed("final pose"));
+  if (!options_.target_channel.empty())
+    bus_.SubscribeMessage<target_t>(
+        options_.target_channel, [this](const target_t& m, const RawMessage&) { OnTarget(m); }, malformed("target"));
+  bus_.SubscribeMessage<control_t>(
+      options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
+      malformed("control"));
+}
+
+DenseModelerNode::FrameSlot& DenseModelerNode::Slot(int64_t seq) {
+  frames_[seq];
+  while (static_cast<int>(frames_.size()) > options_.buffer_frames) {
+    auto oldest = frames_.begin();
+    if (oldest->first == seq) break;
+    if (!oldest->second.pose && !oldest->second.processed)
+      status_.Reject("frame: evicted without pose", "seq " + std::to_string(oldest->first));
+    frames_.erase(oldest);
+  }
+  return frames_[seq];
+}
+
+void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
+  PinholeCamera camera;
+  std::string error;
+  if (!CameraFromMessage(msg, &camera, &error)) {
+    status_.Reject(error, "camera " + msg.camera_name);
+    return;
+  }
+  status_.CountIn();
+  camera_ = camera;
+}
+
+void DenseModelerNode::OnImage(const image_t& msg) {
+  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
+    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (!camera_) {
+    status_.Reject("image: no camera_info yet", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  ImageFrame frame;
+  std::string error;
+  if (!ImageFromMessage(msg, &frame, &error, camera_->width, camera_->height)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  status_.CountIn();
+  status_.SetLastDataUtime(msg.utime);
+  if (frame.image.channels() == 1) cv::cvtColor(frame.image, frame.image, cv::COLOR_GRAY2BGR);
+  FrameSlot& slot = Slot(msg.seq);
+  slot.utime = msg.utime;
+  slot.image = frame.image;
+  TryProcess(msg.seq);
+}
+
+void DenseModelerNode::OnTracks(const feature_tracks_t& msg) {
+  TrackFrame tracks;
+  std::string error;
+  if (!TracksFromMessage(msg, &tracks, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  status_.CountIn();
+  FrameSlot& slot = Slot(msg.seq);
+  slot.tracks = std::move(tracks);
+  TryProcess(msg.seq);
+}
+
+void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
+  CameraPoseEstimate pose;
+  std::string error;
+  if (!PoseFromMessage(msg, &pose, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (!UsableStatus(pose.status)) {
+    status_.Reject("pose: not tracking", "seq " + std::to_string(msg.seq) + " status " +
+                                              std::to_string(static_cast<int>(pose.status)));
+    return;
+  }
+  if (final_pose) {
+    status_.CountIn();
+    final_poses_[msg.seq] = pose.world_from_camera;
+    return;
+  }
+  auto it = frames_.find(msg.seq);
+  if (it == frames_.end() || it->second.image.empty()) {
+    status_.Reject("pose: unknown frame", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  status_.CountIn();
+  it->second.pose = pose;
+  TryProcess(msg.seq);
+}
+
+void DenseModelerNode::OnTarget(const target_t& msg) {
+  bool finite = std::isfinite(msg.yaw_rad);
+  for (int k = 0; k < 3; ++k) finite = finite && std::isfinite(msg.center_mm[k]) && std::isfinite(msg.size_mm[k]);
+  if (!finite || msg.size_mm[0] < 0 || msg.size_mm[1] < 0 || msg.size_mm[2] < 0) {
+    status_.Reject("target: malformed", "non-finite or negative box");
+    return;
+  }
+  status_.CountIn();
+  if (msg.state != target_t::STATE_CONFIRMED || !options_.use_target_box) return;
+  const double c = std::abs(std::cos(msg.yaw_rad)), s = std::abs(std::sin(msg.yaw_rad));
+  const Eigen::Vector3d half(0.5 * (c * msg.size_mm[0] + s * msg.size_mm[1]) + options_.target_margin_mm,
+                             0.5 * (s * msg.size_mm[0] + c * msg.size_mm[1]) + options_.target_margin_mm,
+                             0.5 * msg.size_mm[2] + options_.target_margin_mm);
+  const Eigen::Vector3d center(msg.center_mm[0], msg.center_mm[1], msg.center_mm[2]);
+  box_min_ = center - half;
+  box_max_ = center + half;
+  have_box_ = true;
+}
+
+AffineDenseOptions DenseModelerNode::DenseOptionsForNow() const {
+  AffineDenseOptions d = options_.model.dense;
+  if (have_box_) {
+    d.use_world_box = true;
+    d.box_min = box_min_;
+    d.box_max = box_max_;
+  }
+  return d;
+}
+
+void DenseModelerNode::TryProcess(int64_t seq) {
+  auto it = frames_.find(seq);
+  if (it == frames_.end() || finished_) return;
+  FrameSlot& slot = it->second;
+  if (slot.processed || slot.image.empty() || !slot.tracks || !slot.pose) return;
+  slot.processed = true;
+  last_seq_ = std::max(last_seq_, seq);
+  last_utime_ = std::max(last_utime_, slot.utime);
+  // Copy for the final carving (bounded, deterministic thinning).
+  if (complete_frames_ % carving_keep_stride_ == 0) {
+    if (static_cast<int>(carving_views_.size()) >= options_.max_carving_views) {
+      std::vector<StoredView> kept;
+      for (size_t i = 0; i < carving_views_.size(); i += 2) kept.push_back(std::move(carving_views_[i]));
+      carving_views_.swap(kept);
+      carving_keep_stride_ *= 2;
+    }
+    if (complete_frames_ % carving_keep_stride_ == 0)
+      carving_views_.push_back(
+          {seq, MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample)});
+  }
+  ++complete_frames_;
+  status_.SetValue("carving_views", static_cast<double>(carving_views_.size()));
+  if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
+    status_.SetState(+process_status_t::STATE_RUNNING);
+
+  if (seq % options_.pair_every != 0) return;
+  auto partner = frames_.find(seq - options_.pair_gap);
+  if (partner == frames_.end() || !partner->second.processed || partner->second.image.empty()) return;
+  const FrameSlot& pa = partner->second;
+  const int64_t start_us = MonotonicMicros();
+  DenseView a, b;
+  a.seq = partner->first;
+  a.camera = *camera_;
+  a.world_from_camera = pa.pose->world_from_camera;
+  a.image = pa.image;
+  b.seq = seq;
+  b.camera = *camera_;
+  b.world_from_camera = slot.pose->world_from_camera;
+  b.image = slot.image;
+  DensePairStats stats;
+  const std::vector<DensePoint> points =
+      ComputeDensePair(a, b, MatchTracks(*pa.tracks, *slot.tracks), DenseOptionsForNow(), &stats);
+  const int64_t vote_start_us = MonotonicMicros();
+  grid_.AddPoints(points);
+  const int64_t end_us = MonotonicMicros();
+  ++pairs_done_;
+  dense_points_ += static_cast<int64_t>(points.size());
+  status_.SetValue("pairs", static_cast<double>(pairs_done_));
+  status_.SetValue("dense_points", static_cast<double>(dense_points_));
+  status_.SetValue("voxels", static_cast<double>(grid_.num_voxels()));
+  status_.SetValue("votes", static_cast<double>(grid_.total_votes()));
+  status_.SetValue("pair_ms", (vote_start_us - start_us) * 1e-3);
+  status_.SetValue("vote_ms", (end_us - vote_start_us) * 1e-3);
+  status_.RecordLatencyMs((end_us - start_us) * 1e-3);
+  if (pairs_done_ % options_.voxel_map_every == 0) PublishVoxelMap(slot.utime, seq, false, nullptr);
+}
+
+void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final,
+                                       const std::vector<VoxelRecord>* final_voxels) {
+  std::vector<VoxelRecord> voxels = final_voxels ? *final_voxels : grid_.Extract(options_.model.vote_threshold);
+  voxel_map_t msg;
+  msg.utime = utime;
+  msg.seq = seq;
+  msg.frame = "world";
+  msg.voxel_size_mm = grid_.voxel_size();
+  msg.origin_mm[0] = msg.origin_mm[1] = msg.origin_mm[2] = 0;
+  msg.vote_threshold = options_.model.vote_threshold;
+  msg.is_final = is_final;
+  msg.truncated = static_cast<int>(voxels.size()) > options_.max_map_voxels;
+  if (msg.truncated) {  // strongest first, then (k, j, i): deterministic
+    std::stable_sort(voxels.begin(), voxels.end(),
+                     [](const VoxelRecord& x, const VoxelRecord& y) { return x.votes > y.votes; });
+    voxels.resize(options_.max_map_voxels);
+  }
+  msg.num_voxels = static_cast<int32_t>(voxels.size());
+  msg.ijk.resize(voxels.size());
+  msg.votes.resize(voxels.size());
+  msg.rgb.resize(voxels.size());
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    msg.ijk[i] = {voxels[i].ijk.x(), voxels[i].ijk.y(), voxels[i].ijk.z()};
+    msg.votes[i] = voxels[i].votes;
+    msg.rgb[i] = {static_cast<uint8_t>(voxels[i].bgr[2]), static_cast<uint8_t>(voxels[i].bgr[1]),
+                  static_cast<uint8_t>(voxels[i].bgr[0])};
+  }
+  if (bus_.PublishMessage(options_.voxel_map_channel, msg)) status_.CountOut();
+  else LogWarning("publishing on " + options_.voxel_map_channel + " failed");
+}
+
+void DenseModelerNode::RunFinalPhase(int64_t utime) {
+  if (finished_) return;
+  const int64_t start_us = MonotonicMicros();
+  std::vector<CarvingView> views;
+  int final_used = 0;
+  for (const StoredView& sv : carving_views_) {
+    CarvingView v = sv.view;
+    auto it = final_poses_.find(sv.seq);
+    if (it != final_poses_.end()) {
+      v.world_from_camera = it->second;
+      ++final_used;
+    }
+    views.push_back(std::move(v));
+  }
+  final_poses_used_ = final_used;
+  const FinalModel model = BuildFinalModel(grid_, views, options_.model, have_box_, box_min_, box_max_);
+  LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
+          " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
+          std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
+          std::to_string(model.mesh.triangles.size()) + " triangles");
+  ModelPaths paths;
+  if (!options_.output_dir.empty()) {
+    std::string error;
+    if (!WriteModelFiles(options_.output_dir, model, grid_.voxel_size(), &paths, &error)) {
+      LogError("writing the model failed: " + error);
+      paths = ModelPaths{};
+    }
+  }
+  std::vector<VoxelRecord> final_records;
+  for (const CarvedVoxel& v : model.voxels) {
+    VoxelRecord r;
+    r.ijk = v.ijk;
+    r.votes = v.votes;
+    r.bgr = v.bgr;
+    final_records.push_back(r);
+  }
+  const int64_t data_utime = last_seq_ >= 0 ? last_utime_ : utime;
+  PublishVoxelMap(data_utime, last_seq_, true, &final_records);
+  model_t m;
+  m.utime = data_utime;
+  m.voxels_ply_path = paths.voxels_ply;
+  m.mesh_ply_path = paths.mesh_ply;
+  m.octomap_path = paths.octomap;
+  m.voxel_size_mm = grid_.voxel_size();
+  m.num_voxels = static_cast<int32_t>(model.voxels.size());
+  m.num_voxels_carved = static_cast<int32_t>(model.carving.removed);
+  m.num_mesh_triangles = static_cast<int32_t>(model.mesh.triangles.size());
+  m.num_views = static_cast<int32_t>(views.size());
+  for (int k = 0; k < 3; ++k) {
+    m.bbox_min_mm[k] = model.bbox_min[k];
+    m.bbox_max_mm[k] = model.bbox_max[k];
+  }
+  if (bus_.PublishMessage(options_.model_channel, m)) status_.CountOut();
+  control_t reply;
+  reply.utime = data_utime;
+  reply.sender = options_.name;
+  reply.target = "*";
+  reply.command = control_t::COMMAND_FINISHED;
+  reply.last_seq = last_seq_;
+  reply.argument = paths.voxels_ply.empty() ? "" : options_.output_dir;
+  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
+  finished_ = true;
+  status_.SetValue("final_ms", (MonotonicMicros() - start_us) * 1e-3);
+  status_.SetValue("final_voxels", static_cast<double>(model.voxels.size()));
+  status_.SetState(+process_status_t::STATE_FINISHED, "model written");
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+bool DenseModelerNode::SaveSnapshot(const std::string& path) {
+  std::string error;
+  std::error_code ec;
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  if (!grid_.SaveSnapshot(path, &error)) {
+    status_.Reject("snapshot: write failed", error);
+    return false;
+  }
+  LogInfo("vote snapshot written to " + path);
+  return true;
+}
+
+void DenseModelerNode::OnControl(const control_t& msg) {
+  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  if (msg.command == control_t::COMMAND_SNAPSHOT) {
+    status_.CountIn();
+    std::string path = msg.argument;
+    if (path.empty() && !options_.output_dir.empty())
+      path = (std::filesystem::path(options_.output_dir) / "votes_snapshot.bin").string();
+    if (path.empty()) {
+      status_.Reject("snapshot: no path", "neither argument nor output-dir");
+      return;
+    }
+    SaveSnapshot(path);
+    return;
+  }
+  const bool finish = (msg.command == control_t::COMMAND_FINISHED && msg.sender == options_.finish_sender) ||
+                      (msg.command == control_t::COMMAND_FINALIZE && msg.target == options_.name);
+  if (!finish) return;
+  status_.CountIn();
+  LogInfo("final phase requested by " + msg.sender);
+  RunFinalPhase(msg.utime);
+}
+
+void DenseModelerNode::Tick(int64_t wall_utime) { status_.PublishIfDue(wall_utime); }
+
+void DenseModelerNode::OnShutdown() {
+  if (!options_.output_dir.empty())
+    SaveSnapshot((std::filesystem::path(options_.output_dir) / "votes_snapshot.bin").string());
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+}  // namespace objscan

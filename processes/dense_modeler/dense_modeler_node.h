@@ -1,0 +1,150 @@
+// DenseModelerNode: the "dense_modeler" process.
+// Inputs: CAMERA_IMAGE (image_t), CAMERA_INFO (camera_info_t, needed before frames can be used), FEATURE_TRACKS
+// (feature_tracks_t), CAMERA_POSE (pose_t world_from_camera, mm), CAMERA_POSE_FINAL (pose_t after the pose solver's
+// final adjustment), TARGET (target_t; a confirmed box restricts the model), OBJSCAN_CONTROL (control_t).
+// Frames (image + tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame
+// j is complete with a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired
+// with frame j - pair_gap (if complete): dense points (affine_dense.h) from the tracks both frames share are voted
+// into the voxel grid (voxel_votes.h). Every complete frame also keeps a downsampled copy for the final carving
+// (at most max_carving_views; when full, every second one is dropped, deterministic).
+// Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at most max_map_voxels, strongest
+// first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and control_t COMMAND_FINISHED.
+// Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed at this process):
+// seeds = voxels over the threshold (inside the target box when known), space carving with the stored views,
+// using the final poses of CAMERA_POSE_FINAL where they arrived (votes are NOT recomputed with final poses: the
+// full-resolution images are gone by then), marching tetrahedra mesh, files written to output_dir (when set).
+// COMMAND_SNAPSHOT writes the vote grid to control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown
+// saves output_dir/votes_snapshot.bin when output_dir is set.
+// Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated",
+// adapter reasons for images/camera info/tracks/poses, "image: no camera_info yet", "image: wrong size" (differs from
+// camera_info), "tracks: malformed", "pose: malformed", "final pose: malformed", "pose: unknown frame" (no image
+// for that seq in the buffer), "pose: not tracking" (initializing or lost),
+// "frame: evicted without pose", "target: malformed", "control: malformed", "snapshot: no path",
+// "snapshot: write failed".
+// Status values: pairs, dense_points, voxels, votes, pair_ms, vote_ms, carving_views.
+// Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/camera_model.h"
+#include "common/node.h"
+#include "common/sensor_data.h"
+#include "common/status.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/target_t.hpp"
+#include "processes/dense_modeler/dense_model.h"
+
+namespace objscan {
+
+class Bus;
+class OptionParser;
+
+struct DenseModelerNodeOptions {
+  std::string name = "dense_modeler";                 // process name (status name, control sender)
+  std::string image_channel = "CAMERA_IMAGE";         // images (image_t)
+  std::string info_channel = "CAMERA_INFO";           // intrinsics (camera_info_t)
+  std::string tracks_channel = "FEATURE_TRACKS";      // tracks (feature_tracks_t)
+  std::string pose_channel = "CAMERA_POSE";           // live poses (pose_t)
+  std::string final_pose_channel = "CAMERA_POSE_FINAL";  // poses after final adjustment (pose_t); "" = ignore
+  std::string target_channel = "TARGET";              // target box (target_t); "" = ignore
+  std::string voxel_map_channel = "VOXEL_MAP";        // output voxel_map_t
+  std::string model_channel = "MODEL";                // output model_t
+  std::string control_channel = "OBJSCAN_CONTROL";    // control_t in and out
+  std::string status_channel = "PROCESS_STATUS";      // process_status_t
+  std::string finish_sender = "pose_solver";          // COMMAND_FINISHED from this sender starts the final phase
+  std::string output_dir;                             // model files and snapshots go here ("" = no files)
+  int buffer_frames = 40;                             // frames (full images) kept in the ring buffer (> pair_gap)
+  int pair_gap = 6;                                   // frame j is paired with frame j - pair_gap (>= 1)
+  int pair_every = 2;                                 // only frames with seq % pair_every == 0 start a pair (>= 1)
+  int voxel_map_every = 10;                           // pairs between VOXEL_MAP publications (>= 1)
+  int max_map_voxels = 200000;                        // voxels per VOXEL_MAP message at most (>= 1)
+  int carving_downsample = 2;                         // integer downsampling of the images kept for carving (>= 1)
+  int max_carving_views = 200;                        // images kept for carving at most (>= 2)
+  bool use_target_box = true;                         // restrict to the confirmed TARGET box (+ margin)
+  double target_margin_mm = 30.0;                     // mm, added on every side of the target box (>= 0)
+  int image_queue_capacity = 60;                      // frames buffered by the image subscription (>= 1)
+  int threads = 1;                                    // OpenCV threads (cv::setNumThreads)
+  double status_period_s = 1.0;                       // s, status publication period (> 0)
+  bool exit_when_finished = true;                     // Finished() turns true after the final phase
+  DenseModelOptions model;                            // dense matching, voting, carving, meshing
+};
+
+// Registers every option field.
+void AddDenseModelerNodeOptions(OptionParser& parser, DenseModelerNodeOptions* options);
+// True when usable; otherwise false with *why set.
+bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& options, std::string* why);
+
+class DenseModelerNode : public Node {
+ public:
+  // Subscribes on bus (which must outlive the node). Throws std::invalid_argument on invalid options.
+  DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& options);
+
+  void Tick(int64_t wall_utime) override;
+  bool Finished() const override { return finished_ && options_.exit_when_finished; }
+  void OnShutdown() override;
+
+  const StatusReporter& status() const { return status_; }
+  const VoxelVoteGrid& grid() const { return grid_; }
+  bool final_phase_done() const { return finished_; }
+  int64_t pairs_done() const { return pairs_done_; }
+  // Carving views whose pose was replaced by a CAMERA_POSE_FINAL pose in the final phase.
+  int final_poses_used() const { return final_poses_used_; }
+  // Runs the final phase now (as on COMMAND_FINISHED); no-op when done already.
+  void RunFinalPhase(int64_t utime);
+
+ private:
+  struct FrameSlot {
+    int64_t utime = 0;
+    cv::Mat image;                              // full resolution (empty until received)
+    std::optional<TrackFrame> tracks;
+    std::optional<CameraPoseEstimate> pose;     // usable poses only
+    bool processed = false;                     // pairing / carving copy done
+  };
+  struct StoredView {
+    int64_t seq = 0;
+    CarvingView view;
+  };
+
+  void OnImage(const image_t& msg);
+  void OnCameraInfo(const camera_info_t& msg);
+  void OnTracks(const feature_tracks_t& msg);
+  void OnPose(const pose_t& msg, bool final_pose);
+  void OnTarget(const target_t& msg);
+  void OnControl(const control_t& msg);
+  FrameSlot& Slot(int64_t seq);
+  void TryProcess(int64_t seq);
+  void PublishVoxelMap(int64_t utime, int64_t seq, bool is_final, const std::vector<VoxelRecord>* final_voxels);
+  bool SaveSnapshot(const std::string& path);
+  AffineDenseOptions DenseOptionsForNow() const;
+
+  Bus& bus_;
+  DenseModelerNodeOptions options_;
+  StatusReporter status_;
+  VoxelVoteGrid grid_;
+  std::optional<PinholeCamera> camera_;
+  std::map<int64_t, FrameSlot> frames_;
+  std::vector<StoredView> carving_views_;
+  std::map<int64_t, Eigen::Isometry3d> final_poses_;
+  bool have_box_ = false;
+  Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();
+  int64_t pairs_done_ = 0;
+  int64_t dense_points_ = 0;
+  int64_t last_seq_ = -1, last_utime_ = 0;
+  int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
+  int64_t complete_frames_ = 0;
+  int final_poses_used_ = 0;
+  bool finished_ = false;
+};
+
+}  // namespace objscan

@@ -1,0 +1,244 @@
+#include "processes/dense_modeler/dense_modeler_node.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <unistd.h>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/geometry.h"
+#include "objscan/model_t.hpp"
+#include "objscan/voxel_map_t.hpp"
+#include "processes/dense_modeler/synthetic_scene.h"
+
+namespace objscan {
+namespace {
+
+using testing_scene::SphereScene;
+
+struct Collected {
+  std::vector<voxel_map_t> maps;
+  std::vector<model_t> models;
+  std::vector<control_t> controls;
+};
+
+class NodeFixture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    bus_ = MakeLcmBus("memq://");
+    bus_->SubscribeMessage<voxel_map_t>("VOXEL_MAP", [this](const voxel_map_t& m, const RawMessage&) {
+      out_.maps.push_back(m);
+    });
+    bus_->SubscribeMessage<model_t>("MODEL", [this](const model_t& m, const RawMessage&) { out_.models.push_back(m); });
+    bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
+      if (m.sender == "dense_modeler") out_.controls.push_back(m);
+    });
+    dir_ = (std::filesystem::temp_directory_path() / ("dense_node_test_" + std::to_string(::getpid()))).string();
+    options_.output_dir = dir_;
+    options_.pair_gap = 1;
+    options_.pair_every = 1;
+    options_.buffer_frames = 6;
+    options_.voxel_map_every = 4;
+    options_.carving_downsample = 2;
+    options_.target_channel = "TARGET";
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void Drain() {
+    while (bus_->Handle(0) > 0) {
+    }
+  }
+  void PublishInfo() { bus_->PublishMessage("CAMERA_INFO", CameraToMessage(scene_.camera, 0)); }
+  void PublishFrame(int seq, int n_views, const std::vector<Eigen::Vector3d>& features,
+                    PoseStatus status = PoseStatus::kGroundTruth) {
+    const Eigen::Isometry3d pose = scene_.RingPose(seq, n_views);
+    ImageFrame frame;
+    frame.seq = seq;
+    frame.utime = std::llround(seq * 1e6 / 30);
+    frame.camera_name = "sim";
+    frame.image = scene_.Render(pose);
+    bus_->PublishMessage("CAMERA_IMAGE", ImageToMessage(frame, +image_t::ENCODING_BGR8));
+    bus_->PublishMessage("FEATURE_TRACKS", TracksToMessage(scene_.Tracks(pose, features, seq)));
+    CameraPoseEstimate est;
+    est.seq = seq;
+    est.utime = frame.utime;
+    est.world_from_camera = pose;
+    est.status = status;
+    bus_->PublishMessage("CAMERA_POSE", PoseToMessage(est));
+    Drain();
+  }
+  void PublishControl(int8_t command, const std::string& sender, const std::string& argument = "") {
+    control_t c;
+    c.utime = 0;
+    c.sender = sender;
+    c.target = "*";
+    c.command = command;
+    c.last_seq = -1;
+    c.argument = argument;
+    bus_->PublishMessage("OBJSCAN_CONTROL", c);
+    Drain();
+  }
+
+  SphereScene scene_;
+  std::unique_ptr<Bus> bus_;
+  Collected out_;
+  DenseModelerNodeOptions options_;
+  std::string dir_;
+};
+
+TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  target_t target{};
+  target.state = target_t::STATE_CONFIRMED;
+  target.frame = "world";
+  target.center_mm[2] = 100;
+  target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 200;
+  bus_->PublishMessage("TARGET", target);
+  const int n = 16;
+  const auto features = scene_.SurfacePoints(2000);
+  for (int i = 0; i <= n; ++i) PublishFrame(i, n, features);  // frame n closes the ring (same pose as 0)
+  EXPECT_EQ(node.pairs_done(), n);
+  ASSERT_GE(out_.maps.size(), 4u);
+  EXPECT_FALSE(out_.maps.back().is_final);
+  EXPECT_GT(out_.maps.back().num_voxels, 1000);
+  EXPECT_FALSE(node.Finished());
+  // Final poses (here the same true poses) for half of the frames: used by the carving.
+  for (int i = 0; i <= n; i += 2) {
+    CameraPoseEstimate est;
+    est.seq = i;
+    est.utime = std::llround(i * 1e6 / 30);
+    est.world_from_camera = scene_.RingPose(i, n);
+    est.status = PoseStatus::kTracking;
+    bus_->PublishMessage("CAMERA_POSE_FINAL", PoseToMessage(est));
+  }
+  Drain();
+  PublishControl(+control_t::COMMAND_FINISHED, "tracker");  // not the awaited sender
+  EXPECT_FALSE(node.final_phase_done());
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  EXPECT_TRUE(node.Finished());
+  EXPECT_EQ(node.final_poses_used(), n / 2 + 1);
+  ASSERT_EQ(out_.models.size(), 1u);
+  const model_t& m = out_.models[0];
+  EXPECT_GT(m.num_voxels, 5000);
+  EXPECT_GT(m.num_mesh_triangles, 5000);
+  EXPECT_EQ(m.num_views, n + 1);
+  EXPECT_TRUE(std::filesystem::exists(m.voxels_ply_path));
+  EXPECT_TRUE(std::filesystem::exists(m.mesh_ply_path));
+  EXPECT_TRUE(std::filesystem::exists(m.octomap_path));
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_GT(m.bbox_min_mm[k], -140);
+    EXPECT_LT(m.bbox_max_mm[k], 140);
+  }
+  ASSERT_TRUE(out_.maps.back().is_final);
+  EXPECT_EQ(out_.maps.back().num_voxels, m.num_voxels);
+  ASSERT_EQ(out_.controls.size(), 1u);
+  EXPECT_EQ(out_.controls[0].command, +control_t::COMMAND_FINISHED);
+  EXPECT_EQ(out_.controls[0].last_seq, n);
+  EXPECT_EQ(node.status().rejected_total(), 0);
+  // Snapshot on request, loadable, same content.
+  PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer", dir_ + "/snap.bin");
+  VoxelVoteGrid loaded;
+  std::string error;
+  ASSERT_TRUE(loaded.LoadSnapshot(dir_ + "/snap.bin", &error)) << error;
+  EXPECT_EQ(loaded.total_votes(), node.grid().total_votes());
+  node.OnShutdown();
+  EXPECT_TRUE(std::filesystem::exists(dir_ + "/votes_snapshot.bin"));
+}
+
+TEST_F(NodeFixture, BadInputIsCountedAndSkipped) {
+  options_.output_dir.clear();
+  DenseModelerNode node(*bus_, options_);
+  const auto features = scene_.SurfacePoints(500);
+  // Image before camera info.
+  PublishFrame(0, 16, features);
+  EXPECT_EQ(node.status().rejected("image: no camera_info yet"), 1);
+  EXPECT_EQ(node.status().rejected("pose: unknown frame"), 1);
+  PublishInfo();
+  Drain();
+  // Malformed bytes on the image channel.
+  const char junk[5] = {1, 2, 3, 4, 5};
+  bus_->Publish("CAMERA_IMAGE", junk, 5);
+  Drain();
+  EXPECT_EQ(node.status().rejected("image: malformed"), 1);
+  // Lost pose.
+  PublishFrame(1, 16, features, PoseStatus::kLost);
+  EXPECT_EQ(node.status().rejected("pose: not tracking"), 1);
+  // NaN pose.
+  CameraPoseEstimate est;
+  est.seq = 1;
+  est.status = PoseStatus::kTracking;
+  pose_t msg = PoseToMessage(est);
+  msg.position_mm[0] = std::numeric_limits<double>::quiet_NaN();
+  bus_->PublishMessage("CAMERA_POSE", msg);
+  Drain();
+  EXPECT_EQ(node.status().rejected_total(), 5);
+  // Wrong image size.
+  ImageFrame small;
+  small.seq = 2;
+  small.image = cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3));
+  bus_->PublishMessage("CAMERA_IMAGE", ImageToMessage(small, +image_t::ENCODING_BGR8));
+  Drain();
+  EXPECT_EQ(node.status().rejected("image: wrong size"), 1);
+  EXPECT_EQ(node.status().rejected_total(), 6);
+  // Good frames still work after all that; frames without a usable pose are evicted and counted.
+  for (int i = 3; i < 12; ++i) PublishFrame(i, 16, features);
+  EXPECT_EQ(node.pairs_done(), 8);
+  EXPECT_EQ(node.status().rejected("frame: evicted without pose"), 2);  // seq 0 and 1
+  // Snapshot without a path.
+  PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer");
+  EXPECT_EQ(node.status().rejected("snapshot: no path"), 1);
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  ASSERT_EQ(out_.models.size(), 1u);
+  EXPECT_TRUE(out_.models[0].voxels_ply_path.empty());
+  EXPECT_GT(out_.models[0].num_voxels, 100);
+}
+
+TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
+  options_.output_dir.clear();
+  std::vector<std::vector<uint8_t>> encoded[2];
+  for (int run = 0; run < 2; ++run) {
+    out_ = Collected();
+    auto bus = MakeLcmBus("memq://");
+    bus_.swap(bus);
+    SetUp();
+    options_.output_dir.clear();
+    {
+      DenseModelerNode node(*bus_, options_);
+      PublishInfo();
+      const auto features = scene_.SurfacePoints(1000);
+      for (int i = 0; i < 6; ++i) PublishFrame(i, 24, features);
+      PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+    }
+    for (const auto& m : out_.maps) {
+      std::vector<uint8_t> buf(m.getEncodedSize());
+      m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+      encoded[run].push_back(buf);
+    }
+    ASSERT_EQ(out_.models.size(), 1u);
+    std::vector<uint8_t> buf(out_.models[0].getEncodedSize());
+    out_.models[0].encode(buf.data(), 0, static_cast<int>(buf.size()));
+    encoded[run].push_back(buf);
+  }
+  ASSERT_GE(encoded[0].size(), 2u);
+  EXPECT_TRUE(encoded[0] == encoded[1]);
+}
+
+TEST(DenseModelerNodeOptions, Validation) {
+  DenseModelerNodeOptions o;
+  std::string why;
+  EXPECT_TRUE(ValidateDenseModelerNodeOptions(o, &why)) << why;
+  o.pair_gap = 50;
+  EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
+  EXPECT_NE(why.find("buffer-frames"), std::string::npos);
+  o = DenseModelerNodeOptions();
+  o.model.votes.neighbourhood = 5;
+  EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
+  auto bus = MakeLcmBus("memq://");
+  EXPECT_THROW(DenseModelerNode(*bus, o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace objscan

@@ -1,0 +1,185 @@
+#include "processes/dense_modeler/marching_cubes.h"
+
+#include <algorithm>
+#include <map>
+#include <unordered_map>
+#include <utility>
+
+namespace objscan {
+namespace {
+
+// Cube corner c has offset (c & 1, (c >> 1) & 1, (c >> 2) & 1). Kuhn split: the 6 monotone paths 0 -> 7.
+constexpr int kTets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+
+struct EdgeKeyHash {
+  size_t operator()(const std::pair<int64_t, int64_t>& k) const {
+    return std::hash<int64_t>()(k.first * 0x9E3779B97F4A7C15LL ^ k.second);
+  }
+};
+
+}  // namespace
+
+TriangleMesh ExtractIsosurface(const ScalarVolume& vol, float iso) {
+  TriangleMesh mesh;
+  if (vol.nx < 2 || vol.ny < 2 || vol.nz < 2 ||
+      vol.values.size() != static_cast<size_t>(vol.nx) * vol.ny * vol.nz)
+    return mesh;
+  const bool has_color = vol.bgr.size() == vol.values.size();
+  std::unordered_map<std::pair<int64_t, int64_t>, int32_t, EdgeKeyHash> edge_vertex;
+  auto position = [&](int64_t idx) {
+    const int64_t x = idx % vol.nx, y = (idx / vol.nx) % vol.ny, z = idx / (static_cast<int64_t>(vol.nx) * vol.ny);
+    return Eigen::Vector3d(vol.origin + Eigen::Vector3d(x, y, z) * vol.spacing);
+  };
+  // Vertex on the edge (inside sample a, outside sample b).
+  auto vertex = [&](int64_t a, int64_t b) {
+    const std::pair<int64_t, int64_t> key(std::min(a, b), std::max(a, b));
+    auto it = edge_vertex.find(key);
+    if (it != edge_vertex.end()) return it->second;
+    const double va = vol.values[a], vb = vol.values[b];
+    const double t = va == vb ? 0.5 : std::clamp((iso - va) / (vb - va), 0.0, 1.0);
+    const Eigen::Vector3d p = position(a) + t * (position(b) - position(a));
+    const int32_t id = static_cast<int32_t>(mesh.vertices.size());
+    mesh.vertices.push_back(p.cast<float>());
+    mesh.bgr.push_back(has_color ? vol.bgr[a] : std::array<uint8_t, 3>{{160, 160, 160}});
+    edge_vertex.emplace(key, id);
+    return id;
+  };
+  // Orientation is decided on the edge midpoints (never degenerate, unlike the interpolated vertices when a sample
+  // equals iso): the midpoint triangle/quad of a tetrahedron separates its inside corners from its outside ones.
+  using Edge = std::pair<int64_t, int64_t>;
+  auto emit = [&](const Edge& e0, const Edge& e1, const Edge& e2, const Eigen::Vector3d& inside,
+                  const Eigen::Vector3d& outside) {
+    const Eigen::Vector3d m0 = 0.5 * (position(e0.first) + position(e0.second));
+    const Eigen::Vector3d m1 = 0.5 * (position(e1.first) + position(e1.second));
+    const Eigen::Vector3d m2 = 0.5 * (position(e2.first) + position(e2.second));
+    int32_t i0 = vertex(e0.first, e0.second), i1 = vertex(e1.first, e1.second), i2 = vertex(e2.first, e2.second);
+    if ((m1 - m0).cross(m2 - m0).dot(outside - inside) < 0) std::swap(i1, i2);
+    mesh.triangles.push_back({i0, i1, i2});
+  };
+  const int64_t sx = 1, sy = vol.nx, sz = static_cast<int64_t>(vol.nx) * vol.ny;
+  for (int z = 0; z + 1 < vol.nz; ++z) {
+    for (int y = 0; y + 1 < vol.ny; ++y) {
+      for (int x = 0; x + 1 < vol.nx; ++x) {
+        int64_t corner[8];
+        bool any_in = false, any_out = false;
+        for (int c = 0; c < 8; ++c) {
+          corner[c] = vol.Index(x, y, z) + (c & 1) * sx + ((c >> 1) & 1) * sy + ((c >> 2) & 1) * sz;
+          (vol.values[corner[c]] > iso ? any_in : any_out) = true;
+        }
+        if (!any_in || !any_out) continue;
+        for (const auto& tet : kTets) {
+          int64_t in[4], out[4];
+          int n_in = 0, n_out = 0;
+          for (int k = 0; k < 4; ++k) {
+            const int64_t s = corner[tet[k]];
+            if (vol.values[s] > iso) in[n_in++] = s;
+            else out[n_out++] = s;
+          }
+          if (n_in == 0 || n_out == 0) continue;
+          Eigen::Vector3d cin = Eigen::Vector3d::Zero(), cout = Eigen::Vector3d::Zero();
+          for (int k = 0; k < n_in; ++k) cin += position(in[k]) / n_in;
+          for (int k = 0; k < n_out; ++k) cout += position(out[k]) / n_out;
+          if (n_in == 1) {
+            emit({in[0], out[0]}, {in[0], out[1]}, {in[0], out[2]}, cin, cout);
+          } else if (n_out == 1) {
+            emit({in[0], out[0]}, {in[1], out[0]}, {in[2], out[0]}, cin, cout);
+          } else {  // 2 - 2: quad (in0-out0, in0-out1, in1-out1, in1-out0)
+            emit({in[0], out[0]}, {in[0], out[1]}, {in[1], out[1]}, cin, cout);
+            emit({in[0], out[0]}, {in[1], out[1]}, {in[1], out[0]}, cin, cout);
+          }
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+TriangleMesh MeshFromVoxels(const std::vector<CarvedVoxel>& voxels, double voxel_size, int smoothing_passes) {
+  if (voxels.empty() || !(voxel_size > 0)) return {};
+  Eigen::Vector3i lo = voxels[0].ijk, hi = voxels[0].ijk;
+  for (const CarvedVoxel& v : voxels) {
+    lo = lo.cwiseMin(v.ijk);
+    hi = hi.cwiseMax(v.ijk);
+  }
+  const int margin = 1 + std::max(0, smoothing_passes);
+  lo.array() -= margin;
+  hi.array() += margin;
+  ScalarVolume vol;
+  vol.nx = hi.x() - lo.x() + 1, vol.ny = hi.y() - lo.y() + 1, vol.nz = hi.z() - lo.z() + 1;
+  vol.origin = (lo.cast<double>() + Eigen::Vector3d::Constant(0.5)) * voxel_size;
+  vol.spacing = voxel_size;
+  const size_t n = static_cast<size_t>(vol.nx) * vol.ny * vol.nz;
+  vol.values.assign(n, 0.f);
+  vol.bgr.assign(n, {{160, 160, 160}});
+  std::vector<char> occupied(n, 0);
+  for (const CarvedVoxel& v : voxels) {
+    const Eigen::Vector3i g = v.ijk - lo;
+    const size_t i = vol.Index(g.x(), g.y(), g.z());
+    vol.values[i] = 1.f;
+    vol.bgr[i] = v.bgr;
+    occupied[i] = 1;
+  }
+  // Colour of unoccupied samples: first occupied sample in the 3x3x3 (then 5x5x5) neighbourhood.
+  for (int radius = 1; radius <= 2; ++radius) {
+    std::vector<char> has = occupied;
+    for (int z = 0; z < vol.nz; ++z)
+      for (int y = 0; y < vol.ny; ++y)
+        for (int x = 0; x < vol.nx; ++x) {
+          const size_t i = vol.Index(x, y, z);
+          if (has[i]) continue;
+          bool found = false;
+          for (int dz = -radius; dz <= radius && !found; ++dz)
+            for (int dy = -radius; dy <= radius && !found; ++dy)
+              for (int dx = -radius; dx <= radius && !found; ++dx) {
+                const int xx = x + dx, yy = y + dy, zz = z + dz;
+                if (xx < 0 || yy < 0 || zz < 0 || xx >= vol.nx || yy >= vol.ny || zz >= vol.nz) continue;
+                const size_t j = vol.Index(xx, yy, zz);
+                if (occupied[j]) {
+                  vol.bgr[i] = vol.bgr[j];
+                  found = true;
+                }
+              }
+          if (found) has[i] = 2;
+        }
+    if (radius == 1) {
+      for (size_t i = 0; i < n; ++i) occupied[i] = occupied[i] || has[i];
+    }
+  }
+  // Separable [1 2 1] / 4 smoothing.
+  std::vector<float> tmp(n);
+  const int64_t strides[3] = {1, vol.nx, static_cast<int64_t>(vol.nx) * vol.ny};
+  const int dims[3] = {vol.nx, vol.ny, vol.nz};
+  for (int pass = 0; pass < smoothing_passes; ++pass) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int z = 0; z < vol.nz; ++z)
+        for (int y = 0; y < vol.ny; ++y)
+          for (int x = 0; x < vol.nx; ++x) {
+            const int c[3] = {x, y, z};
+            const size_t i = vol.Index(x, y, z);
+            const float left = c[axis] > 0 ? vol.values[i - strides[axis]] : 0.f;
+            const float right = c[axis] + 1 < dims[axis] ? vol.values[i + strides[axis]] : 0.f;
+            tmp[i] = 0.25f * left + 0.5f * vol.values[i] + 0.25f * right;
+          }
+      vol.values.swap(tmp);
+    }
+  }
+  return ExtractIsosurface(vol, 0.5f);
+}
+
+bool IsClosedOrientedMesh(const TriangleMesh& mesh) {
+  std::map<std::pair<int32_t, int32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int32_t a = t[k], b = t[(k + 1) % 3];
+      if (a == b) return false;
+      if (++directed[{a, b}] > 1) return false;
+    }
+  }
+  for (const auto& [edge, count] : directed) {
+    (void)count;
+    if (!directed.count({edge.second, edge.first})) return false;
+  }
+  return !mesh.triangles.empty();
+}
+
+}  // namespace objscan

@@ -1,0 +1,46 @@
+// Iso-surface extraction from a scalar volume and from a voxel occupancy set (LCM-free).
+// Implementation: marching tetrahedra — every grid cube is split into the 6 Kuhn tetrahedra around its main
+// diagonal (the same split in every cube, so neighbouring cubes agree on their shared faces), which gives a closed,
+// consistently oriented mesh without the 256-case cube tables (more triangles than classic marching cubes: ~2x).
+// Vertices on the same grid edge are shared. Triangles are oriented with their normal pointing from inside
+// (value > iso) to outside.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "processes/dense_modeler/space_carving.h"
+
+namespace objscan {
+
+// Samples on a regular grid: value(x, y, z) lives at origin + (x, y, z) * spacing (world, mm).
+struct ScalarVolume {
+  int nx = 0, ny = 0, nz = 0;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // mm, world position of sample (0, 0, 0)
+  double spacing = 1.0;                              // mm
+  std::vector<float> values;                         // nx * ny * nz, x fastest
+  std::vector<std::array<uint8_t, 3>> bgr;           // optional colour per sample (empty = grey mesh)
+  size_t Index(int x, int y, int z) const { return (static_cast<size_t>(z) * ny + y) * nx + x; }
+};
+
+struct TriangleMesh {
+  std::vector<Eigen::Vector3f> vertices;       // mm, world
+  std::vector<std::array<uint8_t, 3>> bgr;     // per vertex
+  std::vector<std::array<int32_t, 3>> triangles;
+};
+
+// Iso-surface at `iso` (inside = value > iso). Samples outside the volume count as outside; when the volume has
+// no inside sample on its border the mesh is closed. Vertex colour = colour of the inside end of its edge.
+TriangleMesh ExtractIsosurface(const ScalarVolume& volume, float iso);
+
+// Mesh of a voxel set: occupancy (1 inside, 0 outside) on the voxel centres with a one-voxel empty border plus
+// margin, smoothed smoothing_passes times by a separable [1 2 1]/4 filter, extracted at 0.5. Vertex colours are
+// the voxel colours (nearest occupied voxel for smoothed-in samples).
+TriangleMesh MeshFromVoxels(const std::vector<CarvedVoxel>& voxels, double voxel_size_mm, int smoothing_passes = 1);
+
+// True when every undirected edge is used by exactly two triangles with opposite directions (closed, oriented).
+bool IsClosedOrientedMesh(const TriangleMesh& mesh);
+
+}  // namespace objscan

@@ -1,0 +1,82 @@
+#include "processes/dense_modeler/marching_cubes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace objscan {
+namespace {
+
+ScalarVolume SphereVolume(int n, double spacing, const Eigen::Vector3d& center, double radius) {
+  ScalarVolume vol;
+  vol.nx = vol.ny = vol.nz = n;
+  vol.spacing = spacing;
+  vol.origin = Eigen::Vector3d::Zero();
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const Eigen::Vector3d p = Eigen::Vector3d(x, y, z) * spacing;
+        vol.values.push_back(static_cast<float>(radius - (p - center).norm()));  // > 0 inside
+        vol.bgr.push_back({{static_cast<uint8_t>(x), static_cast<uint8_t>(y), static_cast<uint8_t>(z)}});
+      }
+  return vol;
+}
+
+TEST(MarchingCubes, AnalyticSphereClosedAndAccurate) {
+  const double spacing = 2.0, radius = 25.0;
+  const Eigen::Vector3d center(31.3, 30.7, 32.1);
+  const ScalarVolume vol = SphereVolume(33, spacing, center, radius);
+  const TriangleMesh mesh = ExtractIsosurface(vol, 0.f);
+  ASSERT_GT(mesh.triangles.size(), 100u);
+  EXPECT_TRUE(IsClosedOrientedMesh(mesh));
+  double worst = 0;
+  for (const auto& v : mesh.vertices) worst = std::max(worst, std::abs((v.cast<double>() - center).norm() - radius));
+  EXPECT_LT(worst, 0.5 * spacing);
+  // Outward orientation: signed volume positive and close to the sphere volume.
+  double volume = 0;
+  for (const auto& t : mesh.triangles)
+    volume += mesh.vertices[t[0]].cast<double>().dot(
+                  mesh.vertices[t[1]].cast<double>().cross(mesh.vertices[t[2]].cast<double>())) / 6.0;
+  EXPECT_NEAR(volume, 4.0 / 3.0 * M_PI * radius * radius * radius, 0.03 * 4.0 / 3.0 * M_PI * std::pow(radius, 3));
+  ASSERT_EQ(mesh.bgr.size(), mesh.vertices.size());
+}
+
+TEST(MarchingCubes, VoxelisedSphereClosedWithinHalfVoxel) {
+  const double size = 2.0, radius = 30.0;
+  const Eigen::Vector3d center(1.1, -0.7, 40.3);
+  std::vector<CarvedVoxel> voxels;
+  for (int k = -5; k < 45; ++k)
+    for (int j = -25; j < 25; ++j)
+      for (int i = -25; i < 25; ++i) {
+        const Eigen::Vector3d c = (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5)) * size;
+        if ((c - center).norm() > radius) continue;
+        CarvedVoxel v;
+        v.ijk = Eigen::Vector3i(i, j, k);
+        v.bgr = {{10, 20, 30}};
+        voxels.push_back(v);
+      }
+  const TriangleMesh mesh = MeshFromVoxels(voxels, size, 1);
+  ASSERT_GT(mesh.triangles.size(), 100u);
+  EXPECT_TRUE(IsClosedOrientedMesh(mesh));
+  double worst = 0, sum = 0;
+  for (const auto& v : mesh.vertices) {
+    const double d = std::abs((v.cast<double>() - center).norm() - radius);
+    worst = std::max(worst, d);
+    sum += d;
+  }
+  std::printf("voxelised sphere: %zu vertices, mean |d| %.3f mm, max %.3f mm (voxel %.1f)\n", mesh.vertices.size(),
+              sum / mesh.vertices.size(), worst, size);
+  EXPECT_LT(worst, 0.5 * size);
+  for (const auto& c : mesh.bgr) EXPECT_EQ(c[2], 30);
+}
+
+TEST(MarchingCubes, EmptyAndDegenerateInput) {
+  EXPECT_TRUE(MeshFromVoxels({}, 2.0).triangles.empty());
+  ScalarVolume bad;
+  bad.nx = bad.ny = bad.nz = 3;  // no values
+  EXPECT_TRUE(ExtractIsosurface(bad, 0.f).triangles.empty());
+  EXPECT_FALSE(IsClosedOrientedMesh(TriangleMesh{}));
+}
+
+}  // namespace
+}  // namespace objscan

@@ -1,0 +1,134 @@
+// Real images: Middlebury templeSparseRing (16 views on a ring, calibrated K [R t], metres -> mm). Tracks are
+// replaced by SIFT matches between neighbouring views filtered with the known epipolar geometry. There is no
+// public ground-truth model here, so the check is silhouette consistency: the temple stands on a black background,
+// so the final voxels must project onto foreground pixels. Skipped when the data set is absent.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
+#include <algorithm>
+
+#include "processes/dense_modeler/dense_model.h"
+
+namespace objscan {
+namespace {
+
+std::string DataDir() {
+  const char* src = std::getenv("OBJSCAN_SOURCE_DIR");
+  return std::string(src ? src : "/work/main") + "/../shared/data/middlebury_templeSparseRing";
+}
+
+TEST(Middlebury, TempleSparseRingSilhouetteConsistent) {
+  const std::string dir = DataDir();
+  std::ifstream par(dir + "/templeSR_par.txt");
+  if (!par) GTEST_SKIP() << "no data at " << dir;
+  int n = 0;
+  par >> n;
+  std::vector<DenseView> views;
+  for (int i = 0; i < n; ++i) {
+    std::string name;
+    double k[9], r[9], t[3];
+    par >> name;
+    for (double& x : k) par >> x;
+    for (double& x : r) par >> x;
+    for (double& x : t) par >> x;
+    DenseView v;
+    v.seq = i;
+    v.image = cv::imread(dir + "/" + name, cv::IMREAD_COLOR);
+    ASSERT_FALSE(v.image.empty()) << name;
+    v.camera.width = v.image.cols;
+    v.camera.height = v.image.rows;
+    v.camera.fx = k[0], v.camera.skew = k[1], v.camera.cx = k[2], v.camera.fy = k[4], v.camera.cy = k[5];
+    Eigen::Matrix3d rot;
+    rot << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
+    Eigen::Isometry3d camera_from_world = Eigen::Isometry3d::Identity();
+    camera_from_world.linear() = rot;
+    camera_from_world.translation() = 1000.0 * Eigen::Vector3d(t[0], t[1], t[2]);
+    v.world_from_camera = camera_from_world.inverse();
+    v.gray = GrayFloat(v.image);
+    views.push_back(v);
+  }
+  ASSERT_EQ(n, 16);
+  auto sift = cv::SIFT::create(4000);
+  std::vector<std::vector<cv::KeyPoint>> kps(n);
+  std::vector<cv::Mat> desc(n);
+  for (int i = 0; i < n; ++i) sift->detectAndCompute(views[i].image, cv::noArray(), kps[i], desc[i]);
+  DenseModelOptions options;
+  options.dense.use_world_box = true;
+  options.dense.box_min = Eigen::Vector3d(-73.568, 21.728, -12.445) - Eigen::Vector3d::Constant(10);
+  options.dense.box_max = Eigen::Vector3d(28.855, 181.892, 62.736) + Eigen::Vector3d::Constant(10);
+  options.dense.epipolar_threshold_px = 1.5;
+  options.vote_threshold = 12;
+  VoxelVoteGrid grid(options.votes);
+  cv::BFMatcher matcher(cv::NORM_L2);
+  int64_t points = 0;
+  // Pairs: every view with its two nearest views (camera centres); the file is not in ring order.
+  std::set<std::pair<int, int>> pairs;
+  for (int i = 0; i < n; ++i) {
+    std::vector<std::pair<double, int>> by_distance;
+    for (int j = 0; j < n; ++j)
+      if (j != i)
+        by_distance.push_back(
+            {(views[i].world_from_camera.translation() - views[j].world_from_camera.translation()).norm(), j});
+    std::sort(by_distance.begin(), by_distance.end());
+    for (int k = 0; k < 2; ++k) pairs.insert({std::min(i, by_distance[k].second), std::max(i, by_distance[k].second)});
+  }
+  for (const auto& [i, j] : pairs) {
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(desc[i], desc[j], knn, 2);
+    const Eigen::Matrix3d e = EssentialMatrix(views[i].world_from_camera, views[j].world_from_camera);
+    std::vector<PointMatch> matches;
+    for (const auto& m : knn) {
+      if (m.size() < 2 || m[0].distance > 0.8 * m[1].distance) continue;
+      const Eigen::Vector2d a(kps[i][m[0].queryIdx].pt.x, kps[i][m[0].queryIdx].pt.y);
+      const Eigen::Vector2d b(kps[j][m[0].trainIdx].pt.x, kps[j][m[0].trainIdx].pt.y);
+      if (EpipolarDistancePx(e, views[i].camera, views[j].camera, a, b) > 1.5) continue;
+      matches.push_back({a, b});
+    }
+    DensePairStats st;
+    const auto pts = ComputeDensePair(views[i], views[j], matches, options.dense, &st);
+    grid.AddPoints(pts);
+    points += static_cast<int64_t>(pts.size());
+    std::printf("pair %2d-%2d: baseline %.0f mm, %d features, %zu matches, %d triangles (%d shape, %d depth skipped), %lld px, %zu points\n", i, j,
+                (views[i].world_from_camera.translation() - views[j].world_from_camera.translation()).norm(),
+                st.features, matches.size(), st.triangles, st.triangles_skipped_shape, st.triangles_skipped_depth,
+                static_cast<long long>(st.pixels), pts.size());
+  }
+  std::vector<CarvingView> cviews;
+  for (const DenseView& v : views) cviews.push_back(MakeCarvingView(v.camera, v.world_from_camera, v.image, 1));
+  const FinalModel model = BuildFinalModel(grid, cviews, options);
+  ASSERT_GT(model.voxels.size(), 1000u);
+  // Silhouette consistency: fraction of (voxel, view) projections that land on foreground (max channel > 25).
+  int64_t projections = 0, foreground = 0;
+  for (const CarvedVoxel& v : model.voxels) {
+    const Eigen::Vector3d c = (v.ijk.cast<double>() + Eigen::Vector3d::Constant(0.5)) * grid.voxel_size();
+    for (const DenseView& view : views) {
+      Eigen::Vector2d px;
+      if (!view.camera.Project(view.world_from_camera.inverse() * c, &px) || !view.camera.InImage(px, 1)) continue;
+      const cv::Vec3b bgr = view.image.at<cv::Vec3b>(static_cast<int>(std::lround(px.y())),
+                                                     static_cast<int>(std::lround(px.x())));
+      ++projections;
+      foreground += std::max({bgr[0], bgr[1], bgr[2]}) > 25 ? 1 : 0;
+    }
+  }
+  const double fraction = static_cast<double>(foreground) / std::max<int64_t>(1, projections);
+  std::printf("temple: %lld dense points, %lld seeds, %zu final voxels (%lld carved), %zu triangles, "
+              "%.2f%% of projections on foreground\n",
+              static_cast<long long>(points), static_cast<long long>(model.seeds), model.voxels.size(),
+              static_cast<long long>(model.carving.removed), model.mesh.triangles.size(), 100 * fraction);
+  EXPECT_GT(fraction, 0.95);
+  if (const char* out = std::getenv("OBJSCAN_DENSE_TEST_OUTPUT")) {
+    std::string error;
+    EXPECT_TRUE(WriteModelFiles(out, model, grid.voxel_size(), nullptr, &error)) << error;
+  }
+}
+
+}  // namespace
+}  // namespace objscan
