@@ -1,0 +1,243 @@
+#include "tools/export/export_dataset.h"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace objscan {
+namespace fs = std::filesystem;
+
+namespace {
+bool Fail(std::string* error, const std::string& text) {
+  if (error) *error = text;
+  return false;
+}
+
+bool SameCamera(const PinholeCamera& a, const PinholeCamera& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+         a.skew == b.skew && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 && a.p2 == b.p2 && a.k3 == b.k3;
+}
+
+// Reads an int scalar node (also accepts an integral real, as some writers store them).
+bool ReadInt(const cv::FileNode& node, int* value) {
+  if (node.empty()) return false;
+  if (node.isInt()) {
+    *value = static_cast<int>(node);
+    return true;
+  }
+  if (node.isReal()) {
+    const double d = static_cast<double>(node);
+    if (d != std::floor(d)) return false;
+    *value = static_cast<int>(d);
+    return true;
+  }
+  return false;
+}
+}  // namespace
+
+bool ValidateDatasetWriterOptions(const DatasetWriterOptions& options, std::string* why) {
+  if (options.out_dir.empty()) return Fail(why, "--out: the output folder is required");
+  if (options.every < 1) return Fail(why, "--every must be >= 1");
+  if (options.max_frames < 0) return Fail(why, "--max-frames must be >= 0 (0 = no limit)");
+  return true;
+}
+
+std::string DatasetImageName(int64_t seq) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%06" PRId64 ".png", seq);
+  return buf;
+}
+
+bool DatasetWriter::Open(const DatasetWriterOptions& options, std::string* error) {
+  if (!ValidateDatasetWriterOptions(options, error)) return false;
+  options_ = options;
+  std::error_code ec;
+  fs::create_directories(fs::path(options.out_dir) / "images", ec);
+  if (ec) return Fail(error, "cannot create " + (fs::path(options.out_dir) / "images").string() + ": " + ec.message());
+  return true;
+}
+
+DatasetWriter::FrameResult DatasetWriter::AddFrame(const ImageFrame& frame, std::string* error) {
+  ++summary_.frames_offered;
+  if (LimitReached() || frame.seq % options_.every != 0) {
+    ++summary_.frames_not_selected;
+    return FrameResult::kNotSelected;
+  }
+  if (frame.seq < 0) {
+    Fail(error, "frame with negative seq " + std::to_string(frame.seq));
+    return FrameResult::kError;
+  }
+  if (written_seqs_.count(frame.seq)) {
+    ++summary_.frames_duplicate_seq;
+    return FrameResult::kDuplicateSeq;
+  }
+  if (frame.image.empty() || (frame.image.type() != CV_8UC1 && frame.image.type() != CV_8UC3)) {
+    Fail(error, "frame " + std::to_string(frame.seq) + ": image is empty or not 8-bit gray / BGR");
+    return FrameResult::kError;
+  }
+  const fs::path path = fs::path(options_.out_dir) / "images" / DatasetImageName(frame.seq);
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path.string(), frame.image);
+  } catch (const cv::Exception& e) {
+    Fail(error, "cannot write " + path.string() + ": " + e.what());
+    return FrameResult::kError;
+  }
+  if (!ok) {
+    Fail(error, "cannot write " + path.string());
+    return FrameResult::kError;
+  }
+  written_seqs_.insert(frame.seq);
+  written_.push_back({frame.seq, frame.utime, frame.image.cols, frame.image.rows});
+  ++summary_.frames_written;
+  return FrameResult::kWritten;
+}
+
+void DatasetWriter::AddCamera(const PinholeCamera& camera) {
+  if (!has_camera_) {
+    camera_ = camera;
+    has_camera_ = true;
+  } else if (!SameCamera(camera, camera_)) {
+    ++summary_.calibration_changes;
+  }
+}
+
+void DatasetWriter::AddTruePose(const CameraPoseEstimate& pose) { true_poses_[pose.seq] = pose; }
+
+void DatasetWriter::AddOdometry(const OdometryReading& reading) { odometry_.push_back(reading); }
+
+bool DatasetWriter::Finish(std::string* error) {
+  const fs::path root(options_.out_dir);
+  // Frames in file-name order (= seq order), as the folder reader sees them.
+  std::vector<WrittenFrame> frames = written_;
+  std::sort(frames.begin(), frames.end(), [](const WrittenFrame& a, const WrittenFrame& b) { return a.seq < b.seq; });
+
+  summary_.frames_size_mismatch = 0;
+  if (has_camera_) {
+    for (const auto& f : frames)
+      if (f.width != camera_.width || f.height != camera_.height) ++summary_.frames_size_mismatch;
+    if (!WriteDatasetCalibration((root / "calib.yaml").string(), camera_, error)) return false;
+    summary_.has_calibration = true;
+  }
+
+  if (!true_poses_.empty()) {
+    std::vector<TumPose> lines;
+    summary_.frames_without_true_pose = 0;
+    for (const auto& f : frames) {
+      const auto it = true_poses_.find(f.seq);
+      if (it == true_poses_.end()) {
+        ++summary_.frames_without_true_pose;
+        continue;
+      }
+      TumPose p;
+      p.t = static_cast<double>(it->second.utime) / 1e6;
+      p.position = it->second.world_from_camera.translation();
+      p.orientation = Eigen::Quaterniond(it->second.world_from_camera.linear());
+      lines.push_back(p);
+    }
+    if (!WriteTumPoses((root / "poses_gt.txt").string(), lines,
+                       {"units: mm", "objscan true camera poses (world_from_camera), t = utime / 1e6 s, one per image "
+                                     "in images/ that has one, in file-name order",
+                        "t tx ty tz qx qy qz qw"},
+                       error))
+      return false;
+    summary_.true_poses_written = static_cast<int64_t>(lines.size());
+  }
+
+  if (!odometry_.empty()) {
+    const fs::path path = root / "odometry.txt";
+    std::FILE* out = std::fopen(path.string().c_str(), "w");
+    if (!out) return Fail(error, "cannot write " + path.string());
+    std::fprintf(out,
+                 "# objscan robot odometry (odometry_t), one reading per line in log order. Odometry frame: x forward, "
+                 "y left, z up at the robot's start pose; theta about +z; tilt positive = looking down.\n"
+                 "# t_s utime_us seq x_mm y_mm theta_rad pan_rad tilt_rad v_mm_s omega_rad_s pan_rate_rad_s "
+                 "tilt_rate_rad_s\n");
+    for (const auto& r : odometry_) {
+      std::fprintf(out, "%.6f %" PRId64 " %" PRId64 " %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                   static_cast<double>(r.utime) / 1e6, r.utime, r.seq, r.x_mm, r.y_mm, r.theta_rad, r.pan_rad,
+                   r.tilt_rad, r.v_mm_s, r.omega_rad_s, r.pan_rate_rad_s, r.tilt_rate_rad_s);
+    }
+    const bool ok = std::ferror(out) == 0;
+    if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path.string());
+    summary_.odometry_written = static_cast<int64_t>(odometry_.size());
+  }
+  return true;
+}
+
+bool WriteDatasetCalibration(const std::string& path, const PinholeCamera& camera, std::string* error) {
+  try {
+    cv::FileStorage storage(path, cv::FileStorage::WRITE);
+    if (!storage.isOpened()) return Fail(error, "cannot write " + path);
+    const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, camera.skew, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    const cv::Mat d = (cv::Mat_<double>(1, 5) << camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+    storage << "image_width" << camera.width << "image_height" << camera.height << "camera_matrix" << k
+            << "distortion_coefficients" << d;
+  } catch (const cv::Exception& e) {
+    return Fail(error, "cannot write " + path + ": " + e.what());
+  }
+  return true;
+}
+
+bool ReadDatasetCalibration(const std::string& path, PinholeCamera* camera, std::string* error) {
+  cv::FileStorage storage;
+  try {
+    if (!fs::is_regular_file(path)) return Fail(error, "calibration " + path + " not found");
+    if (!storage.open(path, cv::FileStorage::READ) || !storage.isOpened())
+      return Fail(error, "calibration " + path + " cannot be parsed");
+    PinholeCamera c;
+    c.name = "camera";
+    if (!ReadInt(storage["image_width"], &c.width) || !ReadInt(storage["image_height"], &c.height))
+      return Fail(error, "calibration " + path + ": missing or non-integer image_width / image_height");
+    cv::Mat k;
+    storage["camera_matrix"] >> k;
+    if (k.empty() || k.total() != 9) return Fail(error, "calibration " + path + ": camera_matrix must be 3x3");
+    k.convertTo(k, CV_64F);
+    k = k.reshape(1, 3);
+    if (k.at<double>(1, 0) != 0 || k.at<double>(2, 0) != 0 || k.at<double>(2, 1) != 0 || k.at<double>(2, 2) != 1)
+      return Fail(error, "calibration " + path + ": camera_matrix must look like [fx s cx; 0 fy cy; 0 0 1]");
+    c.fx = k.at<double>(0, 0);
+    c.skew = k.at<double>(0, 1);
+    c.cx = k.at<double>(0, 2);
+    c.fy = k.at<double>(1, 1);
+    c.cy = k.at<double>(1, 2);
+    cv::Mat d;
+    if (!storage["distortion_coefficients"].empty()) storage["distortion_coefficients"] >> d;
+    if (!d.empty()) {
+      d.convertTo(d, CV_64F);
+      d = d.reshape(1, 1);
+      const int n = static_cast<int>(d.total());
+      if (n != 4 && n != 5) return Fail(error, "calibration " + path + ": distortion_coefficients needs 4 or 5 values");
+      double* coeffs[5] = {&c.k1, &c.k2, &c.p1, &c.p2, &c.k3};
+      for (int i = 0; i < n; ++i) *coeffs[i] = d.at<double>(0, i);
+    }
+    std::string why;
+    if (!c.IsValid(&why)) return Fail(error, "calibration " + path + ": " + why);
+    *camera = c;
+  } catch (const cv::Exception& e) {
+    return Fail(error, "calibration " + path + " cannot be parsed: " + e.what());
+  }
+  return true;
+}
+
+bool WriteTumPoses(const std::string& path, const std::vector<TumPose>& poses, const std::vector<std::string>& header,
+                   std::string* error) {
+  std::FILE* out = std::fopen(path.c_str(), "w");
+  if (!out) return Fail(error, "cannot write " + path);
+  for (const auto& h : header) std::fprintf(out, "# %s\n", h.c_str());
+  for (const auto& p : poses) {
+    const Eigen::Quaterniond& q = p.orientation;
+    std::fprintf(out, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.t, p.position.x(), p.position.y(),
+                 p.position.z(), q.x(), q.y(), q.z(), q.w());
+  }
+  const bool ok = std::ferror(out) == 0;
+  if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path);
+  return true;
+}
+
+}  // namespace objscan

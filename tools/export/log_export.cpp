@@ -1,0 +1,126 @@
+#include "tools/export/log_export.h"
+
+#include <lcm/eventlog.h>
+
+#include "common/adapters.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/odometry_t.hpp"
+#include "objscan/pose_t.hpp"
+
+namespace objscan {
+namespace {
+bool Fail(std::string* error, const std::string& text) {
+  if (error) *error = text;
+  return false;
+}
+
+template <class Msg>
+bool Decode(const lcm_eventlog_event_t& event, Msg* msg) {
+  return msg->decode(event.data, 0, event.datalen) == event.datalen;
+}
+}  // namespace
+
+void AddLogExportOptions(OptionParser& parser, LogExportOptions* options) {
+  parser.Add("log", &options->log_path, "LCM log file to read");
+  parser.Add("out", &options->out_dir, "dataset folder to write (created: images/, calib.yaml, poses_gt.txt, ...)");
+  parser.Add("image-channel", &options->image_channel, "channel of image_t frames");
+  parser.Add("info-channel", &options->info_channel, "channel of camera_info_t (the first one -> calib.yaml)");
+  parser.Add("ground-truth-channel", &options->ground_truth_channel, "channel of true pose_t (-> poses_gt.txt)");
+  parser.Add("odometry-channel", &options->odometry_channel, "channel of odometry_t (-> odometry.txt)");
+  parser.Add("every", &options->every, "keep frames whose seq is a multiple of N (1 = all)");
+  parser.Add("max-frames", &options->max_frames, "write at most N frames (0 = all)");
+}
+
+bool ValidateLogExportOptions(const LogExportOptions& options, std::string* why) {
+  if (options.log_path.empty()) return Fail(why, "--log: the LCM log to read is required");
+  if (options.image_channel.empty() || options.info_channel.empty() || options.ground_truth_channel.empty() ||
+      options.odometry_channel.empty())
+    return Fail(why, "channel names must not be empty");
+  DatasetWriterOptions writer;
+  writer.out_dir = options.out_dir;
+  writer.every = options.every;
+  writer.max_frames = options.max_frames;
+  return ValidateDatasetWriterOptions(writer, why);
+}
+
+bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result, std::string* error) {
+  *result = LogExportResult();
+  if (!ValidateLogExportOptions(options, error)) return false;
+  lcm_eventlog_t* log = lcm_eventlog_create(options.log_path.c_str(), "r");
+  if (log == nullptr) return Fail(error, "cannot open LCM log " + options.log_path);
+
+  DatasetWriter writer;
+  DatasetWriterOptions writer_options;
+  writer_options.out_dir = options.out_dir;
+  writer_options.every = options.every;
+  writer_options.max_frames = options.max_frames;
+  if (!writer.Open(writer_options, error)) {
+    lcm_eventlog_destroy(log);
+    return false;
+  }
+  auto reject = [result](const std::string& reason, const std::string& detail) {
+    if (result->rejected[reason]++ == 0) LogWarning("skipped: " + reason + " (" + detail + "); further ones counted");
+  };
+
+  bool ok = true;
+  while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log)) {
+    ++result->events_read;
+    const std::string channel(event->channel, event->channellen);
+    const std::string where = "event " + std::to_string(event->eventnum) + " on " + channel;
+    if (channel == options.image_channel) {
+      if (!writer.LimitReached()) {
+        image_t msg;
+        ImageFrame frame;
+        std::string reason;
+        if (!Decode(*event, &msg)) {
+          writer.CountUndecodable();
+          reject("image: not an image_t", where);
+        } else if (!ImageFromMessage(msg, &frame, &reason)) {
+          writer.CountUndecodable();
+          reject(reason, where + ", seq " + std::to_string(msg.seq));
+        } else {
+          std::string why;
+          const DatasetWriter::FrameResult r = writer.AddFrame(frame, &why);
+          if (r == DatasetWriter::FrameResult::kError) {
+            ok = Fail(error, why);
+          } else if (r == DatasetWriter::FrameResult::kDuplicateSeq) {
+            reject("image: duplicate seq", where + ", seq " + std::to_string(frame.seq));
+          }
+        }
+      }
+    } else if (channel == options.info_channel) {
+      camera_info_t msg;
+      PinholeCamera camera;
+      std::string reason;
+      if (!Decode(*event, &msg)) reject("camera_info: not a camera_info_t", where);
+      else if (!CameraFromMessage(msg, &camera, &reason)) reject(reason, where);
+      else writer.AddCamera(camera);
+    } else if (channel == options.ground_truth_channel) {
+      pose_t msg;
+      CameraPoseEstimate pose;
+      std::string reason;
+      if (!Decode(*event, &msg)) reject("ground truth: not a pose_t", where);
+      else if (!PoseFromMessage(msg, &pose, &reason)) reject(reason, where);
+      else writer.AddTruePose(pose);
+    } else if (channel == options.odometry_channel) {
+      odometry_t msg;
+      OdometryReading reading;
+      std::string reason;
+      if (!Decode(*event, &msg)) reject("odometry: not an odometry_t", where);
+      else if (!OdometryFromMessage(msg, &reading, &reason)) reject(reason, where);
+      else writer.AddOdometry(reading);
+    }
+    lcm_eventlog_free_event(event);
+    if (!ok) break;
+  }
+  lcm_eventlog_destroy(log);
+  if (!ok) return false;
+  if (!writer.Finish(error)) return false;
+  result->dataset = writer.summary();
+  return true;
+}
+
+}  // namespace objscan
