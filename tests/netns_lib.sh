@@ -36,19 +36,21 @@ netns_create() {
 # with multicast routed over the link (LCM udpm with ttl=1).
 netns_create_pair() {
   local a="$1" b="$2" prefix="$3"
+  # Interface names are limited to 15 characters: name the veth ends by this shell's pid, not by the namespaces.
+  local va="vo$$a" vb="vo$$b"
   ip netns add "$a" || { echo "SKIP: cannot create network namespace $a"; exit 77; }
   NETNS_CREATED+=("$a")
   ip netns add "$b" || { echo "SKIP: cannot create network namespace $b"; exit 77; }
   NETNS_CREATED+=("$b")
-  ip link add "veth-$a" netns "$a" type veth peer name "veth-$b" netns "$b"
+  ip link add "$va" netns "$a" type veth peer name "$vb" netns "$b"
   ip -n "$a" link set lo up
   ip -n "$b" link set lo up
-  ip -n "$a" addr add "$prefix.1/24" dev "veth-$a"
-  ip -n "$b" addr add "$prefix.2/24" dev "veth-$b"
-  ip -n "$a" link set "veth-$a" up multicast on
-  ip -n "$b" link set "veth-$b" up multicast on
-  ip -n "$a" route add 224.0.0.0/4 dev "veth-$a"
-  ip -n "$b" route add 224.0.0.0/4 dev "veth-$b"
+  ip -n "$a" addr add "$prefix.1/24" dev "$va"
+  ip -n "$b" addr add "$prefix.2/24" dev "$vb"
+  ip -n "$a" link set "$va" up multicast on
+  ip -n "$b" link set "$vb" up multicast on
+  ip -n "$a" route add 224.0.0.0/4 dev "$va"
+  ip -n "$b" route add 224.0.0.0/4 dev "$vb"
 }
 
 in_ns() {

@@ -14,13 +14,16 @@ fail() { echo "FAIL: $*"; exit 1; }
 
 "$BIN/tracker" --lcm-url "file://$LOG?speed=0" --lcm-url-out "file://$WORK/t1.lcmlog?mode=w" > "$WORK/t1.out" 2>&1 \
   || { cat "$WORK/t1.out"; fail "tracker run 1"; }
-"$BIN/objscan_replay" --log "$LOG" --out "$WORK/r1" > "$WORK/r1.out" 2>&1 || { cat "$WORK/r1.out"; fail "replay 1"; }
+# Both replays write into the same folder (the MODEL message names its files by path), moved aside after each run.
+"$BIN/objscan_replay" --log "$LOG" --out "$WORK/out" > "$WORK/r1.out" 2>&1 || { cat "$WORK/r1.out"; fail "replay 1"; }
+mv "$WORK/out" "$WORK/r1"
 
 # Second run under load: two busy loops for the whole run.
 for _ in 1 2; do (while :; do :; done) & LOAD_PIDS+=($!); done
 "$BIN/tracker" --lcm-url "file://$LOG?speed=0" --lcm-url-out "file://$WORK/t2.lcmlog?mode=w" > "$WORK/t2.out" 2>&1 \
   || { cat "$WORK/t2.out"; fail "tracker run 2"; }
-"$BIN/objscan_replay" --log "$LOG" --out "$WORK/r2" > "$WORK/r2.out" 2>&1 || { cat "$WORK/r2.out"; fail "replay 2"; }
+"$BIN/objscan_replay" --log "$LOG" --out "$WORK/out" > "$WORK/r2.out" 2>&1 || { cat "$WORK/r2.out"; fail "replay 2"; }
+mv "$WORK/out" "$WORK/r2"
 for p in "${LOAD_PIDS[@]}"; do kill "$p"; done; LOAD_PIDS=()
 
 "$BIN/objscan_logtool" count "$WORK/t1.lcmlog"

@@ -9,18 +9,21 @@ int main(int argc, char** argv) {
   objscan::SetLogName("objscan_replay");
   objscan::PipelineReplayOptions options;
   bool tracker_only = false;
+  bool no_dense = false;
   objscan::OptionParser parser("objscan_replay",
                                "Reruns tracker, pose solver and dense modeler over an LCM log, deterministically.");
   parser.Add("log", &options.log_path, "input LCM log");
   parser.Add("out", &options.out_dir, "output folder (replay.lcmlog and the results)");
   parser.Add("tracker-only", &tracker_only, "run only the tracker");
+  parser.Add("no-dense", &no_dense, "run tracker and pose solver, not the dense modeler");
   int exit_code = 0;
   if (!objscan::ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
   if (options.log_path.empty() || options.out_dir.empty()) {
     objscan::LogError("--log and --out are required");
     return 2;
   }
-  options.run_pose_solver = options.run_dense_modeler = !tracker_only;
+  options.run_pose_solver = !tracker_only;
+  options.run_dense_modeler = !tracker_only && !no_dense;
   objscan::PipelineReplayResult result;
   std::string error;
   if (!objscan::RunPipelineReplay(options, &result, &error)) {
