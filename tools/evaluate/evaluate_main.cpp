@@ -4,7 +4,9 @@
 //   objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] [--align EST.txt TRUTH.txt]
 //       accuracy (model -> truth) p50/p90/max and completeness (truth points within D of the model);
 //       --min-z drops truth points below Z (e.g. the part hidden against the floor); --align first maps the model
-//       with the Sim(3) that aligns the estimated trajectory to the true one.
+//       with the Sim(3) that aligns the estimated trajectory to the true one; --visible-from POSES.txt keeps only
+//       truth points seen by >= --min-views (2) of those cameras (--intrinsics fx,fy,cx,cy,w,h; default the sim's
+//       800,800,319.5,239.5,640,480), so completeness is measured on the visible surface (needs truth normals).
 // Output is one "key value" pair per line (easy to grep in tests and scripts).
 #include <cmath>
 #include <cstdio>
@@ -26,7 +28,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
-                 "[--align EST TRUTH]\n");
+                 "[--align EST TRUTH] [--visible-from POSES] [--min-views N] [--intrinsics fx,fy,cx,cy,w,h]\n");
     return 2;
   }
   const std::string command = argv[1];
@@ -52,20 +54,39 @@ int main(int argc, char** argv) {
   }
   if (command == "surface") {
     double threshold = 2.0, min_z = -1e300;
-    std::string align_est, align_truth;
+    std::string align_est, align_truth, visible_from;
+    ViewIntrinsics intrinsics;
+    int min_views = 2;
     for (int i = 4; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--threshold" && i + 1 < argc) threshold = std::atof(argv[++i]);
       else if (a == "--min-z" && i + 1 < argc) min_z = std::atof(argv[++i]);
+      else if (a == "--visible-from" && i + 1 < argc) visible_from = argv[++i];
+      else if (a == "--min-views" && i + 1 < argc) min_views = std::atoi(argv[++i]);
+      else if (a == "--intrinsics" && i + 1 < argc) {
+        if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
+                        &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
+          return Fail("--intrinsics wants fx,fy,cx,cy,width,height");
+      }
       else if (a == "--align" && i + 2 < argc) {
         align_est = argv[++i];
         align_truth = argv[++i];
       } else return Fail("unknown option " + a);
     }
-    std::vector<Eigen::Vector3d> model, truth, visible;
-    if (!ReadPlyPoints(argv[2], &model, &error) || !ReadPlyPoints(argv[3], &truth, &error)) return Fail(error);
-    for (const auto& p : truth)
-      if (p.z() >= min_z) visible.push_back(p);
+    std::vector<Eigen::Vector3d> model, truth, truth_normals, visible;
+    if (!ReadPlyPoints(argv[2], &model, &error) ||
+        !ReadPlyPoints(argv[3], &truth, &error, visible_from.empty() ? nullptr : &truth_normals))
+      return Fail(error);
+    std::vector<int> candidates;
+    if (visible_from.empty()) {
+      for (size_t i = 0; i < truth.size(); ++i) candidates.push_back(static_cast<int>(i));
+    } else {
+      std::vector<StampedPose> views;
+      if (!ReadTumTrajectory(visible_from, &views, &error)) return Fail(error);
+      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, 0.1);
+    }
+    for (int i : candidates)
+      if (truth[i].z() >= min_z) visible.push_back(truth[i]);
     if (!align_est.empty()) {
       std::vector<StampedPose> est, tru;
       if (!ReadTumTrajectory(align_est, &est, &error) || !ReadTumTrajectory(align_truth, &tru, &error))

@@ -85,7 +85,8 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
   return true;
 }
 
-bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error) {
+bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
+                   std::vector<Eigen::Vector3d>* normals) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     *error = "cannot read " + path;
@@ -149,6 +150,19 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
     *error = path + ": vertex has no x y z";
     return false;
   }
+  int nxi = -1, nyi = -1, nzi = -1;
+  for (size_t i = 0; i < props.size(); ++i) {
+    if (props[i].name == "nx") nxi = static_cast<int>(i);
+    if (props[i].name == "ny") nyi = static_cast<int>(i);
+    if (props[i].name == "nz") nzi = static_cast<int>(i);
+  }
+  if (normals) {
+    if (nxi < 0 || nyi < 0 || nzi < 0) {
+      *error = path + ": vertex has no nx ny nz";
+      return false;
+    }
+    normals->clear();
+  }
   points->clear();
   points->reserve(static_cast<size_t>(vertex_count));
   if (format == "ascii") {
@@ -162,6 +176,7 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
         return false;
       }
       points->emplace_back(values[xi], values[yi], values[zi]);
+      if (normals) normals->emplace_back(values[nxi], values[nyi], values[nzi]);
     }
   } else if (format == "binary_little_endian") {
     std::vector<int> offsets;
@@ -190,6 +205,7 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
     for (long v = 0; v < vertex_count; ++v) {
       if (!in.read(row.data(), stride)) break;
       points->emplace_back(read_value(xi), read_value(yi), read_value(zi));
+      if (normals) normals->emplace_back(read_value(nxi), read_value(nyi), read_value(nzi));
     }
   } else {
     *error = path + ": unsupported PLY format " + format;
@@ -201,6 +217,33 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
     return false;
   }
   return true;
+}
+
+std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points,
+                                      const std::vector<Eigen::Vector3d>& normals,
+                                      const std::vector<StampedPose>& cameras, const ViewIntrinsics& intrinsics,
+                                      int min_views, double min_cos) {
+  std::vector<int> visible;
+  if (points.size() != normals.size()) return visible;
+  std::vector<Eigen::Isometry3d> camera_from_world;
+  camera_from_world.reserve(cameras.size());
+  for (const auto& c : cameras) camera_from_world.push_back(c.world_from_camera.inverse());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d n = normals[i].normalized();
+    int views = 0;
+    for (size_t k = 0; k < cameras.size() && views < min_views; ++k) {
+      const Eigen::Vector3d to_camera = cameras[k].world_from_camera.translation() - points[i];
+      if (n.dot(to_camera) < min_cos * to_camera.norm()) continue;
+      const Eigen::Vector3d p = camera_from_world[k] * points[i];
+      if (p.z() <= 0) continue;
+      const double u = intrinsics.fx * p.x() / p.z() + intrinsics.cx;
+      const double v = intrinsics.fy * p.y() / p.z() + intrinsics.cy;
+      if (u < 0 || v < 0 || u > intrinsics.width - 1 || v > intrinsics.height - 1) continue;
+      ++views;
+    }
+    if (views >= min_views) visible.push_back(static_cast<int>(i));
+  }
+  return visible;
 }
 
 namespace {

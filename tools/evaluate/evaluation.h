@@ -34,8 +34,26 @@ struct TrajectoryEvaluation {
 bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const std::vector<StampedPose>& truth,
                              bool with_scale, double max_dt_s, TrajectoryEvaluation* out, std::string* error);
 
-// Reads the vertices (x y z) of an ASCII or binary_little_endian PLY (float or double coordinates).
-bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error);
+// Reads the vertices (x y z) of an ASCII or binary_little_endian PLY (float or double coordinates). With normals
+// non-null, also the vertex normals (nx ny nz); false when the file has none.
+bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
+                   std::vector<Eigen::Vector3d>* normals = nullptr);
+
+// Pinhole intrinsics of the views used to decide which part of a true surface was visible.
+struct ViewIntrinsics {
+  double fx = 800, fy = 800;     // px
+  double cx = 319.5, cy = 239.5; // px
+  int width = 640, height = 480; // px
+};
+
+// Indices of the surface points (with outward normals) seen by at least min_views of the cameras: in front of the
+// camera, inside the image, and facing it (cosine between normal and direction to the camera >= min_cos).
+// No occlusion test: exact for convex objects (sphere, box, cylinder); for non-convex ones the visible set is
+// over-estimated, so completeness computed on it is conservative.
+std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points,
+                                      const std::vector<Eigen::Vector3d>& normals,
+                                      const std::vector<StampedPose>& cameras, const ViewIntrinsics& intrinsics,
+                                      int min_views, double min_cos);
 
 struct SurfaceEvaluation {
   int num_model = 0;

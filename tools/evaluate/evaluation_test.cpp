@@ -94,5 +94,43 @@ TEST(EvaluationTest, ReadsAsciiAndBinaryPly) {
   std::remove(Temp("b.ply").c_str());
 }
 
+// A unit sphere of points seen by cameras on a ring above it: the visible set is the cap facing the ring, never the
+// underside, and a single view is not enough when two are required.
+TEST(EvaluationTest, VisibleSurfacePointsKeepsTheCapFacingTheCameras) {
+  std::vector<Eigen::Vector3d> points, normals;
+  for (int i = 0; i < 2000; ++i) {
+    const double z = -1 + 2 * (i + 0.5) / 2000, phi = i * 2.399963;  // Fibonacci sphere, radius 100 mm
+    const Eigen::Vector3d n(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+    normals.push_back(n);
+    points.push_back(100 * n);
+  }
+  std::vector<StampedPose> cameras;
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * M_PI / 4;
+    const Eigen::Vector3d c(800 * std::cos(a), 800 * std::sin(a), 400);
+    const Eigen::Vector3d forward = (-c).normalized();  // looks at the centre
+    const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d down = forward.cross(right);
+    StampedPose pose;
+    pose.world_from_camera.linear() << right, down, forward;
+    pose.world_from_camera.translation() = c;
+    cameras.push_back(pose);
+  }
+  ViewIntrinsics intrinsics;
+  const std::vector<int> visible = VisibleSurfacePoints(points, normals, cameras, intrinsics, 2, 0.1);
+  ASSERT_FALSE(visible.empty());
+  int lower = 0;
+  for (int i : visible) {
+    if (points[i].z() < -90) ++lower;  // normal more than ~64 deg below the horizon
+  }
+  EXPECT_EQ(lower, 0);                                          // the underside faces away from every camera
+  EXPECT_GT(visible.size(), 1000u);                             // more than a hemisphere: cameras look from all sides
+  EXPECT_LT(visible.size(), 1900u);                             // but not the bottom cap
+  // One camera cannot give two views.
+  std::vector<StampedPose> one(cameras.begin(), cameras.begin() + 1);
+  EXPECT_TRUE(VisibleSurfacePoints(points, normals, one, intrinsics, 2, 0.1).empty());
+  EXPECT_FALSE(VisibleSurfacePoints(points, normals, one, intrinsics, 1, 0.1).empty());
+}
+
 }  // namespace
 }  // namespace objscan
