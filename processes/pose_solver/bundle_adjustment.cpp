@@ -280,9 +280,22 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   else if (options.loss == "cauchy") loss = std::make_unique<ceres::CauchyLoss>(options.loss_scale_px);
   const Intrinsics k = MakeIntrinsics(camera);
   const FourDofGeometry g = MakeGeometry(robot);
+  // Points seen by fewer than two distinct frames carry no information (free, they only make the Schur complement
+  // singular; fixed, they would pin the camera to their old estimate): their observations are left out and the
+  // points returned unchanged. A fixed point (point_fixed) keeps even a single observation.
+  std::vector<int> point_first_frame(num_points, -1);
+  std::vector<uint8_t> point_multi(num_points, 0);
+  for (const auto& o : p->observations) {
+    if (o.frame < 0 || o.frame >= num_frames || o.point < 0 || o.point >= num_points) continue;
+    if (point_first_frame[o.point] < 0) point_first_frame[o.point] = o.frame;
+    else if (point_first_frame[o.point] != o.frame) point_multi[o.point] = 1;
+  }
+  for (int i = 0; i < num_points && i < static_cast<int>(p->point_fixed.size()); ++i)
+    if (p->point_fixed[i]) point_multi[i] = 1;
   std::vector<uint8_t> frame_used(num_frames, 0), point_used(num_points, 0);
   for (const auto& o : p->observations) {
     if (o.frame < 0 || o.frame >= num_frames || o.point < 0 || o.point >= num_points) continue;
+    if (!point_multi[o.point]) continue;
     double* c = &cams[static_cast<size_t>(o.frame) * cam_size];
     double* x = &pts[3 * static_cast<size_t>(o.point)];
     ceres::CostFunction* cost;

@@ -90,7 +90,9 @@ bool RefinePose(const PinholeCamera& camera, const RobotGeometry& robot, const B
   std::string message;
 };
 
-// Runs the adjustment in place. Observations referring to out-of-range indices are ignored. Never throws for bad
+// Runs the adjustment in place. Observations referring to out-of-range indices are ignored, and so are the
+// observations of a point seen by fewer than two distinct frames unless it is point_fixed (no depth: such a point
+// is returned unchanged; kept free it would make the Schur complement singular). Never throws for bad
 // numbers: non-finite inputs make it return ok = false without touching the problem.
 BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& robot, const BaOptions& options,
                               BaProblem* problem);

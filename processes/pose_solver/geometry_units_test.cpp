@@ -166,6 +166,51 @@ TEST(BundleAdjustment, ReducesErrorSixAndFourDof) {
   }
 }
 
+TEST(BundleAdjustment, IgnoresPointsSeenByOneFrame) {
+  // Points with a single observation carry no depth: they must come back unchanged and not disturb the solve.
+  const SyntheticOrbit s = Scene(0.3);
+  BaProblem p;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0, 1);
+  const std::vector<int> frames = {0, 10, 20, 30};
+  for (int f : frames) {
+    Eigen::Isometry3d w = s.world_from_camera[f];
+    if (f != 0) w.translation() += 2.0 * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    p.world_from_camera.push_back(w);
+  }
+  for (const auto& x : s.points) p.points.push_back(x + 1.0 * Eigen::Vector3d(g(rng), g(rng), g(rng)));
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const Eigen::Isometry3d cw = s.world_from_camera[frames[k]].inverse();
+    for (size_t i = 0; i < s.points.size(); ++i) {
+      Eigen::Vector2d uv;
+      if (!s.camera.Project(cw * s.points[i], &uv) || !s.camera.InImage(uv)) continue;
+      p.observations.push_back({static_cast<int>(k), static_cast<int>(i), uv + 0.3 * Eigen::Vector2d(g(rng), g(rng))});
+    }
+  }
+  // 50 single-view points, 20 mm off their rays' true point, seen by frame 2 only.
+  const size_t first_single = p.points.size();
+  const Eigen::Isometry3d cw2 = s.world_from_camera[frames[2]].inverse();
+  for (size_t i = 0; i < s.points.size() && p.points.size() < first_single + 50; i += 7) {
+    Eigen::Vector2d uv;
+    if (!s.camera.Project(cw2 * s.points[i], &uv) || !s.camera.InImage(uv)) continue;
+    p.points.push_back(s.points[i] + Eigen::Vector3d(20, 0, 0));
+    p.observations.push_back({2, static_cast<int>(p.points.size() - 1), uv});
+  }
+  const std::vector<Eigen::Vector3d> before(p.points.begin() + first_single, p.points.end());
+  p.frame_fix.assign(frames.size(), FrameFix::kFree);
+  p.frame_fix[0] = FrameFix::kFixed;
+  p.distance_frame_a = 0;
+  p.distance_frame_b = 3;
+  p.distance_mm = (s.world_from_camera[frames[3]].translation() - s.world_from_camera[0].translation()).norm();
+  const BaSummary sum = RunBundleAdjustment(s.camera, s.robot, BaOptions(), &p);
+  ASSERT_TRUE(sum.ok) << sum.message;
+  for (size_t i = 0; i < before.size(); ++i) EXPECT_EQ(p.points[first_single + i], before[i]);
+  double pos = 0;
+  for (size_t k = 0; k < frames.size(); ++k)
+    pos = std::max(pos, (p.world_from_camera[k].translation() - s.world_from_camera[frames[k]].translation()).norm());
+  EXPECT_LT(pos, 1.0);
+}
+
 TEST(BundleAdjustment, RejectsNonFiniteInput) {
   const SyntheticOrbit s = Scene();
   BaProblem p;

@@ -43,6 +43,8 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.local_fixed_keyframes < 1) e << "local fixed keyframes must be >= 1; ";
   if (o.local_ba_iterations < 0 || o.global_ba_iterations < 0 || o.init_ba_iterations < 1)
     e << "BA iterations must be >= 0 (init >= 1); ";
+  if (!(o.global_ba_function_tolerance > 0 && o.global_ba_function_tolerance < 1))
+    e << "global BA function tolerance must be in (0, 1); ";
   if (o.ba_loss != "huber" && o.ba_loss != "cauchy") e << "ba loss must be huber or cauchy; ";
   if (!(o.ba_loss_px > 0)) e << "ba loss scale must be > 0; ";
   if (!(o.max_landmark_error_px > 0)) e << "max landmark error must be > 0; ";
@@ -173,9 +175,16 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
 
   FrameResult result;
   if (phase_ == Phase::kInitializing) {
+    const int window_start = init_start_;
     if (TryInitialize(f)) {
       result.initialized_now = true;
       result.keyframe = true;
+      // Frames of the preliminary window before the span: PnP against the new map, nearest first.
+      for (int g = span_first_ - 1; g >= window_start; --g)
+        if (!frames_[g].posed && frames_[g + 1].posed && RegisterAgainstMap(g, frames_[g + 1].world_from_camera))
+          frames_[g].status = frames_[span_first_].status;
+      for (int g = window_start; g < f; ++g)
+        if (frames_[g].posed) result.late_poses.push_back(Estimate(g));
     }
   } else if ([&] {
                const int64_t t0 = MonotonicMicros();
@@ -215,6 +224,7 @@ bool PoseEstimator::TryInitialize(int newest) {
   if (!SelectStartSpan(lists, options_.start_span, &first, &last, &common)) return false;
   const int64_t start_us = MonotonicMicros();
   const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
+  if (ok) span_first_ = first + first_considered;
   init_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   return ok;
 }
@@ -266,16 +276,11 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   TriangulateNew(last);
   for (const auto& kv : points_)
     if (!existing.count(kv.first)) new_points.push_back(kv.first);
-  // Metric scale and world frame from odometry.
+  // Metric scale and world frame from odometry. Scale: median over the span's steps of odometry / visual step
+  // length (robust to a time-stamping offset of the odometry, which corrupts the steps next to a clamped reading).
   const Frame& a = frames_[first];
-  double odo_sum = 0, vis_sum = 0;
-  bool have_odometry = a.has_odometry;
-  for (int f = first + 1; f <= last; ++f) {
-    if (!frames_[f].has_odometry) continue;
-    odo_sum += (frames_[f].odometry_world_from_camera.translation() - a.odometry_world_from_camera.translation()).norm();
-    vis_sum += (frames_[f].world_from_camera.translation() - a.world_from_camera.translation()).norm();
-  }
-  have_odometry = have_odometry && odo_sum > 1e-6 && vis_sum > 1e-9;
+  double odo_scale = 0;
+  const bool have_odometry = a.has_odometry && OdometryStepScale(first, last, &odo_scale);
   Eigen::Isometry3d anchor = Eigen::Isometry3d::Identity();  // desired world_from_camera of frame `first`
   bool have_anchor = false;
   if (recovering_ && last_good_ >= 0 && a.has_odometry && frames_[last_good_].has_odometry) {
@@ -286,7 +291,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     anchor = a.odometry_world_from_camera;
     have_anchor = true;
   }
-  const double scale = have_odometry ? odo_sum / vis_sum : 1.0;
+  const double scale = have_odometry ? odo_scale : 1.0;
   scale_source_ = have_odometry ? ScaleSource::kOdometry : ScaleSource::kNone;
   {
     Eigen::Isometry3d scaled = a.world_from_camera;
@@ -294,6 +299,10 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     const Eigen::Isometry3d t = (have_anchor ? anchor : a.world_from_camera) * scaled.inverse();
     ApplySimilarity(scale, t, first, last, new_points);
   }
+  // kSixDof: the camera height above a floor plane seen in the span fixes the scale far better than the odometry
+  // over a short span (about the first camera: the anchor is kept).
+  if (options_.model == MotionModel::kSixDof && options_.use_floor_for_scale)
+    RescaleToFloorHeight(first, last, new_points, first);
   if (options_.model == MotionModel::kFourDof) {
     std::vector<int64_t> floor_ids;
     Eigen::Vector4d plane;
@@ -689,10 +698,18 @@ void PoseEstimator::GlobalBundleAdjustment() {
     if (g == gauge_frame_b_) gauge_b_index = static_cast<int>(k);
     bp.world_from_camera.push_back(fr.world_from_camera);
     bp.frame_fix.push_back(FrameFix::kFree);
+    // Observations further than the PnP inlier threshold from the current map are left out: they were never checked
+    // (points triangulated after the frame's PnP) and in the robust loss' linear region they only slow it down.
+    const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
     for (size_t i = 0; i < fr.ids.size(); ++i) {
       if (fr.outlier[i]) continue;
       auto it = point_index.find(fr.ids[i]);
-      if (it != point_index.end()) bp.observations.push_back({static_cast<int>(k), it->second, fr.pixels[i]});
+      if (it == point_index.end()) continue;
+      Eigen::Vector2d uv;
+      if (!ProjectIdeal(camera_, cw * bp.points[it->second], &uv) ||
+          (uv - fr.pixels[i]).norm() > options_.pnp.inlier_threshold_px)
+        continue;
+      bp.observations.push_back({static_cast<int>(k), it->second, fr.pixels[i]});
     }
   }
   if (gauge_index < 0) gauge_index = 0;
@@ -704,7 +721,9 @@ void PoseEstimator::GlobalBundleAdjustment() {
     bp.distance_mm =
         (bp.world_from_camera[gauge_index].translation() - bp.world_from_camera[gauge_b_index].translation()).norm();
   }
-  const BaSummary s = RunBundleAdjustment(camera_, options_.robot, MakeBaOptions(options_.global_ba_iterations), &bp);
+  BaOptions global_options = MakeBaOptions(options_.global_ba_iterations);
+  global_options.function_tolerance = options_.global_ba_function_tolerance;
+  const BaSummary s = RunBundleAdjustment(camera_, options_.robot, global_options, &bp);
   last_message_ = "global BA: " + s.message;
   if (!s.ok) return;
   for (size_t k = 0; k < frame_list.size(); ++k) frames_[frame_list[k]].world_from_camera = bp.world_from_camera[k];
@@ -733,30 +752,38 @@ void PoseEstimator::GlobalBundleAdjustment() {
 }
 
 void PoseEstimator::RescaleSixDof(int first_frame) {
-  if (options_.use_floor_for_scale && RescaleToFloorHeight()) return;
+  if (options_.use_floor_for_scale && gauge_frame_ >= 0) {
+    std::vector<int64_t> all;
+    all.reserve(points_.size());
+    for (const auto& kv : points_) all.push_back(kv.first);
+    if (RescaleToFloorHeight(0, static_cast<int>(frames_.size()) - 1, all, gauge_frame_)) return;
+  }
   if (options_.refine_scale_with_odometry) RescaleToOdometryPath(first_frame);
 }
 
-bool PoseEstimator::RescaleToFloorHeight() {
-  if (gauge_frame_ < 0 || !frames_[gauge_frame_].posed) return false;
-  std::vector<int64_t> all;
-  all.reserve(points_.size());
-  for (const auto& kv : points_) all.push_back(kv.first);
+bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids,
+                                         int pivot_frame) {
+  if (pivot_frame < 0 || !frames_[pivot_frame].posed) return false;
   std::vector<int64_t> floor_ids;
   Eigen::Vector4d plane;
-  if (!DetectFloor(all, &floor_ids, &plane)) return false;
-  const Eigen::Vector3d c0 = frames_[gauge_frame_].world_from_camera.translation();
+  if (!DetectFloor(point_ids, &floor_ids, &plane)) return false;
+  const Eigen::Vector3d c0 = frames_[pivot_frame].world_from_camera.translation();
   Eigen::Vector3d n = plane.head<3>();
   double d = plane(3);
   if (n.dot(c0) + d < 0) {
     n = -n;
     d = -d;
   }
+  // Expected height from each camera's tilt relative to the plane (the world z need not be vertical).
+  const Eigen::Matrix3d level = Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   double measured = 0, expected = 0;
-  for (const Frame& fr : frames_) {
+  for (int f = first_frame; f <= last_frame; ++f) {
+    const Frame& fr = frames_[f];
     if (!fr.posed) continue;
     measured += n.dot(fr.world_from_camera.translation()) + d;
-    expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, fr.world_from_camera))
+    Eigen::Isometry3d levelled = Eigen::Isometry3d::Identity();
+    levelled.linear() = level * fr.world_from_camera.linear();
+    expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, levelled))
                     .translation()
                     .z();
   }
@@ -764,9 +791,28 @@ bool PoseEstimator::RescaleToFloorHeight() {
   const double s = expected / measured;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = c0 - s * c0;
-  ApplySimilarity(s, t, 0, static_cast<int>(frames_.size()) - 1, all);
+  ApplySimilarity(s, t, first_frame, last_frame, point_ids);
   scale_source_ = ScaleSource::kCameraHeight;
   return true;
+}
+
+bool PoseEstimator::OdometryStepScale(int first_frame, int last_frame, double* scale) const {
+  std::vector<double> ratios;
+  for (int f = std::max(1, first_frame + 1); f <= last_frame; ++f) {
+    const Frame& a = frames_[f - 1];
+    const Frame& b = frames_[f];
+    if (!a.posed || !b.posed || !a.has_odometry || !b.has_odometry) continue;
+    const double odo = (b.odometry_world_from_camera.translation() - a.odometry_world_from_camera.translation()).norm();
+    const double vis = (b.world_from_camera.translation() - a.world_from_camera.translation()).norm();
+    if (odo > 1e-3 && vis > 1e-9) ratios.push_back(odo / vis);
+  }
+  if (ratios.empty()) return false;
+  const size_t m = ratios.size() / 2;
+  std::nth_element(ratios.begin(), ratios.begin() + m, ratios.end());
+  double med = ratios[m];
+  if (ratios.size() % 2 == 0) med = 0.5 * (med + *std::max_element(ratios.begin(), ratios.begin() + m));
+  *scale = med;
+  return std::isfinite(med) && med > 0;
 }
 
 double PoseEstimator::RescaleToOdometryPath(int first_frame) {
@@ -791,37 +837,49 @@ double PoseEstimator::RescaleToOdometryPath(int first_frame) {
   return s;
 }
 
+bool PoseEstimator::RegisterAgainstMap(int f, const Eigen::Isometry3d& prior) {
+  Frame& fr = frames_[f];
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Eigen::Vector2d> px;
+  std::vector<int> feature_index;
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    auto it = points_.find(fr.ids[i]);
+    if (it == points_.end()) continue;
+    pts.push_back(it->second.x);
+    px.push_back(fr.pixels[i]);
+    feature_index.push_back(static_cast<int>(i));
+  }
+  PnpOptions po = options_.pnp;
+  po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
+  PnpResult r;
+  if (static_cast<int>(pts.size()) < po.min_inliers || !SolvePnp(camera_, options_.robot, pts, px, &prior, po, &r))
+    return false;
+  std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
+  std::vector<uint8_t> is_inlier(pts.size(), 0);
+  for (int i : r.inliers) is_inlier[i] = 1;
+  for (size_t c = 0; c < pts.size(); ++c)
+    if (!is_inlier[c]) fr.outlier[feature_index[c]] = 1;
+  fr.posed = true;
+  fr.world_from_camera = r.world_from_camera;
+  fr.inliers = static_cast<int>(r.inliers.size());
+  fr.rms = r.rms_px;
+  fr.status = PoseStatus::kTracking;
+  return true;
+}
+
 std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
   const int64_t start_us = MonotonicMicros();
   if (map_initialized_) {
     // Register frames never posed (before the first span, lost stretches) against the map.
     for (int f = 0; f < static_cast<int>(frames_.size()); ++f) {
-      Frame& fr = frames_[f];
-      if (fr.posed) continue;
+      if (frames_[f].posed) continue;
       int nearest = -1;
       for (int d = 1; d < static_cast<int>(frames_.size()) && nearest < 0; ++d) {
         if (f + d < static_cast<int>(frames_.size()) && frames_[f + d].posed) nearest = f + d;
         else if (f - d >= 0 && frames_[f - d].posed) nearest = f - d;
       }
       if (nearest < 0) break;
-      std::vector<Eigen::Vector3d> pts;
-      std::vector<Eigen::Vector2d> px;
-      for (size_t i = 0; i < fr.ids.size(); ++i) {
-        auto it = points_.find(fr.ids[i]);
-        if (it == points_.end()) continue;
-        pts.push_back(it->second.x);
-        px.push_back(fr.pixels[i]);
-      }
-      PnpOptions po = options_.pnp;
-      po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
-      PnpResult r;
-      const Eigen::Isometry3d prior = frames_[nearest].world_from_camera;
-      if (static_cast<int>(pts.size()) >= po.min_inliers &&
-          SolvePnp(camera_, options_.robot, pts, px, &prior, po, &r)) {
-        fr.posed = true;
-        fr.world_from_camera = r.world_from_camera;
-        fr.status = PoseStatus::kTracking;
-      }
+      RegisterAgainstMap(f, frames_[nearest].world_from_camera);
     }
     GlobalBundleAdjustment();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);

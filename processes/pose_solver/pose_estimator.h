@@ -6,10 +6,13 @@
 //     rotations and shape, both depth-reversal candidates are upgraded to perspective and bundle-adjusted, the better
 //     one is kept. Metric scale and world frame:
 //       kSixDof:  world_from_camera of the span's first frame = the odometry's WorldFromCamera at that frame; scale =
-//                 odometry baselines / visual baselines over the span (SCALE_ODOMETRY). Refined at keyframes during
-//                 the first online_scale_frames frames and at Finish(): if a floor plane is seen among the landmarks
-//                 (use_floor_for_scale), by the camera height above it (SCALE_CAMERA_HEIGHT), else by the odometry
-//                 path length (refine_scale_with_odometry).
+//                 if a floor plane is seen among the span's landmarks (use_floor_for_scale), the camera height above
+//                 it (SCALE_CAMERA_HEIGHT), else the median over the span's steps of odometry / visual step length
+//                 (SCALE_ODOMETRY; the median ignores steps spoilt by an odometry time-stamping offset). Refined at
+//                 keyframes during the first online_scale_frames frames and at Finish(): by the camera height above
+//                 the floor plane when one is seen, else by the odometry path length (refine_scale_with_odometry).
+//     When it succeeds, the earlier frames of the window (the span, and frames before it that PnP against the new
+//     map accepts) are returned in FrameResult::late_poses so that every frame gets a published pose.
 //       kFourDof: world = odometry frame; if a floor plane is seen among the landmarks (>= min_floor_points within
 //                 floor_tolerance_mm, normal within 20 deg of vertical), the map is levelled onto it (floor z = 0) and
 //                 scaled so that the cameras sit at the robot model's height (SCALE_CAMERA_HEIGHT); floor landmarks
@@ -26,8 +29,9 @@
 //     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
 //     last good frame and the new span (no Sim(3) merge from common landmarks: KLT ids do not reappear). The first
 //     pose after recovery has status RELOCALIZED.
-//  4. Finish(): frames never posed get PnP against the final map, then global BA over all posed frames and
-//     landmarks, scale refinement (kSixDof with odometry), final poses for every frame.
+//  4. Finish(): frames never posed get PnP against the final map, then global BA over the keyframes (or all posed
+//     frames) and landmarks (observations beyond the PnP inlier threshold left out), pose refits of the other
+//     frames, scale refinement (kSixDof), final poses for every frame.
 // Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
 // Memory grows with the stream (all frames' observations are kept for the final adjustment).
 #pragma once
@@ -66,6 +70,8 @@ struct PoseEstimatorOptions {
   int local_fixed_keyframes = 4;             // older keyframes (nearest first) held fixed in the windowed BA
   bool global_ba_all_frames = false;         // final BA over every frame (slow) instead of keyframes + pose refits
   int global_ba_iterations = 40;             // Ceres iterations of the final BA
+  double global_ba_function_tolerance = 1e-5;  // final BA stops when a step changes the cost by less than this
+                                               // fraction (the Huber loss' IRLS tail creeps at ~1e-6 per step)
   int init_ba_iterations = 50;               // Ceres iterations of the span BA
   std::string ba_loss = "huber";             // robust loss: "huber" or "cauchy"
   double ba_loss_px = 1.0;                   // px, robust loss scale
@@ -115,6 +121,10 @@ struct FrameResult {
   CameraPoseEstimate pose;     // the pose to publish for this frame now
   bool keyframe = false;       // a keyframe was added (publish landmarks)
   bool initialized_now = false;  // the preliminary phase finished with this frame
+  // With initialized_now: poses of the EARLIER frames of the preliminary window that the new map registered (the
+  // span and the frames before it that PnP against the map accepts), in frame order, to publish now (their first
+  // publication said INITIALIZING or LOST).
+  std::vector<CameraPoseEstimate> late_poses;
 };
 
 class PoseEstimator {
@@ -173,12 +183,19 @@ class PoseEstimator {
   int TriangulateNew(int f);
   void LocalBundleAdjustment(int f);
   void GlobalBundleAdjustment();
+  // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
+  // its outlier flags set. False (frame untouched) otherwise.
+  bool RegisterAgainstMap(int f, const Eigen::Isometry3d& prior);
   // kSixDof with odometry scale: rescales everything about the gauge camera so that the visual path length from
   // first_frame on matches the odometry's. Returns the factor applied (1 when not possible).
   double RescaleToOdometryPath(int first_frame);
-  // kSixDof: rescales everything about the gauge camera so that the cameras' mean height above the floor plane
-  // found among the landmarks equals the robot model's; sets SCALE_CAMERA_HEIGHT. Returns false when no floor.
-  bool RescaleToFloorHeight();
+  // Rescales frames first_frame..last_frame and the points point_ids about the centre of pivot_frame so that the
+  // cameras' mean height above the floor plane found among those points equals the robot model's for their tilt
+  // relative to the plane; sets SCALE_CAMERA_HEIGHT. Returns false (nothing changed) when no floor is found.
+  bool RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids, int pivot_frame);
+  // Median over consecutive posed frames with odometry in [first_frame, last_frame] of odometry / visual step
+  // length. False when no step qualifies.
+  bool OdometryStepScale(int first_frame, int last_frame, double* scale) const;
   void RescaleSixDof(int first_frame);
   void PruneLandmarks(const std::vector<int64_t>& ids, const std::vector<int>& frames);
   bool DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
@@ -196,6 +213,7 @@ class PoseEstimator {
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
   int init_start_ = 0;              // first frame considered by the (re)initialization
+  int span_first_ = -1;             // first frame of the last preliminary span
   int gauge_frame_ = -1;            // first frame of the first map (fixed in BA)
   int gauge_frame_b_ = -1;          // second frame of the 6-DOF scale gauge
   int last_good_ = -1;              // last frame with a tracked pose

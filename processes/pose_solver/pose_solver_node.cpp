@@ -260,6 +260,16 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   }
   const double frame_ms = (MonotonicMicros() - t0) * 1e-3;
   if (r.initialized_now) LogInfo(estimator_->last_message());
+  // Earlier frames of the preliminary window, posed by the new map: published now (same seq, late) and recorded
+  // in place of their first (INITIALIZING / LOST) publication.
+  for (const CameraPoseEstimate& late : r.late_poses) {
+    if (bus_.PublishMessage(options_.pose_channel, PoseToMessage(late))) status_.CountOut();
+    for (auto it = online_poses_.rbegin(); it != online_poses_.rend(); ++it)
+      if (it->seq == late.seq) {
+        *it = late;
+        break;
+      }
+  }
   if (bus_.PublishMessage(options_.pose_channel, PoseToMessage(r.pose))) status_.CountOut();
   online_poses_.push_back(r.pose);
   if (!options_.output_dir.empty()) kept_frames_.push_back(frame);

@@ -3,13 +3,16 @@
 //   CAMERA_POSE        one pose_t per accepted track frame (world_from_camera, mm; status INITIALIZING while the
 //                      preliminary phase runs (pose = odometry's camera pose, or identity without odometry), TRACKING,
 //                      LOST (pose = last good pose, num_inliers 0: ignore it), RELOCALIZED; scale_source says what
-//                      fixes the metric scale),
+//                      fixes the metric scale); when the preliminary phase succeeds, the earlier frames of its
+//                      window that the new map poses are published again (same seq and utime, late, in frame
+//                      order, before the current frame's pose),
 //   LANDMARKS          landmarks_t at every keyframe (frame "world", rgb is a constant grey: no images here),
 //   CAMERA_POSE_FINAL  after the final global BA: one pose_t per frame, in frame order,
 //   then final LANDMARKS and control_t COMMAND_FINISHED (sender = name, last_seq = last frame's seq) on
 //   OBJSCAN_CONTROL. The final phase runs on control_t COMMAND_FINISHED from sender finish_on_sender ("tracker")
 //   with target "*", "" or this name. With output_dir set it writes DIR/trajectory.txt (final, TUM, mm),
-//   DIR/trajectory_online.txt (as published), DIR/landmarks.ply, DIR/colmap/{cameras,images,points3D}.txt.
+//   DIR/trajectory_online.txt (as published; a late republication replaces the first), DIR/landmarks.ply,
+//   DIR/colmap/{cameras,images,points3D}.txt.
 // Inputs before the first valid CAMERA_INFO: up to pending_tracks_capacity track frames are buffered and processed
 // when it arrives; more are rejected. Odometry is interpolated at the frame time (optional: without it the scale
 // source is NONE unless the floor/camera height fixes it in 4-DOF mode).
