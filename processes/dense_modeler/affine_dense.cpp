@@ -70,6 +70,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (!(o.max_reprojection_px > 0)) e << "max-reprojection must be > 0; ";
   if (!(o.min_triangulation_angle_deg >= 0)) e << "min-triangulation-angle must be >= 0; ";
   if (o.use_world_box && !(o.box_min.array() < o.box_max.array()).all()) e << "world box min must be < max; ";
+  if (o.region.valid && !(o.region.box_min.array() < o.region.box_max.array()).all()) e << "region min must be < max; ";
+  if (!(o.region_slack_mm >= 0) || !(o.region_image_margin_px >= 0)) e << "region slack and margin must be >= 0; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -221,7 +223,9 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   cv::Mat gray_b = b.gray.empty() ? GrayFloat(b.image) : b.gray;
   cv::Mat1b visited = cv::Mat1b::zeros(a.image.rows, a.image.cols);
   const cv::Rect image_rect(0, 0, a.image.cols, a.image.rows);
-  const cv::Rect roi = o.roi_a.area() > 0 ? (o.roi_a & image_rect) : image_rect;
+  cv::Rect roi = o.roi_a.area() > 0 ? (o.roi_a & image_rect) : image_rect;
+  if (o.region.valid) roi &= o.region.ImageRect(a.camera, a.world_from_camera, o.region_image_margin_px);
+  if (roi.area() <= 0) return finish();
   const int h = o.ncc_half_window;
   const int channels = a.image.channels();
   double refine_shift_sum = 0;
@@ -260,6 +264,16 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
       ++stats.triangles_skipped_depth;
       continue;
     }
+    if (o.region.valid &&
+        o.region.TriangleOutside(a.world_from_camera * vertex_in_a[idx[0]], a.world_from_camera * vertex_in_a[idx[1]],
+                                 a.world_from_camera * vertex_in_a[idx[2]], o.region_slack_mm)) {
+      ++stats.triangles_skipped_region;
+      continue;
+    }
+    // Cheap reject before any pixel work: the triangle's bounding box misses the ROI rectangle.
+    if (std::max({a0.x(), a1.x(), a2.x()}) < roi.x || std::min({a0.x(), a1.x(), a2.x()}) > roi.x + roi.width - 1 ||
+        std::max({a0.y(), a1.y(), a2.y()}) < roi.y || std::min({a0.y(), a1.y(), a2.y()}) > roi.y + roi.height - 1)
+      continue;
     {
       const Eigen::Vector3d& v0 = vertex_in_a[idx[0]];
       const Eigen::Vector3d normal = (vertex_in_a[idx[1]] - v0).cross(vertex_in_a[idx[2]] - v0);
@@ -381,7 +395,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           ++stats.rejected_triangulation;
           continue;
         }
-        if (o.use_world_box && !((x.array() >= o.box_min.array()).all() && (x.array() <= o.box_max.array()).all())) {
+        if ((o.use_world_box && !((x.array() >= o.box_min.array()).all() && (x.array() <= o.box_max.array()).all())) ||
+            !o.region.Contains(x)) {
           ++stats.rejected_box;
           continue;
         }

@@ -5,7 +5,9 @@
 // triangulated vertices (mapping kPlane: perspective-correct, exact for planar triangles). Q is kept only when it
 // lies within epipolar_threshold_px of the epipolar line of P and its radiance matches P (mean |ΔBGR| and an NCC
 // over a small window warped by the triangle's affine map); optionally Q is refined by a 1-D NCC search along the
-// epipolar line first. P–Q is then triangulated (ray midpoint) into a world point.
+// epipolar line first. P–Q is then triangulated (ray midpoint) into a world point. With a region of interest
+// (region_of_interest.h) only pixels inside the region's projected box are visited, triangles whose triangulated
+// vertices are surely outside it are skipped and points outside it are rejected.
 // Frames/units: poses world_from_camera in mm, pixels (u, v) = (column, row) with the origin at the centre of the
 // top-left pixel. Lens distortion is honoured for rays and the epipolar test (PinholeCamera::Unproject); the
 // 1-D refinement searches along the undistorted-model epipolar direction. Never throws for bad data: degenerate
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "common/camera_model.h"
+#include "processes/dense_modeler/region_of_interest.h"
 
 namespace objscan {
 
@@ -57,8 +60,8 @@ struct AffineDenseOptions {
   double max_color_difference = 30.0;     // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
   int ncc_half_window = 2;                // px, half side of the NCC window (0 = no NCC check)
   double min_ncc = 0.7;                   // min NCC of the warped window, [-1, 1]
-  double min_window_stddev = 2.0;         // gray levels, windows flatter than this skip the NCC test (textureless)
-  bool refine_along_epipolar = false;     // refine Q by a 1-D NCC search along the epipolar line
+  double min_window_stddev = 0.5;         // gray levels, windows flatter than this skip the NCC test (textureless)
+  bool refine_along_epipolar = true;      // refine Q by a 1-D NCC search along the epipolar line
   double refine_search_px = 1.5;          // px, half length of the refinement search (> 0)
   double refine_step_px = 0.25;           // px, refinement search step (> 0)
   double min_triangle_area_px2 = 4.0;     // px², smaller triangles are skipped
@@ -74,6 +77,10 @@ struct AffineDenseOptions {
   Eigen::Vector3d box_min = Eigen::Vector3d::Zero();  // mm, world
   Eigen::Vector3d box_max = Eigen::Vector3d::Zero();  // mm, world
   cv::Rect roi_a;                         // px, only pixels of A inside this rectangle (empty = whole image)
+  RegionOfInterest region;                // world region the points must lie in (invalid = everywhere); pixels of A
+                                          // outside its projected box and triangles surely outside it are skipped
+  double region_slack_mm = 10.0;          // mm, a triangle is skipped only when its vertices are this far outside
+  double region_image_margin_px = 8.0;    // px, margin around the region's projected box in A
 };
 
 // Counters of one pair (for status, tests and tuning).
@@ -88,7 +95,8 @@ struct DensePairStats {
   int64_t rejected_color = 0;
   int64_t rejected_ncc = 0;
   int64_t rejected_triangulation = 0;  // small angle, behind a camera or reprojection error
-  int64_t rejected_box = 0;
+  int64_t rejected_box = 0;            // outside the world box or the region
+  int triangles_skipped_region = 0;     // vertices surely outside the region
   int64_t accepted = 0;
   double mean_refine_shift_px = 0;  // mean |Q_refined - Q| (refinement on)
 };

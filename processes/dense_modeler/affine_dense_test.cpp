@@ -90,6 +90,7 @@ TEST(AffineDense, AffineMapExactOnFrontoParallelPlane) {
   pb.translation() = Eigen::Vector3d(120, 25, 60);  // same orientation: the plane maps affinely
   const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
   AffineDenseOptions o;
+  o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   DensePairStats st;
   const auto pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &st);
   const Errors e = Check(scene, pa, pb, pts);
@@ -109,6 +110,7 @@ TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
   pb.translation() = Eigen::Vector3d(110, 10, 5);
   const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
   AffineDenseOptions o;
+  o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   o.mapping = static_cast<int>(DenseMapping::kPlane);
   const auto plane_pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
   const Errors ep = Check(scene, pa, pb, plane_pts);
@@ -135,6 +137,7 @@ TEST(AffineDense, EpipolarCheckRejectsWrongMatches) {
   auto matches = scene.Matches(pa, pb, 40);
   for (auto& m : matches) m.b.y() += 4.0;  // 4 px off the epipolar line
   AffineDenseOptions o;
+  o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   DensePairStats st;
   const auto pts = ComputeDensePair(a, b, matches, o, &st);
   EXPECT_TRUE(pts.empty());
@@ -154,6 +157,7 @@ TEST(AffineDense, RadianceCheckRejectsWrongTexture) {
   cv::flip(img_b, wrong, 0);  // right geometry, wrong radiance
   const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, wrong);
   AffineDenseOptions o;
+  o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   DensePairStats st;
   const auto pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &st);
   std::printf("wrong radiance: %zu of %lld accepted (colour %lld, ncc %lld rejected)\n", pts.size(),
@@ -172,6 +176,7 @@ TEST(AffineDense, EpipolarRefinementFixesAlongLineErrors) {
   auto matches = scene.Matches(pa, pb, 40);
   for (size_t i = 0; i < matches.size(); ++i) matches[i].b.x() += (i % 2 ? 0.8 : -0.8);  // along the epipolar line
   AffineDenseOptions o;
+  o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   o.min_ncc = -1;  // keep everything: compare the geometry only
   o.max_color_difference = -1;
   const Errors plain = Check(scene, pa, pb, ComputeDensePair(a, b, matches, o));

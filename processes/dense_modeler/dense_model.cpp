@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
@@ -38,16 +39,35 @@ std::vector<PointMatch> MatchTracks(const TrackFrame& a, const TrackFrame& b) {
   return out;
 }
 
+double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                                    const TrackFrame& frame,
+                                    const std::unordered_map<int64_t, Eigen::Vector3d>& landmarks, int* count) {
+  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
+  std::vector<double> errors;
+  for (const TrackedFeature& f : frame.features) {
+    auto it = landmarks.find(f.id);
+    if (it == landmarks.end()) continue;
+    Eigen::Vector2d uv;
+    const Eigen::Vector3d pc = camera_from_world * it->second;
+    if (pc.z() > 0 && camera.Project(pc, &uv)) errors.push_back((uv - Eigen::Vector2d(f.u, f.v)).norm());
+    else errors.push_back(std::numeric_limits<double>::infinity());
+  }
+  if (count) *count = static_cast<int>(errors.size());
+  if (errors.empty()) return 0.0;
+  const size_t mid = errors.size() / 2;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(mid), errors.end());
+  return errors[mid];
+}
+
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
-                           const DenseModelOptions& o, bool use_box, const Eigen::Vector3d& box_min,
-                           const Eigen::Vector3d& box_max) {
+                           const DenseModelOptions& o, const RegionOfInterest& region) {
   FinalModel model;
   std::vector<VoxelRecord> seeds = grid.Extract(o.vote_threshold);
   {
     std::vector<VoxelRecord> kept;
     for (const VoxelRecord& r : seeds) {
       const Eigen::Vector3d c = grid.CenterOf(r.ijk);
-      if (use_box && !((c.array() >= box_min.array()).all() && (c.array() <= box_max.array()).all())) continue;
+      if (!region.Contains(c)) continue;
       if (o.min_relative_votes > 0) {
         int32_t best = 0;
         for (int dz = -1; dz <= 1; ++dz)

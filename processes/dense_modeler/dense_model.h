@@ -5,11 +5,13 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "common/sensor_data.h"
 #include "processes/dense_modeler/affine_dense.h"
 #include "processes/dense_modeler/marching_cubes.h"
+#include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/voxel_votes.h"
 
@@ -31,6 +33,14 @@ bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* wh
 // Features present in both frames (same track id), in the order of frame a.
 std::vector<PointMatch> MatchTracks(const TrackFrame& a, const TrackFrame& b);
 
+// Median reprojection error (px) of the landmarks (track id -> world point, mm) whose tracks are in frame, seen from
+// world_from_camera; *count (optional) gets how many took part. Landmarks behind the camera count as infinite.
+// Returns 0 with *count 0 when none is in the frame. A pose from an older map (e.g. before the pose solver rescaled
+// it) shows up as a large median.
+double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                                    const TrackFrame& frame,
+                                    const std::unordered_map<int64_t, Eigen::Vector3d>& landmarks, int* count);
+
 struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
@@ -40,12 +50,10 @@ struct FinalModel {
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
 };
 
-// Seeds = voxels with votes >= threshold and >= min_relative_votes x the largest neighbour count (and centre inside [box_min, box_max] when use_box), carved against the
-// views (when options.carve), meshed.
+// Seeds = voxels with votes >= threshold and >= min_relative_votes x the largest neighbour count whose centre is
+// inside region (when valid: box and floor half-space), carved against the views (when options.carve), meshed.
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
-                           const DenseModelOptions& options, bool use_box = false,
-                           const Eigen::Vector3d& box_min = Eigen::Vector3d::Zero(),
-                           const Eigen::Vector3d& box_max = Eigen::Vector3d::Zero());
+                           const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
 
 struct ModelPaths {
   std::string voxels_ply, mesh_ply, octomap;

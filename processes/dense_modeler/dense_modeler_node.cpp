@@ -27,6 +27,7 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("pose-channel", &o->pose_channel, "live camera pose channel (pose_t)");
   p.Add("final-pose-channel", &o->final_pose_channel, "final adjusted camera poses (pose_t, \"\" = ignore)");
   p.Add("target-channel", &o->target_channel, "target_t channel (\"\" = ignore)");
+  p.Add("landmarks-channel", &o->landmarks_channel, "landmarks_t channel for the automatic region (\"\" = ignore)");
   p.Add("voxel-map-channel", &o->voxel_map_channel, "output voxel_map_t channel");
   p.Add("model-channel", &o->model_channel, "output model_t channel");
   p.Add("control-channel", &o->control_channel, "control_t channel (in and out)");
@@ -36,12 +37,30 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("buffer-frames", &o->buffer_frames, "frames kept in the ring buffer (> pair-gap)");
   p.Add("pair-gap", &o->pair_gap, "frame j is paired with frame j - pair-gap");
   p.Add("pair-every", &o->pair_every, "only frames with seq % pair-every == 0 start a pair");
+  p.Add("max-pair-landmark-error", &o->max_pair_landmark_error_px,
+        "px, skip pairs whose median landmark reprojection error exceeds this (0 = off)");
   p.Add("voxel-map-every", &o->voxel_map_every, "pairs between VOXEL_MAP publications");
   p.Add("max-map-voxels", &o->max_map_voxels, "voxels per VOXEL_MAP message at most");
   p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
   p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
   p.Add("target-margin", &o->target_margin_mm, "mm, margin around the target box");
+  p.Add("roi-box", &o->roi_box, "mm, world region xmin,ymin,zmin,xmax,ymax,zmax when no TARGET box (\"\" = none)");
+  p.Add("auto-roi", &o->auto_roi, "derive the region of interest from the landmarks near the image centre");
+  AutoRoiOptions* r = &o->roi;
+  p.Add("roi-central-fraction", &r->central_fraction, "central window, fraction of the image width and height");
+  p.Add("roi-min-central-views", &r->min_central_views, "views with the track in the central window");
+  p.Add("roi-min-central-landmarks", &r->min_central_landmarks, "fewer central landmarks = no automatic region");
+  p.Add("roi-cluster-k", &r->cluster_k, "cluster radius in median distances to the median");
+  p.Add("roi-margin", &r->margin_mm, "mm, minimum growth of the automatic box on every side");
+  p.Add("roi-margin-fraction", &r->margin_fraction, "growth of the automatic box as a fraction of its extent");
+  p.Add("roi-detect-floor", &r->detect_floor, "exclude the floor plane found among the landmarks");
+  p.Add("roi-floor-radius", &r->floor_radius_mm, "mm, horizontal radius searched for floor landmarks");
+  p.Add("roi-floor-tolerance", &r->floor_tolerance_mm, "mm, floor plane inlier distance");
+  p.Add("roi-min-floor-points", &r->min_floor_points, "landmarks needed to accept a floor plane");
+  p.Add("roi-max-floor-tilt", &r->max_floor_tilt_deg, "deg, max angle of the floor normal to world +z");
+  p.Add("roi-floor-clearance", &r->floor_clearance_mm, "mm, points lower than this above the floor are dropped");
+  p.Add("roi-ransac-iterations", &r->ransac_iterations, "floor RANSAC samples");
   p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
   p.Add("threads", &o->threads, "OpenCV threads (cv::setNumThreads)");
   p.Add("status-period", &o->status_period_s, "s, status publication period");
@@ -70,6 +89,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-min-triangulation-angle", &d->min_triangulation_angle_deg, "deg, min angle between the rays");
   p.Add("dense-max-reprojection", &d->max_reprojection_px, "px, max reprojection error of a dense point");
   p.Add("dense-min-feature-separation", &d->min_feature_separation_px, "px, closer features are dropped");
+  p.Add("dense-region-slack", &d->region_slack_mm, "mm, triangles this far outside the region are skipped");
+  p.Add("dense-region-margin", &d->region_image_margin_px, "px, margin around the region's projected box");
   VoxelVoteOptions* v = &m->votes;
   p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
   p.Add("vote-neighbourhood", &v->neighbourhood, "0, 6 or 26 neighbours get votes");
@@ -99,11 +120,18 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.pair_gap < 1) e << "pair-gap must be >= 1; ";
   if (o.buffer_frames <= o.pair_gap) e << "buffer-frames must be > pair-gap; ";
   if (o.pair_every < 1) e << "pair-every must be >= 1; ";
+  if (!(o.max_pair_landmark_error_px >= 0)) e << "max-pair-landmark-error must be >= 0; ";
   if (o.voxel_map_every < 1) e << "voxel-map-every must be >= 1; ";
   if (o.max_map_voxels < 1) e << "max-map-voxels must be >= 1; ";
   if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving-downsample must be in [1, 8]; ";
   if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
+  {
+    RegionOfInterest box;
+    std::string box_why;
+    if (!ParseRoiBox(o.roi_box, &box, &box_why)) e << box_why << "; ";
+    if (!ValidateAutoRoiOptions(o.roi, &box_why)) e << box_why << "; ";
+  }
   if (o.image_queue_capacity < 1) e << "image-queue-capacity must be >= 1; ";
   if (o.threads < 1) e << "threads must be >= 1; ";
   if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
@@ -156,6 +184,11 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
   if (!options_.target_channel.empty())
     bus_.SubscribeMessage<target_t>(
         options_.target_channel, [this](const target_t& m, const RawMessage&) { OnTarget(m); }, malformed("target"));
+  if (!options_.landmarks_channel.empty())
+    bus_.SubscribeMessage<landmarks_t>(
+        options_.landmarks_channel, [this](const landmarks_t& m, const RawMessage&) { OnLandmarks(m); },
+        malformed("landmarks"));
+  ParseRoiBox(options_.roi_box, &config_region_, nullptr);
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
       malformed("control"));
@@ -265,15 +298,63 @@ void DenseModelerNode::OnTarget(const target_t& msg) {
   box_min_ = center - half;
   box_max_ = center + half;
   have_box_ = true;
+  region_dirty_ = true;
+}
+
+void DenseModelerNode::OnLandmarks(const landmarks_t& msg) {
+  const size_t n = static_cast<size_t>(std::max(0, msg.num_landmarks));
+  if (msg.num_landmarks < 0 || msg.id.size() != n || msg.position_mm.size() != n) {
+    status_.Reject("landmarks: malformed", "inconsistent counts");
+    return;
+  }
+  if (!msg.frame.empty() && msg.frame != "world") {
+    status_.Reject("landmarks: not in world frame", "frame " + msg.frame);
+    return;
+  }
+  status_.CountIn();
+  landmark_ids_.clear();
+  landmark_points_.clear();
+  landmark_by_id_.clear();
+  landmark_ids_.reserve(n);
+  landmark_points_.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(msg.position_mm[i][0], msg.position_mm[i][1], msg.position_mm[i][2]);
+    if (!p.allFinite()) continue;  // a bad point is skipped, not the whole map
+    landmark_ids_.push_back(msg.id[i]);
+    landmark_points_.push_back(p);
+    landmark_by_id_[msg.id[i]] = p;
+  }
+  region_dirty_ = true;
+}
+
+void DenseModelerNode::UpdateRegion(bool force) {
+  if (!region_dirty_ && !force) return;
+  region_dirty_ = false;
+  RegionOfInterest region;
+  int source = 0;
+  if (have_box_ || config_region_.valid) {
+    source = have_box_ ? 1 : 2;
+    region = have_box_ ? RegionOfInterest{} : config_region_;
+    if (have_box_) {
+      region.valid = true;
+      region.box_min = box_min_;
+      region.box_max = box_max_;
+    }
+    if (options_.roi.detect_floor)
+      AddFloorNear(landmark_points_, 0.5 * (region.box_min + region.box_max), options_.roi, &region);
+  } else if (options_.auto_roi && AutoRegionOfInterest(landmark_ids_, landmark_points_, central_counts_,
+                                                       options_.roi, &region)) {
+    source = 3;
+  }
+  region_ = region;
+  region_source_ = source;
+  status_.SetValue("roi_source", source);
+  status_.SetValue("roi_floor", region_.has_floor ? 1.0 : 0.0);
 }
 
 AffineDenseOptions DenseModelerNode::DenseOptionsForNow() const {
   AffineDenseOptions d = options_.model.dense;
-  if (have_box_) {
-    d.use_world_box = true;
-    d.box_min = box_min_;
-    d.box_max = box_max_;
-  }
+  d.region = region_;
   return d;
 }
 
@@ -298,6 +379,13 @@ void DenseModelerNode::TryProcess(int64_t seq) {
           {seq, MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample)});
   }
   ++complete_frames_;
+  if (options_.auto_roi) {
+    std::vector<std::pair<int64_t, Eigen::Vector2d>> tracks;
+    tracks.reserve(slot.tracks->features.size());
+    for (const TrackedFeature& f : slot.tracks->features) tracks.emplace_back(f.id, Eigen::Vector2d(f.u, f.v));
+    CountCentralTracks(*camera_, tracks, options_.roi.central_fraction, &central_counts_);
+    region_dirty_ = true;
+  }
   status_.SetValue("carving_views", static_cast<double>(carving_views_.size()));
   if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
     status_.SetState(+process_status_t::STATE_RUNNING);
@@ -306,7 +394,22 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   auto partner = frames_.find(seq - options_.pair_gap);
   if (partner == frames_.end() || !partner->second.processed || partner->second.image.empty()) return;
   const FrameSlot& pa = partner->second;
+  if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
+    int na = 0, nb = 0;
+    const double ea = MedianLandmarkReprojectionPx(*camera_, pa.pose->world_from_camera, *pa.tracks, landmark_by_id_, &na);
+    const double eb =
+        MedianLandmarkReprojectionPx(*camera_, slot.pose->world_from_camera, *slot.tracks, landmark_by_id_, &nb);
+    if (std::max(ea, eb) > options_.max_pair_landmark_error_px) {
+      ++pairs_skipped_inconsistent_;
+      status_.SetValue("pairs_skipped_inconsistent", static_cast<double>(pairs_skipped_inconsistent_));
+      LogInfo("pair " + std::to_string(partner->first) + "-" + std::to_string(seq) +
+              " skipped: median landmark reprojection error " + std::to_string(ea) + " / " + std::to_string(eb) +
+              " px");
+      return;
+    }
+  }
   const int64_t start_us = MonotonicMicros();
+  UpdateRegion(false);
   DenseView a, b;
   a.seq = partner->first;
   a.camera = *camera_;
@@ -380,7 +483,18 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     views.push_back(std::move(v));
   }
   final_poses_used_ = final_used;
-  const FinalModel model = BuildFinalModel(grid_, views, options_.model, have_box_, box_min_, box_max_);
+  UpdateRegion(true);
+  if (region_.valid) {
+    std::ostringstream r;
+    r << "region of interest (source " << region_source_ << "): box [" << region_.box_min.transpose() << "] .. ["
+      << region_.box_max.transpose() << "] mm";
+    if (region_.has_floor)
+      r << ", floor normal [" << region_.floor_normal.transpose() << "] offset " << region_.floor_offset_mm << " mm";
+    LogInfo(r.str());
+  } else {
+    LogWarning("no region of interest: the model is not restricted");
+  }
+  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +

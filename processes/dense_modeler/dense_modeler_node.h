@@ -1,7 +1,14 @@
 // DenseModelerNode: the "dense_modeler" process.
 // Inputs: CAMERA_IMAGE (image_t), CAMERA_INFO (camera_info_t, needed before frames can be used), FEATURE_TRACKS
 // (feature_tracks_t), CAMERA_POSE (pose_t world_from_camera, mm), CAMERA_POSE_FINAL (pose_t after the pose solver's
-// final adjustment), TARGET (target_t; a confirmed box restricts the model), OBJSCAN_CONTROL (control_t).
+// final adjustment), TARGET (target_t; a confirmed box restricts the model), LANDMARKS (landmarks_t, for the
+// automatic region of interest and the floor), OBJSCAN_CONTROL (control_t).
+// Region of interest (region_of_interest.h): the confirmed TARGET box (+ target_margin) if any, else the box of
+// --roi-box if set, else (auto_roi) the region derived from the latest LANDMARKS and the tracks seen in the central
+// window of the posed frames. The floor plane found among the landmarks (roi.detect_floor) cuts every source.
+// Dense pairs (pixels, triangles, points) and the final seeds are restricted to the region; it is recomputed when
+// landmarks or central tracks changed, before each pair and at the final phase (with the final landmarks). Pairs
+// before any region is known run unrestricted.
 // Frames (image + tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame
 // j is complete with a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired
 // with frame j - pair_gap (if complete): dense points (affine_dense.h) from the tracks both frames share are voted
@@ -19,9 +26,12 @@
 // adapter reasons for images/camera info/tracks/poses, "image: no camera_info yet", "image: wrong size" (differs from
 // camera_info), "tracks: malformed", "pose: malformed", "final pose: malformed", "pose: unknown frame" (no image
 // for that seq in the buffer), "pose: not tracking" (initializing or lost),
-// "frame: evicted without pose", "target: malformed", "control: malformed", "snapshot: no path",
+// "frame: evicted without pose", "target: malformed", "landmarks: malformed", "landmarks: not in world frame", "control: malformed", "snapshot: no path",
 // "snapshot: write failed".
-// Status values: pairs, dense_points, voxels, votes, pair_ms, vote_ms, carving_views.
+// Pair check: when landmarks are known, a pair whose frames see their landmarks with a median reprojection error over
+// max_pair_landmark_error_px is skipped (the pose solver's early live poses can belong to a map it rescaled since).
+// Status values: pairs, pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none,
+// 1 target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region).
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
@@ -31,6 +41,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "common/camera_model.h"
@@ -41,6 +52,7 @@
 #include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
 #include "objscan/image_t.hpp"
+#include "objscan/landmarks_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/target_t.hpp"
 #include "processes/dense_modeler/dense_model.h"
@@ -58,6 +70,7 @@ struct DenseModelerNodeOptions {
   std::string pose_channel = "CAMERA_POSE";           // live poses (pose_t)
   std::string final_pose_channel = "CAMERA_POSE_FINAL";  // poses after final adjustment (pose_t); "" = ignore
   std::string target_channel = "TARGET";              // target box (target_t); "" = ignore
+  std::string landmarks_channel = "LANDMARKS";        // sparse landmarks (landmarks_t); "" = ignore
   std::string voxel_map_channel = "VOXEL_MAP";        // output voxel_map_t
   std::string model_channel = "MODEL";                // output model_t
   std::string control_channel = "OBJSCAN_CONTROL";    // control_t in and out
@@ -67,12 +80,17 @@ struct DenseModelerNodeOptions {
   int buffer_frames = 40;                             // frames (full images) kept in the ring buffer (> pair_gap)
   int pair_gap = 6;                                   // frame j is paired with frame j - pair_gap (>= 1)
   int pair_every = 2;                                 // only frames with seq % pair_every == 0 start a pair (>= 1)
+  double max_pair_landmark_error_px = 3.0;             // px, a pair is skipped when the median landmark reprojection
+                                                      // error in either frame exceeds this (stale pose; 0 = off)
   int voxel_map_every = 10;                           // pairs between VOXEL_MAP publications (>= 1)
   int max_map_voxels = 200000;                        // voxels per VOXEL_MAP message at most (>= 1)
   int carving_downsample = 2;                         // integer downsampling of the images kept for carving (>= 1)
   int max_carving_views = 200;                        // images kept for carving at most (>= 2)
   bool use_target_box = true;                         // restrict to the confirmed TARGET box (+ margin)
   double target_margin_mm = 30.0;                     // mm, added on every side of the target box (>= 0)
+  std::string roi_box;                                // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
+  bool auto_roi = true;                               // derive the region from landmarks when no box is known
+  AutoRoiOptions roi;                                 // automatic region and floor detection
   int image_queue_capacity = 60;                      // frames buffered by the image subscription (>= 1)
   int threads = 1;                                    // OpenCV threads (cv::setNumThreads)
   double status_period_s = 1.0;                       // s, status publication period (> 0)
@@ -100,6 +118,9 @@ class DenseModelerNode : public Node {
   int64_t pairs_done() const { return pairs_done_; }
   // Carving views whose pose was replaced by a CAMERA_POSE_FINAL pose in the final phase.
   int final_poses_used() const { return final_poses_used_; }
+  // The current region of interest (invalid = none yet) and its source (0 none, 1 target, 2 config, 3 automatic).
+  const RegionOfInterest& region() const { return region_; }
+  int region_source() const { return region_source_; }
   // Runs the final phase now (as on COMMAND_FINISHED); no-op when done already.
   void RunFinalPhase(int64_t utime);
 
@@ -121,6 +142,9 @@ class DenseModelerNode : public Node {
   void OnTracks(const feature_tracks_t& msg);
   void OnPose(const pose_t& msg, bool final_pose);
   void OnTarget(const target_t& msg);
+  void OnLandmarks(const landmarks_t& msg);
+  // Recomputes region_ from the sources (see the header comment) when something changed or force is set.
+  void UpdateRegion(bool force);
   void OnControl(const control_t& msg);
   FrameSlot& Slot(int64_t seq);
   void TryProcess(int64_t seq);
@@ -136,8 +160,17 @@ class DenseModelerNode : public Node {
   std::map<int64_t, FrameSlot> frames_;
   std::vector<StoredView> carving_views_;
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
-  bool have_box_ = false;
+  bool have_box_ = false;  // confirmed TARGET box
   Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();
+  RegionOfInterest config_region_;                 // from roi_box
+  std::vector<int64_t> landmark_ids_;              // latest LANDMARKS
+  std::vector<Eigen::Vector3d> landmark_points_;   // mm, world
+  std::unordered_map<int64_t, Eigen::Vector3d> landmark_by_id_;  // the same, by track id
+  int64_t pairs_skipped_inconsistent_ = 0;         // pairs skipped by the landmark reprojection check
+  std::unordered_map<int64_t, int> central_counts_;  // track id -> posed frames with it in the central window
+  RegionOfInterest region_;                        // current region (invalid = none)
+  int region_source_ = 0;                          // 0 none, 1 target, 2 configuration, 3 automatic
+  bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
   int64_t dense_points_ = 0;
   int64_t last_seq_ = -1, last_utime_ = 0;
