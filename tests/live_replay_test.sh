@@ -22,7 +22,9 @@ LOGGER=$!
 ip netns exec "$NS" "$BIN/tracker" --lcm-url "$URL" > "$WORK/tracker.out" 2>&1 &
 TRACKER=$!
 sleep 1.0
-in_ns "$NS" lcm-logplayer -s 1 --lcm-url="$URL" "$LOG" > "$WORK/player.out" 2>&1 || fail "lcm-logplayer failed"
+# Half speed: CTest runs other CPU-heavy tests beside this one, and this test is about the live path giving the
+# deterministic result, not about throughput (that is in the benchmarks and the session summary's drop counts).
+in_ns "$NS" lcm-logplayer -s 0.5 --lcm-url="$URL" "$LOG" > "$WORK/player.out" 2>&1 || fail "lcm-logplayer failed"
 # The tracker exits by itself after END_OF_STREAM; give it time to finish the last frames.
 for _ in $(seq 1 100); do kill -0 $TRACKER 2>/dev/null || break; sleep 0.1; done
 kill -TERM $TRACKER 2>/dev/null || true; wait $TRACKER || true
@@ -32,7 +34,7 @@ kill -TERM $LOGGER; wait $LOGGER || true
 "$BIN/objscan_logtool" compare-tracks "$WORK/reference.lcmlog" "$WORK/live.lcmlog" 0.01 | tee "$WORK/cmp.txt"
 read -r _ fa _ fb _ matched _ contiguous _ compared _ within _ maxpx _ overlap < "$WORK/cmp.txt"
 [ "$fa" -eq "$FRAMES" ] || fail "reference has $fa of $FRAMES frames"
-[ "$fb" -eq "$FRAMES" ] || fail "live run dropped frames: $fb of $FRAMES"
+[ "$fb" -eq "$FRAMES" ] || { tail -20 "$WORK/tracker.out"; fail "live run dropped frames: $fb of $FRAMES"; }
 [ "$contiguous" -eq 1 ] || fail "live tracks have sequence gaps"
 [ "$matched" -eq "$FRAMES" ] || fail "only $matched frames matched"
 awk -v w="$within" -v c="$compared" -v o="$overlap" 'BEGIN { exit !(c > 0 && w / c >= 0.999 && o >= 0.999) }' \

@@ -71,6 +71,12 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
       PoseSolverNodeOptions pose_options;
       pose_options.exit_when_finished = false;
       pose_options.output_dir = options.out_dir;
+      pose_options.model = options.pose_model;
+      std::string why;
+      if (!ValidatePoseSolverNodeOptions(pose_options, &why)) {
+        *error = "pose solver options: " + why;
+        return false;
+      }
       nodes.push_back(std::make_unique<PoseSolverNode>(bus, pose_options));
       result->nodes += ",pose_solver";
     }

@@ -21,6 +21,7 @@ struct PipelineReplayOptions {
                                           "OBJSCAN_CONTROL", "TARGET"};  // fed from the log
   bool run_pose_solver = true;     // include the pose solver when it is built
   bool run_dense_modeler = true;   // include the dense modeler when it is built
+  std::string pose_model = "6dof"; // pose solver camera model: "6dof" or "4dof" (the robot's floor model)
 };
 
 struct PipelineReplayResult {

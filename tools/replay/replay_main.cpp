@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   parser.Add("out", &options.out_dir, "output folder (replay.lcmlog and the results)");
   parser.Add("tracker-only", &tracker_only, "run only the tracker");
   parser.Add("no-dense", &no_dense, "run tracker and pose solver, not the dense modeler");
+  parser.Add("pose-model", &options.pose_model, "pose solver camera model: 6dof or 4dof");
   int exit_code = 0;
   if (!objscan::ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
   if (options.log_path.empty() || options.out_dir.empty()) {

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# End-to-end accuracy on the simulated orbit (issues 3 and 4): robot_sim renders the 200-frame, 800 mm orbit around
+# the sphere into a log (ground truth written aside, never fed to the pipeline), objscan_replay runs tracker, pose
+# solver and dense modeler over it, and objscan_evaluate scores the results against the truth after Sim(3)
+# alignment. Pose bounds are the issue's targets; dense bounds are regression bounds at the level measured today,
+# and the issue's dense targets are printed with MET / NOT MET (see docs/benchmarks.md).
+set -euo pipefail
+BIN="$1"; SRC="$2"
+WORK=$(mktemp -d); trap 'rm -rf "$WORK"' EXIT
+FAILED=0
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$BIN/robot_sim" --lcm-url "file://$WORK/sim.lcmlog?mode=w" --scene "$SRC/drivers/robot_sim/scenes/sphere.scene" \
+  --frames 200 --seed 1 --realtime=false --encoding jpeg --jpeg-quality 95 --ground-truth-dir "$WORK/gt" \
+  > "$WORK/sim.out" 2>&1 || { cat "$WORK/sim.out"; fail "robot_sim"; }
+GT="$WORK/gt/poses_gt.txt"
+
+# value KEY FILE: the number after KEY in an objscan_evaluate output.
+value() { awk -v k="$1" '$1==k {print $2}' "$2"; }
+# check LABEL VALUE OP BOUND [target]: OP is <= or >=; "target" only reports.
+check() {
+  local label="$1" v="$2" op="$3" bound="$4" kind="${5:-bound}" ok
+  if [ "$op" = "<=" ]; then ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a<=b)?1:0}')
+  else ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a>=b)?1:0}'); fi
+  if [ "$kind" = "target" ]; then
+    printf '  %-44s %10s  issue target %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo MET || echo 'NOT MET')"
+  else
+    printf '  %-44s %10s  %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo ok || echo FAIL)"
+    [ "$ok" = 1 ] || FAILED=1
+  fi
+}
+trajectory_checks() {  # NAME OUTDIR
+  local name="$1" out="$2" f
+  for f in online final; do
+    local file="$out/trajectory.txt"; [ $f = online ] && file="$out/trajectory_online.txt"
+    "$BIN/objscan_evaluate" trajectory "$file" "$GT" > "$WORK/$name-$f.txt" || fail "evaluate $name $f"
+    local limit=0.3; [ $f = online ] && limit=2.0
+    check "$name $f ATE RMSE (mm)" "$(value ate_rmse "$WORK/$name-$f.txt")" "<=" $limit
+    local scale; scale=$(value scale "$WORK/$name-$f.txt")
+    check "$name $f scale error" "$(awk -v s="$scale" 'BEGIN{d=s-1; if(d<0)d=-d; printf "%.5f", d}')" "<=" 0.01
+    check "$name $f registered fraction" "$(value registered_fraction "$WORK/$name-$f.txt")" ">=" 0.98
+  done
+  check "$name online rotation mean (deg)" "$(value rotation_mean_deg "$WORK/$name-online.txt")" "<=" 0.2
+}
+
+# 6-DOF, full pipeline.
+"$BIN/objscan_replay" --log "$WORK/sim.lcmlog" --out "$WORK/out6" > "$WORK/replay6.out" 2>&1 \
+  || { tail -30 "$WORK/replay6.out"; fail "replay (6-DOF)"; }
+echo "pose solver, 6-DOF:"
+trajectory_checks 6dof "$WORK/out6"
+
+# 4-DOF (the robot's floor model), poses only.
+"$BIN/objscan_replay" --log "$WORK/sim.lcmlog" --out "$WORK/out4" --no-dense --pose-model 4dof \
+  > "$WORK/replay4.out" 2>&1 || { tail -30 "$WORK/replay4.out"; fail "replay (4-DOF)"; }
+echo "pose solver, 4-DOF:"
+trajectory_checks 4dof "$WORK/out4"
+
+echo "dense model (6-DOF poses):"
+for m in mesh voxels; do
+  "$BIN/objscan_evaluate" surface "$WORK/out6/model_$m.ply" "$WORK/gt/target_surface.ply" \
+    --align "$WORK/out6/trajectory.txt" "$GT" --visible-from "$GT" > "$WORK/$m.txt" || fail "evaluate $m"
+done
+check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 3.5
+check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 3.5
+check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.80
+check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.80
+check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.0 target
+check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 3.0 target
+check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.5 target
+check "mesh completeness" "$(value completeness "$WORK/mesh.txt")" ">=" 0.95 target
+
+[ "$FAILED" = 0 ] || fail "accuracy below the bounds above"
+echo "PASS: pipeline accuracy on the simulated orbit"
