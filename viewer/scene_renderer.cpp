@@ -492,23 +492,26 @@ void SceneRenderer::Render(const ViewerState& state, const OrbitView& view, cons
 
   // Trajectories and the error segment, thicker.
   lines.Clear();
-  auto add_path = [&lines](const std::map<int64_t, TrajectoryPoint>& path, Color c) {
+  // The truth is drawn in the estimate's frame (ViewerState::estimate_from_truth).
+  auto add_path = [&lines](const std::map<int64_t, TrajectoryPoint>& path, Color c, const Sim3& transform) {
     Eigen::Vector3d previous = Eigen::Vector3d::Zero();
     bool first = true;
     for (const auto& entry : path) {
-      const Eigen::Vector3d p = entry.second.world_from_camera.translation();
+      const Eigen::Vector3d p = transform * entry.second.world_from_camera.translation();
       if (!first) lines.Segment(previous, p, c);
       previous = p;
       first = false;
     }
   };
-  if (options.layers.ground_truth) add_path(state.ground_truth_trajectory(), ToColor(kGroundTruthTrajectoryColor));
-  if (options.layers.estimated) add_path(state.estimated_trajectory(), ToColor(kEstimatedTrajectoryColor));
+  if (options.layers.ground_truth)
+    add_path(state.ground_truth_trajectory(), ToColor(kGroundTruthTrajectoryColor), state.estimate_from_truth());
+  if (options.layers.estimated) add_path(state.estimated_trajectory(), ToColor(kEstimatedTrajectoryColor), Sim3());
   if (options.layers.error && state.latest_error_seq() >= 0) {
     const auto est = state.estimated_trajectory().find(state.latest_error_seq());
     const auto gt = state.ground_truth_trajectory().find(state.latest_error_seq());
     if (est != state.estimated_trajectory().end() && gt != state.ground_truth_trajectory().end())
-      lines.Segment(est->second.world_from_camera.translation(), gt->second.world_from_camera.translation(),
+      lines.Segment(est->second.world_from_camera.translation(),
+                    state.estimate_from_truth() * gt->second.world_from_camera.translation(),
                     ToColor(kErrorSegmentColor));
   }
   DrawColored(lines.data(), GL_LINES, options.trajectory_line_width_px);

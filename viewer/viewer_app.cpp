@@ -126,6 +126,9 @@ class Viewer {
  public:
   explicit Viewer(const ViewerOptions& options)
       : options_(options), dispatcher_(&state_, options.channels), view_(InitialView(options)) {
+    ViewerStateOptions state_options;
+    state_options.align_truth = options.align_truth;
+    state_ = ViewerState(state_options);
     scene_.min_votes = options.min_votes;
     scene_.cull_hidden_voxels = options.cull_hidden_voxels;
     scene_.voxel_style = options.voxel_style == "cubes"    ? VoxelStyle::kCubes
@@ -507,7 +510,8 @@ void Viewer::BuildPanels(const Viewport& scene_viewport) {
     ImGui::Text("poses: estimated %zu, truth %zu", state_.estimated_trajectory().size(),
                 state_.ground_truth_trajectory().size());
     if (state_.latest_position_error_mm())
-      ImGui::Text("position error %.1f mm (seq %lld), rms %.1f mm over %lld", *state_.latest_position_error_mm(),
+      ImGui::Text("position error%s %.1f mm (seq %lld), rms %.1f mm over %lld",
+                  state_.truth_aligned() ? " (Sim3-aligned)" : "", *state_.latest_position_error_mm(),
                   static_cast<long long>(state_.latest_error_seq()), state_.position_error_rms_mm(),
                   static_cast<long long>(state_.position_error_count()));
     ImGui::Text("landmarks %d, voxels %lld shown (%lld drawn) of %d",
@@ -768,6 +772,8 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("window-height", &o->window_height, "px, window height");
   parser.Add("panel-width", &o->panel_width, "px, width of the panel column on the right (0 = no panels)");
   parser.Add("vsync", &o->vsync, "wait for vertical sync");
+  parser.Add("align-truth", &o->align_truth,
+             "draw the ground truth in the estimate's frame (Sim(3) fit over matched frames) and measure errors there");
   parser.Add("view", &o->view, "view preset: iso, top, front, side");
   parser.Add("view-yaw-deg", &o->view_yaw_deg, "deg, eye azimuth about world z from +x (overrides the preset)");
   parser.Add("view-pitch-deg", &o->view_pitch_deg, "deg, eye elevation (overrides the preset)");

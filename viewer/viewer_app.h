@@ -31,6 +31,7 @@ struct ViewerOptions {
   int window_height = 800;                        // px, window height
   int panel_width = 500;                          // px, right-hand panel column (0 = no panels)
   bool vsync = true;                              // wait for vertical sync (interactive use)
+  bool align_truth = true;                        // draw the truth in the estimate's frame (Sim(3) fit), errors too
   std::string view = "iso";                       // view preset: iso, top, front, side
   double view_yaw_deg = std::numeric_limits<double>::quiet_NaN();    // deg, overrides the preset's yaw
   double view_pitch_deg = std::numeric_limits<double>::quiet_NaN();  // deg, overrides the preset's pitch

@@ -132,22 +132,31 @@ void ViewerState::AddGroundTruthPose(const CameraPoseEstimate& pose) {
 }
 
 void ViewerState::UpdateError(int64_t seq) {
-  const auto est = estimated_.find(seq);
-  const auto gt = ground_truth_.find(seq);
-  if (est == estimated_.end() || gt == ground_truth_.end()) return;
-  const double error =
-      (est->second.world_from_camera.translation() - gt->second.world_from_camera.translation()).norm();
-  const auto previous = error_by_seq_.find(seq);
-  if (previous != error_by_seq_.end()) {  // re-estimated pose: replace its contribution
-    error_sum_sq_ -= previous->second * previous->second;
-    --error_count_;
+  if (estimated_.find(seq) == estimated_.end() || ground_truth_.find(seq) == ground_truth_.end()) return;
+  // Frames with both, then the alignment over all of them, then every error again (a few hundred frames: cheap).
+  std::vector<Eigen::Vector3d> truth_points, estimate_points;
+  std::vector<int64_t> seqs;
+  for (auto it = estimated_.rbegin(); it != estimated_.rend() && seqs.size() < options_.max_alignment_frames; ++it) {
+    const auto gt = ground_truth_.find(it->first);
+    if (gt == ground_truth_.end()) continue;
+    seqs.insert(seqs.begin(), it->first);
+    estimate_points.insert(estimate_points.begin(), it->second.world_from_camera.translation());
+    truth_points.insert(truth_points.begin(), gt->second.world_from_camera.translation());
   }
-  error_by_seq_[seq] = error;
-  error_sum_sq_ += error * error;
-  ++error_count_;
-  if (seq >= latest_error_seq_) {
-    latest_error_seq_ = seq;
-    latest_error_mm_ = error;
+  Sim3 alignment;
+  truth_aligned_ = options_.align_truth && seqs.size() >= 3 &&
+                   AlignUmeyama(truth_points, estimate_points, true, &alignment);
+  estimate_from_truth_ = truth_aligned_ ? alignment : Sim3();
+  error_sum_sq_ = 0;
+  error_count_ = 0;
+  for (size_t i = 0; i < seqs.size(); ++i) {
+    const double error = (estimate_points[i] - estimate_from_truth_ * truth_points[i]).norm();
+    error_sum_sq_ += error * error;
+    ++error_count_;
+    if (i + 1 == seqs.size()) {  // seqs ascend: the newest frame with both
+      latest_error_seq_ = seqs[i];
+      latest_error_mm_ = error;
+    }
   }
 }
 

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "common/geometry.h"
+
 #include "common/camera_model.h"
 #include "common/sensor_data.h"
 #include "objscan/control_t.hpp"
@@ -76,6 +78,8 @@ struct ViewerStateOptions {
   size_t max_trajectory_points = 200000;  // oldest poses are forgotten beyond this (per trajectory)
   size_t max_track_frames = 64;           // track frames kept to match the displayed image by seq
   double rate_window_s = 2.0;             // s, window of the message rate estimate (> 0)
+  bool align_truth = true;                // map the truth into the estimate's frame (Sim(3) fit) for errors/drawing
+  size_t max_alignment_frames = 2000;     // newest frames with both poses used for the fit and the error RMS
 };
 
 class ViewerState {
@@ -109,10 +113,16 @@ class ViewerState {
   // --- Outputs. ---
   const std::map<int64_t, TrajectoryPoint>& estimated_trajectory() const { return estimated_; }        // by seq
   const std::map<int64_t, TrajectoryPoint>& ground_truth_trajectory() const { return ground_truth_; }  // by seq
-  // Position error (mm) between the estimate and the truth of the newest frame that has both; nullopt before.
+  // The estimate's world frame is its own (e.g. the odometry frame at the first image), not the truth's: once >= 3
+  // frames have both, the truth is mapped into the estimate's frame by the least-squares similarity (Umeyama) over
+  // the newest such frames (options), recomputed as poses arrive; identity before or with align_truth off. Errors below and the drawn truth use it.
+  const Sim3& estimate_from_truth() const { return estimate_from_truth_; }
+  bool truth_aligned() const { return truth_aligned_; }
+  // Position error (mm) between the estimate and the (aligned) truth of the newest frame that has both; nullopt
+  // before.
   std::optional<double> latest_position_error_mm() const { return latest_error_mm_; }
   int64_t latest_error_seq() const { return latest_error_seq_; }
-  // RMS of the position error over all frames with both (mm, no alignment), and how many.
+  // RMS of the position error over the newest frames with both (mm, after the alignment above), and how many.
   double position_error_rms_mm() const;
   int64_t position_error_count() const { return error_count_; }
 
@@ -151,7 +161,8 @@ class ViewerState {
   std::map<int64_t, TrajectoryPoint> ground_truth_;
   std::optional<double> latest_error_mm_;
   int64_t latest_error_seq_ = -1;
-  std::map<int64_t, double> error_by_seq_;  // mm
+  Sim3 estimate_from_truth_;
+  bool truth_aligned_ = false;
   double error_sum_sq_ = 0;
   int64_t error_count_ = 0;
   std::optional<landmarks_t> landmarks_;

@@ -73,6 +73,25 @@ TEST_F(DispatcherTest, TrajectoriesAndLivePositionError) {
   EXPECT_NEAR(state_.position_error_rms_mm(), std::sqrt(25.0 / 2), 1e-9);
 }
 
+// The estimate lives in its own world frame (here: the truth moved by 800 mm); from 3 frames on the error is
+// measured after the similarity alignment, so a correct estimate shows ~0 mm, not the frames' offset.
+TEST_F(DispatcherTest, PositionErrorIsMeasuredAfterAligningTheFrames) {
+  const double xs[] = {0, 100, 180, 230};
+  const double ys[] = {0, 20, 70, 140};
+  for (int i = 0; i < 4; ++i) ASSERT_TRUE(Send("GROUND_TRUTH_POSE", MakePose(i, xs[i], ys[i], 300)));
+  for (int i = 0; i < 4; ++i) ASSERT_TRUE(Send("CAMERA_POSE", MakePose(i, xs[i], ys[i] + 800, 300)));
+  ASSERT_TRUE(state_.truth_aligned());
+  ASSERT_TRUE(state_.latest_position_error_mm().has_value());
+  EXPECT_NEAR(*state_.latest_position_error_mm(), 0.0, 1e-6);
+  EXPECT_NEAR(state_.position_error_rms_mm(), 0.0, 1e-6);
+  EXPECT_NEAR((state_.estimate_from_truth() * Eigen::Vector3d(0, 0, 300) - Eigen::Vector3d(0, 800, 300)).norm(), 0.0,
+              1e-6);
+  // A wrong estimate of the newest frame shows up (reduced by the refit, never hidden).
+  ASSERT_TRUE(Send("CAMERA_POSE", MakePose(3, 230, 140 + 800 + 40, 300)));
+  EXPECT_GT(*state_.latest_position_error_mm(), 10.0);
+  EXPECT_LT(*state_.latest_position_error_mm(), 40.0);
+}
+
 TEST_F(DispatcherTest, MalformedAndUnknownAreCountedNeverApplied) {
   ASSERT_TRUE(Send("CAMERA_POSE", MakePose(0, 1, 2, 3)));
   const char junk[] = "definitely not a pose";
