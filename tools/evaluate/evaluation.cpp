@@ -254,6 +254,7 @@ class PointGrid {
     for (size_t i = 0; i < points.size(); ++i) cells_[Key(points[i])].push_back(static_cast<int>(i));
   }
   // Nearest distance, searching rings up to max_rings cells away; returns +inf if nothing found.
+  // Cost grows with max_rings^4: keep it small and use NearestExact for points that may be far.
   double Nearest(const Eigen::Vector3d& q, int max_rings) const {
     const Eigen::Vector3i c = Cell(q);
     double best = std::numeric_limits<double>::infinity();
@@ -269,6 +270,16 @@ class PointGrid {
       if (best <= r * cell_) break;  // nothing in a further ring can be closer
     }
     return best;
+  }
+  // Exact nearest distance: the ring search near the query, then every point when nothing was found close by
+  // (far-off points, e.g. a model that is not aligned to the truth).
+  double NearestExact(const Eigen::Vector3d& q) const {
+    constexpr int kRings = 8;
+    const double near = Nearest(q, kRings);
+    if (near <= kRings * cell_) return near;
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& p : points_) best = std::min(best, (p - q).squaredNorm());
+    return std::sqrt(best);
   }
 
  private:
@@ -304,7 +315,7 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, con
   const PointGrid truth_grid(truth, cell);
   std::vector<double> d;
   d.reserve(model.size());
-  for (const auto& p : model) d.push_back(truth_grid.Nearest(p, 200));
+  for (const auto& p : model) d.push_back(truth_grid.NearestExact(p));
   r.accuracy_p50 = Percentile(d, 0.5);
   r.accuracy_p90 = Percentile(d, 0.9);
   r.accuracy_max = *std::max_element(d.begin(), d.end());
