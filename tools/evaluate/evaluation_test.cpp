@@ -71,7 +71,8 @@ TEST(EvaluationTest, SurfaceAccuracyAndCompleteness) {
 // A model far from the truth (not aligned) gets its exact distance, quickly, not a search over millions of cells.
 TEST(EvaluationTest, FarModelPointsGetTheirExactDistance) {
   const auto truth = SpherePoints(100, 20000, Eigen::Vector3d::Zero());
-  const std::vector<Eigen::Vector3d> model = {Eigen::Vector3d(1100, 0, 0), Eigen::Vector3d(0, 0, 5100)};
+  const std::vector<Eigen::Vector3d> model = {Eigen::Vector3d(1100, 0, 0), Eigen::Vector3d(-1100, 0, 0),
+                                             Eigen::Vector3d(0, 0, 5100)};
   const SurfaceEvaluation e = EvaluateSurface(model, truth, 2.0);
   EXPECT_NEAR(e.accuracy_p50, 1000, 1.0);
   EXPECT_NEAR(e.accuracy_max, 5000, 1.0);
