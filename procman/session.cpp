@@ -178,9 +178,14 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     for (size_t i = 0; i < children.size(); ++i) {
       ChildProcess& c = *children[i];
       if (!c.started() || c.Running()) continue;
-      const bool finished_ok = c.exit_code() == 0 &&
-                               (processes[i].is_driver || monitor->finished_.count(c.name()) ||
-                                options.finish_on.empty());
+      auto finished_ok_now = [&]() {
+        return c.exit_code() == 0 &&
+               (processes[i].is_driver || monitor->finished_.count(c.name()) || options.finish_on.empty());
+      };
+      // A processor sends FINISHED and exits at once: its message may still wait in our socket when we see the
+      // exit. Read the bus a little before calling a clean exit a failure.
+      for (int tries = 0; c.exit_code() == 0 && !finished_ok_now() && tries < 20; ++tries) pump(50);
+      const bool finished_ok = finished_ok_now();
       if (!finished_ok) {
         failure = "process '" + c.name() + "' exited with code " + std::to_string(c.exit_code()) +
                   " before the session ended; last lines of " + c.log_path() + ":\n" + c.LogTail(15);
