@@ -1,38 +1,9 @@
 // tracker: KLT feature tracker process. CAMERA_IMAGE (+ optional CAMERA_INFO) in, FEATURE_TRACKS out.
-#include <cstdio>
-#include <exception>
-#include <string>
-
-#include "common/bus.h"
-#include "common/log.h"
-#include "common/node.h"
-#include "common/options.h"
+#include "common/node_main.h"
 #include "processes/tracker/tracker_node.h"
 
 int main(int argc, char** argv) {
-  objscan::TrackerNodeOptions options;
-  std::string lcm_url = objscan::kDefaultLcmUrl;
-  std::string lcm_url_out;
-  objscan::OptionParser parser("tracker", "KLT feature tracker: CAMERA_IMAGE in, FEATURE_TRACKS out");
-  parser.Add("lcm-url", &lcm_url, "LCM URL to read (and write, unless --lcm-url-out is set)");
-  parser.Add("lcm-url-out", &lcm_url_out, "separate LCM URL for output (e.g. when replaying a file:// log)");
-  objscan::AddTrackerNodeOptions(parser, &options);
-  int exit_code = 0;
-  if (!objscan::ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
-  std::string why;
-  if (!objscan::ValidateTrackerNodeOptions(options, &why)) {
-    std::fprintf(stderr, "error: %s\n", why.c_str());
-    return 2;
-  }
-  std::fprintf(stderr, "%s", parser.Effective().c_str());
-  objscan::SetLogName(options.name);
-  try {
-    auto bus = objscan::MakeBus(lcm_url, lcm_url_out);
-    objscan::LogInfo("bus " + bus->Describe());
-    objscan::TrackerNode node(*bus, options);
-    return objscan::RunNode(*bus, node);
-  } catch (const std::exception& e) {
-    objscan::LogError(e.what());
-    return 1;
-  }
+  return objscan::NodeMain<objscan::TrackerNode>(argc, argv, "tracker",
+                                                 "KLT feature tracker: CAMERA_IMAGE in, FEATURE_TRACKS out",
+                                                 objscan::AddTrackerNodeOptions, objscan::ValidateTrackerNodeOptions);
 }
