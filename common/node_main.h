@@ -18,8 +18,8 @@ namespace objscan {
 // stop, 2 for bad options, 1 when the bus or the node cannot be made (the error is logged). Blocks until the node
 // stops (end of stream where the node does that, SIGINT or SIGTERM).
 template <class NodeT, class Options>
-int NodeMain(int argc, char** argv, const char* program, const char* description,
-             void (*add)(OptionParser&, Options*), bool (*validate)(const Options&, std::string*)) {
+int NodeMain(int argc, char** argv, const char* program, const char* description, void (*add)(OptionParser&, Options*),
+             bool (*validate)(const Options&, std::string*)) {
   Options options;
   std::string lcm_url = kDefaultLcmUrl;
   std::string lcm_url_out;

@@ -42,7 +42,8 @@ struct ChannelCount {
 class Monitor {
  public:
   explicit Monitor(Bus& bus) {
-    bus.Subscribe(".*", [this](const RawMessage& raw) { OnMessage(raw); }, 10000);
+    bus.Subscribe(
+        ".*", [this](const RawMessage& raw) { OnMessage(raw); }, 10000);
   }
 
   void OnMessage(const RawMessage& raw) {
@@ -106,8 +107,10 @@ bool ParseProcessList(const std::string& text, std::vector<SessionProcess>* proc
     bool in_word = false;
     for (char ch : line) {
       if (quote) {
-        if (ch == quote) quote = 0;
-        else word += ch;
+        if (ch == quote)
+          quote = 0;
+        else
+          word += ch;
       } else if (ch == '\'' || ch == '"') {
         quote = ch;
         in_word = true;
@@ -377,9 +380,12 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   const std::string summary_path = options.out_dir + "/summary.json";
   std::ofstream(summary_path) << json.str() << "\n";
 
-  std::fprintf(stderr, "[objscan] %s: %lld frames, %lld track frames (mean %.0f live tracks), %lld dropped, "
+  std::fprintf(stderr,
+               "[objscan] %s: %lld frames, %lld track frames (mean %.0f live tracks), %lld dropped, "
                "log %s (%lld events), %.1f s\n[objscan] summary: %s\n",
-               interrupted ? "interrupted" : failure.empty() ? "done" : "FAILED",
+               interrupted       ? "interrupted"
+               : failure.empty() ? "done"
+                                 : "FAILED",
                static_cast<long long>(monitor->channels_["CAMERA_IMAGE"].messages),
                static_cast<long long>(monitor->track_frames_),
                monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0,

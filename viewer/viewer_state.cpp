@@ -144,8 +144,8 @@ void ViewerState::UpdateError(int64_t seq) {
     truth_points.insert(truth_points.begin(), gt->second.world_from_camera.translation());
   }
   Sim3 alignment;
-  truth_aligned_ = options_.align_truth && seqs.size() >= 3 &&
-                   AlignUmeyama(truth_points, estimate_points, true, &alignment);
+  truth_aligned_ =
+      options_.align_truth && seqs.size() >= 3 && AlignUmeyama(truth_points, estimate_points, true, &alignment);
   estimate_from_truth_ = truth_aligned_ ? alignment : Sim3();
   error_sum_sq_ = 0;
   error_count_ = 0;

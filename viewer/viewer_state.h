@@ -115,7 +115,8 @@ class ViewerState {
   const std::map<int64_t, TrajectoryPoint>& ground_truth_trajectory() const { return ground_truth_; }  // by seq
   // The estimate's world frame is its own (e.g. the odometry frame at the first image), not the truth's: once >= 3
   // frames have both, the truth is mapped into the estimate's frame by the least-squares similarity (Umeyama) over
-  // the newest such frames (options), recomputed as poses arrive; identity before or with align_truth off. Errors below and the drawn truth use it.
+  // the newest such frames (options), recomputed as poses arrive; identity before or with align_truth off. Errors below
+  // and the drawn truth use it.
   const Sim3& estimate_from_truth() const { return estimate_from_truth_; }
   bool truth_aligned() const { return truth_aligned_; }
   // Position error (mm) between the estimate and the (aligned) truth of the newest frame that has both; nullopt

@@ -30,13 +30,13 @@
 namespace objscan {
 
 struct RegionOfInterest {
-  bool valid = false;                                  // false = no restriction known
-  Eigen::Vector3d box_min = Eigen::Vector3d::Zero();   // mm, world
-  Eigen::Vector3d box_max = Eigen::Vector3d::Zero();   // mm, world
-  bool has_floor = false;                              // the floor half-space applies
+  bool valid = false;                                       // false = no restriction known
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero();        // mm, world
+  Eigen::Vector3d box_max = Eigen::Vector3d::Zero();        // mm, world
+  bool has_floor = false;                                   // the floor half-space applies
   Eigen::Vector3d floor_normal = Eigen::Vector3d::UnitZ();  // unit, world, pointing up (away from the floor)
-  double floor_offset_mm = 0.0;                        // mm, height of x above the floor = normal·x - offset
-  double floor_clearance_mm = 0.0;                     // mm, points lower than this above the floor are outside
+  double floor_offset_mm = 0.0;                             // mm, height of x above the floor = normal·x - offset
+  double floor_clearance_mm = 0.0;                          // mm, points lower than this above the floor are outside
 
   // Height of x above the floor (mm; +infinity when there is no floor).
   double HeightAboveFloor(const Eigen::Vector3d& x) const;
@@ -54,20 +54,20 @@ struct RegionOfInterest {
 };
 
 struct AutoRoiOptions {
-  double central_fraction = 0.3;    // central window = this fraction of the image width and height, centred on
-                                    // the principal point, (0, 1]
-  int min_central_views = 1;        // views in which a landmark's track must lie in the central window (>= 1)
-  int min_central_landmarks = 15;   // fewer central landmarks (after floor removal) = no region (>= 3)
-  double cluster_k = 2.5;           // cluster = central landmarks within cluster_k x median distance of the median
-  double margin_mm = 30.0;          // mm, minimum growth of the box on every side (>= 0)
-  double margin_fraction = 0.25;    // box grows by this fraction of its extent on every side when larger (>= 0)
-  bool detect_floor = true;         // look for the floor plane among the landmarks
-  double floor_radius_mm = 600.0;   // mm, horizontal radius around the central median searched for the floor (> 0)
-  double floor_tolerance_mm = 5.0;  // mm, plane inlier distance (> 0)
-  int min_floor_points = 30;        // landmarks needed to accept a floor plane (>= 3)
-  double max_floor_tilt_deg = 20.0; // deg, max angle between the floor normal and world +z, (0, 90)
-  double floor_clearance_mm = 10.0; // mm, points lower than this above the floor are outside the region (>= 0)
-  int ransac_iterations = 300;      // floor RANSAC samples (>= 1)
+  double central_fraction = 0.3;     // central window = this fraction of the image width and height, centred on
+                                     // the principal point, (0, 1]
+  int min_central_views = 1;         // views in which a landmark's track must lie in the central window (>= 1)
+  int min_central_landmarks = 15;    // fewer central landmarks (after floor removal) = no region (>= 3)
+  double cluster_k = 2.5;            // cluster = central landmarks within cluster_k x median distance of the median
+  double margin_mm = 30.0;           // mm, minimum growth of the box on every side (>= 0)
+  double margin_fraction = 0.25;     // box grows by this fraction of its extent on every side when larger (>= 0)
+  bool detect_floor = true;          // look for the floor plane among the landmarks
+  double floor_radius_mm = 600.0;    // mm, horizontal radius around the central median searched for the floor (> 0)
+  double floor_tolerance_mm = 5.0;   // mm, plane inlier distance (> 0)
+  int min_floor_points = 30;         // landmarks needed to accept a floor plane (>= 3)
+  double max_floor_tilt_deg = 20.0;  // deg, max angle between the floor normal and world +z, (0, 90)
+  double floor_clearance_mm = 10.0;  // mm, points lower than this above the floor are outside the region (>= 0)
+  int ransac_iterations = 300;       // floor RANSAC samples (>= 1)
 };
 
 bool ValidateAutoRoiOptions(const AutoRoiOptions& options, std::string* why);
@@ -84,8 +84,8 @@ struct FloorPlane {
 };
 // Deterministic RANSAC for the plane with the most points within tolerance_mm whose normal is within
 // max_tilt_deg of +z, refitted by least squares to its inliers. False when fewer than min_points inliers.
-bool FitFloorPlane(const std::vector<Eigen::Vector3d>& points, double tolerance_mm, double max_tilt_deg,
-                   int min_points, int iterations, FloorPlane* plane);
+bool FitFloorPlane(const std::vector<Eigen::Vector3d>& points, double tolerance_mm, double max_tilt_deg, int min_points,
+                   int iterations, FloorPlane* plane);
 
 // Fits the floor (FitFloorPlane with the options' floor settings) to the landmarks within floor_radius_mm
 // (horizontally) of centre and, when found, sets the floor half-space of *region (clearance floor_clearance_mm).
@@ -94,11 +94,11 @@ int AddFloorNear(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vec
                  const AutoRoiOptions& options, RegionOfInterest* region);
 
 struct AutoRoiStats {
-  int landmarks = 0;          // landmarks given
-  int central = 0;            // central landmarks (step 1)
-  int floor_inliers = 0;      // 0 when no floor was found
-  int above_floor = 0;        // central landmarks left after step 3's floor removal
-  int cluster = 0;            // landmarks in the cluster
+  int landmarks = 0;      // landmarks given
+  int central = 0;        // central landmarks (step 1)
+  int floor_inliers = 0;  // 0 when no floor was found
+  int above_floor = 0;    // central landmarks left after step 3's floor removal
+  int cluster = 0;        // landmarks in the cluster
 };
 
 // The automatic region (see the file comment). landmark ids index central_counts (track id -> central views).

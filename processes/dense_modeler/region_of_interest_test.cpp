@@ -124,7 +124,7 @@ TEST(RegionOfInterestTest, FloorPlaneRejectsSteepPlanesAndIsDeterministic) {
   std::vector<Eigen::Vector3d> wall, floor;
   for (int i = 0; i < 20; ++i)
     for (int j = 0; j < 20; ++j) {
-      wall.emplace_back(10.0 * i, 500.0, 50.0 + 10.0 * j);  // vertical plane
+      wall.emplace_back(10.0 * i, 500.0, 50.0 + 10.0 * j);    // vertical plane
       floor.emplace_back(10.0 * i, 10.0 * j, 3.0 + 0.1 * i);  // tilted floor: slope 0.01
     }
   FloorPlane plane;

@@ -38,18 +38,22 @@ int main(int argc, char** argv) {
     double max_dt = 0.005;
     for (int i = 4; i < argc; ++i) {
       const std::string a = argv[i];
-      if (a == "--no-scale") with_scale = false;
-      else if (a == "--max-dt" && i + 1 < argc) max_dt = std::atof(argv[++i]);
-      else return Fail("unknown option " + a);
+      if (a == "--no-scale")
+        with_scale = false;
+      else if (a == "--max-dt" && i + 1 < argc)
+        max_dt = std::atof(argv[++i]);
+      else
+        return Fail("unknown option " + a);
     }
     std::vector<StampedPose> est, truth;
     if (!ReadTumTrajectory(argv[2], &est, &error) || !ReadTumTrajectory(argv[3], &truth, &error)) return Fail(error);
     TrajectoryEvaluation e;
     if (!EvaluateTumTrajectories(est, truth, with_scale, max_dt, &e, &error)) return Fail(error);
-    std::printf("matched %d\nestimated %d\ntruth %d\nregistered_fraction %.4f\nate_rmse %.4f\nate_max %.4f\n"
-                "rotation_mean_deg %.4f\nrotation_max_deg %.4f\nscale %.6f\n",
-                e.num_matched, e.num_estimated, e.num_truth, e.registered_fraction, e.error.ate_rmse, e.error.ate_max,
-                e.error.rotation_mean_rad * 180 / M_PI, e.error.rotation_max_rad * 180 / M_PI, e.error.scale);
+    std::printf(
+        "matched %d\nestimated %d\ntruth %d\nregistered_fraction %.4f\nate_rmse %.4f\nate_max %.4f\n"
+        "rotation_mean_deg %.4f\nrotation_max_deg %.4f\nscale %.6f\n",
+        e.num_matched, e.num_estimated, e.num_truth, e.registered_fraction, e.error.ate_rmse, e.error.ate_max,
+        e.error.rotation_mean_rad * 180 / M_PI, e.error.rotation_max_rad * 180 / M_PI, e.error.scale);
     return 0;
   }
   if (command == "surface") {
@@ -59,19 +63,23 @@ int main(int argc, char** argv) {
     int min_views = 2;
     for (int i = 4; i < argc; ++i) {
       const std::string a = argv[i];
-      if (a == "--threshold" && i + 1 < argc) threshold = std::atof(argv[++i]);
-      else if (a == "--min-z" && i + 1 < argc) min_z = std::atof(argv[++i]);
-      else if (a == "--visible-from" && i + 1 < argc) visible_from = argv[++i];
-      else if (a == "--min-views" && i + 1 < argc) min_views = std::atoi(argv[++i]);
+      if (a == "--threshold" && i + 1 < argc)
+        threshold = std::atof(argv[++i]);
+      else if (a == "--min-z" && i + 1 < argc)
+        min_z = std::atof(argv[++i]);
+      else if (a == "--visible-from" && i + 1 < argc)
+        visible_from = argv[++i];
+      else if (a == "--min-views" && i + 1 < argc)
+        min_views = std::atoi(argv[++i]);
       else if (a == "--intrinsics" && i + 1 < argc) {
         if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
                         &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
           return Fail("--intrinsics wants fx,fy,cx,cy,width,height");
-      }
-      else if (a == "--align" && i + 2 < argc) {
+      } else if (a == "--align" && i + 2 < argc) {
         align_est = argv[++i];
         align_truth = argv[++i];
-      } else return Fail("unknown option " + a);
+      } else
+        return Fail("unknown option " + a);
     }
     std::vector<Eigen::Vector3d> model, truth, truth_normals, visible;
     if (!ReadPlyPoints(argv[2], &model, &error) ||
@@ -96,9 +104,10 @@ int main(int argc, char** argv) {
       for (auto& p : model) p = e.error.alignment * p;
     }
     const SurfaceEvaluation s = EvaluateSurface(model, visible, threshold);
-    std::printf("model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
-                "completeness %.4f\n",
-                s.num_model, s.num_truth, s.accuracy_p50, s.accuracy_p90, s.accuracy_max, s.completeness);
+    std::printf(
+        "model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
+        "completeness %.4f\n",
+        s.num_model, s.num_truth, s.accuracy_p50, s.accuracy_p90, s.accuracy_max, s.completeness);
     return 0;
   }
   return Fail("unknown command " + command);

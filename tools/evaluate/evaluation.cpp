@@ -48,8 +48,8 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
   for (const auto& p : poses) {
     const Eigen::Quaterniond q(p.world_from_camera.linear());
     const Eigen::Vector3d t = p.world_from_camera.translation();
-    std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.t, t.x(), t.y(), t.z(), q.x(),
-                  q.y(), q.z(), q.w());
+    std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.t, t.x(), t.y(), t.z(), q.x(), q.y(),
+                  q.z(), q.w());
     out << buf;
   }
   return static_cast<bool>(out);
@@ -109,7 +109,8 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
     std::istringstream ss(line);
     std::string word;
     ss >> word;
-    if (word == "format") ss >> format;
+    if (word == "format")
+      ss >> format;
     else if (word == "element") {
       std::string name;
       long count;

@@ -25,9 +25,9 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
 struct TrajectoryEvaluation {
   int num_estimated = 0;
   int num_truth = 0;
-  int num_matched = 0;        // estimated poses with a true pose within max_dt
+  int num_matched = 0;             // estimated poses with a true pose within max_dt
   double registered_fraction = 0;  // num_matched / num_truth
-  TrajectoryError error;      // after Sim(3) (or SE(3)) alignment of the matched poses
+  TrajectoryError error;           // after Sim(3) (or SE(3)) alignment of the matched poses
 };
 
 // Pairs poses by timestamp (nearest, |dt| <= max_dt_s) and evaluates them.
@@ -41,9 +41,9 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
 
 // Pinhole intrinsics of the views used to decide which part of a true surface was visible.
 struct ViewIntrinsics {
-  double fx = 800, fy = 800;     // px
-  double cx = 319.5, cy = 239.5; // px
-  int width = 640, height = 480; // px
+  double fx = 800, fy = 800;      // px
+  double cx = 319.5, cy = 239.5;  // px
+  int width = 640, height = 480;  // px
 };
 
 // Indices of the surface points (with outward normals) seen by at least min_views of the cameras: in front of the

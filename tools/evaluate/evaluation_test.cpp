@@ -72,7 +72,7 @@ TEST(EvaluationTest, SurfaceAccuracyAndCompleteness) {
 TEST(EvaluationTest, FarModelPointsGetTheirExactDistance) {
   const auto truth = SpherePoints(100, 20000, Eigen::Vector3d::Zero());
   const std::vector<Eigen::Vector3d> model = {Eigen::Vector3d(1100, 0, 0), Eigen::Vector3d(-1100, 0, 0),
-                                             Eigen::Vector3d(0, 0, 5100)};
+                                              Eigen::Vector3d(0, 0, 5100)};
   const SurfaceEvaluation e = EvaluateSurface(model, truth, 2.0);
   EXPECT_NEAR(e.accuracy_p50, 1000, 1.0);
   EXPECT_NEAR(e.accuracy_max, 5000, 1.0);
@@ -134,9 +134,9 @@ TEST(EvaluationTest, VisibleSurfacePointsKeepsTheCapFacingTheCameras) {
   for (int i : visible) {
     if (points[i].z() < -90) ++lower;  // normal more than ~64 deg below the horizon
   }
-  EXPECT_EQ(lower, 0);                                          // the underside faces away from every camera
-  EXPECT_GT(visible.size(), 1000u);                             // more than a hemisphere: cameras look from all sides
-  EXPECT_LT(visible.size(), 1900u);                             // but not the bottom cap
+  EXPECT_EQ(lower, 0);               // the underside faces away from every camera
+  EXPECT_GT(visible.size(), 1000u);  // more than a hemisphere: cameras look from all sides
+  EXPECT_LT(visible.size(), 1900u);  // but not the bottom cap
   // One camera cannot give two views.
   std::vector<StampedPose> one(cameras.begin(), cameras.begin() + 1);
   EXPECT_TRUE(VisibleSurfacePoints(points, normals, one, intrinsics, 2, 0.1).empty());
