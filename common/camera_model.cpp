@@ -1,6 +1,7 @@
 #include "common/camera_model.h"
 
 #include <cmath>
+#include <opencv2/core.hpp>
 
 namespace objscan {
 
@@ -50,6 +51,24 @@ Eigen::Vector2d PinholeCamera::Unproject(const Eigen::Vector2d& pixel) const {
     if (err.squaredNorm() < 1e-24) break;
   }
   return n;
+}
+
+bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error) {
+  try {
+    cv::FileStorage storage(path, cv::FileStorage::WRITE);
+    if (!storage.isOpened()) {
+      if (error) *error = "cannot write " + path;
+      return false;
+    }
+    const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, camera.skew, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    const cv::Mat d = (cv::Mat_<double>(1, 5) << camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+    storage << "image_width" << camera.width << "image_height" << camera.height << "camera_matrix" << k
+            << "distortion_coefficients" << d;
+  } catch (const cv::Exception& e) {
+    if (error) *error = "cannot write " + path + ": " + e.what();
+    return false;
+  }
+  return true;
 }
 
 }  // namespace objscan

@@ -8,12 +8,12 @@
 namespace objscan {
 
 struct PinholeCamera {
-  std::string name;        // camera name
-  int width = 0;           // px
-  int height = 0;          // px
-  double fx = 0, fy = 0;   // px
-  double cx = 0, cy = 0;   // px
-  double skew = 0;         // px
+  std::string name;       // camera name
+  int width = 0;          // px
+  int height = 0;         // px
+  double fx = 0, fy = 0;  // px
+  double cx = 0, cy = 0;  // px
+  double skew = 0;        // px
   // k1 k2 p1 p2 k3 (OpenCV); all zero = no distortion.
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
 
@@ -33,5 +33,10 @@ struct PinholeCamera {
            pixel.y() <= height - 0.5 - margin;
   }
 };
+
+// Writes an OpenCV FileStorage calibration (YAML): image_width, image_height, camera_matrix (3x3) and
+// distortion_coefficients (k1 k2 p1 p2 k3) — the dataset folder's calib.yaml, read back by the camera driver
+// (drivers/camera ReadCalibrationFile). False with *error when the file cannot be written.
+bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error);
 
 }  // namespace objscan

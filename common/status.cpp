@@ -21,7 +21,9 @@ double Percentile(std::vector<double> values, double q) {
 }  // namespace
 
 StatusReporter::StatusReporter(Bus* bus, std::string name, std::string channel, double period_s)
-    : bus_(bus), name_(std::move(name)), channel_(std::move(channel)),
+    : bus_(bus),
+      name_(std::move(name)),
+      channel_(std::move(channel)),
       period_us_(static_cast<int64_t>(period_s * 1e6)) {
   char host[256] = {0};
   if (gethostname(host, sizeof(host) - 1) == 0) host_ = host;
@@ -123,6 +125,12 @@ void StatusReporter::PublishIfDue(int64_t wall_utime, bool force) {
   }
   msg.num_values = static_cast<int32_t>(msg.value.size());
   bus_->PublishMessage(channel_, msg);
+}
+
+std::function<void(const RawMessage&)> StatusReporter::MalformedHandler(const std::string& what) {
+  return [this, what](const RawMessage& raw) {
+    Reject(what + ": malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+  };
 }
 
 }  // namespace objscan

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 namespace objscan {
 
 class Bus;
+struct RawMessage;
 
 // What a sequence number says about the stream it came from.
 enum class SeqResult { kFirst, kNext, kGap, kRepeatedOrOld };
@@ -24,6 +26,9 @@ class StatusReporter {
   void CountOut() { ++messages_out_; }
   // Counts a rejected input under `reason` ("image: wrong size"); logs the first one of each reason with detail.
   void Reject(const std::string& reason, const std::string& detail = "");
+  // The on_malformed handler of Bus::SubscribeMessage for input `what`: rejects as "<what>: malformed" with the
+  // size and channel as detail. The reporter must outlive the subscription.
+  std::function<void(const RawMessage&)> MalformedHandler(const std::string& what);
   // Tracks the sequence numbers of one input stream; a gap adds the missing count to dropped_inputs.
   SeqResult ObserveSeq(const std::string& stream, int64_t seq);
   void RecordLatencyMs(double ms);

@@ -664,20 +664,6 @@ bool ReadCalibrationFile(const std::string& path, const std::string& camera_name
   return true;
 }
 
-bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error) {
-  try {
-    cv::FileStorage storage(path, cv::FileStorage::WRITE);
-    if (!storage.isOpened()) return Fail(error, "cannot write " + path);
-    const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, camera.skew, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    const cv::Mat d = (cv::Mat_<double>(1, 5) << camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
-    storage << "image_width" << camera.width << "image_height" << camera.height << "camera_matrix" << k
-            << "distortion_coefficients" << d;
-  } catch (const cv::Exception& e) {
-    return Fail(error, "cannot write " + path + ": " + e.what());
-  }
-  return true;
-}
-
 bool ReadTumTrajectory(const std::string& path, double position_scale, std::vector<TimedPose>* poses,
                        std::string* error) {
   std::ifstream in(path);

@@ -89,8 +89,7 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options, 
 // principal point inside the image). Returns false with *error naming the file and the problem.
 bool ReadCalibrationFile(const std::string& path, const std::string& camera_name, PinholeCamera* camera,
                          std::string* error);
-// Writes a calibration in the format ReadCalibrationFile reads (YAML).
-bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error);
+// WriteCalibrationFile (common/camera_model.h) writes the format ReadCalibrationFile reads.
 
 // One line of a TUM trajectory: t in s, world_from_camera with the position already converted to mm.
 struct TimedPose {

@@ -161,11 +161,7 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
       grid_(options_.model.votes) {
   cv::setNumThreads(options_.threads);
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for posed images");
-  auto malformed = [this](const std::string& what) {
-    return [this, what](const RawMessage& raw) {
-      status_.Reject(what + ": malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-    };
-  };
+  auto malformed = [this](const std::string& what) { return status_.MalformedHandler(what); };
   bus_.SubscribeMessage<image_t>(
       options_.image_channel, [this](const image_t& m, const RawMessage&) { OnImage(m); }, malformed("image"),
       options_.image_queue_capacity);

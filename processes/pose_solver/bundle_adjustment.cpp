@@ -73,22 +73,30 @@ void CentreFour(const FourDofGeometry& g, const T* cam, T* c) {
   for (int i = 0; i < 3; ++i) c[i] = o[i] + r[i][0] * off[0] + r[i][1] * off[1] + r[i][2] * off[2];
 }
 
+// Residual (px) of a point in the camera frame against the measured pixel (u, v); a point behind the camera gets a
+// large constant residual instead of a projection.
+template <typename T>
+bool PixelResidual(const Intrinsics& k, const T* pc, double u, double v, T* res) {
+  if (pc[2] <= T(1e-6)) {
+    res[0] = T(1e3);
+    res[1] = T(1e3);
+    return true;
+  }
+  T uv[2];
+  PixelFromCamera(k, pc, uv);
+  res[0] = uv[0] - u;
+  res[1] = uv[1] - v;
+  return true;
+}
+
 struct ReprojectionSix {
   Intrinsics k;
   double u, v;
   template <typename T>
   bool operator()(const T* cam, const T* pw, T* res) const {
-    T pc[3], uv[2];
+    T pc[3];
     CameraFromWorldSix(cam, pw, pc);
-    if (pc[2] <= T(1e-6)) {
-      res[0] = T(1e3);
-      res[1] = T(1e3);
-      return true;
-    }
-    PixelFromCamera(k, pc, uv);
-    res[0] = uv[0] - u;
-    res[1] = uv[1] - v;
-    return true;
+    return PixelResidual(k, pc, u, v, res);
   }
 };
 
@@ -98,17 +106,9 @@ struct ReprojectionFour {
   double u, v;
   template <typename T>
   bool operator()(const T* cam, const T* pw, T* res) const {
-    T pc[3], uv[2];
+    T pc[3];
     CameraFromWorldFour(g, cam, pw, pc);
-    if (pc[2] <= T(1e-6)) {
-      res[0] = T(1e3);
-      res[1] = T(1e3);
-      return true;
-    }
-    PixelFromCamera(k, pc, uv);
-    res[0] = uv[0] - u;
-    res[1] = uv[1] - v;
-    return true;
+    return PixelResidual(k, pc, u, v, res);
   }
 };
 
@@ -121,18 +121,12 @@ struct PoseOnlyReprojection {
   template <typename T>
   bool operator()(const T* cam, T* res) const {
     const T pw[3] = {T(x), T(y), T(z)};
-    T pc[3], uv[2];
-    if (kSix) CameraFromWorldSix(cam, pw, pc);
-    else CameraFromWorldFour(g, cam, pw, pc);
-    if (pc[2] <= T(1e-6)) {
-      res[0] = T(1e3);
-      res[1] = T(1e3);
-      return true;
-    }
-    PixelFromCamera(k, pc, uv);
-    res[0] = uv[0] - u;
-    res[1] = uv[1] - v;
-    return true;
+    T pc[3];
+    if (kSix)
+      CameraFromWorldSix(cam, pw, pc);
+    else
+      CameraFromWorldFour(g, cam, pw, pc);
+    return PixelResidual(k, pc, u, v, res);
   }
 };
 
@@ -183,9 +177,9 @@ Eigen::Isometry3d FromSix(const double* p) {
 
 Eigen::Isometry3d WorldFromCameraFloor(const RobotGeometry& robot, const FloorPose& p) {
   Eigen::Isometry3d world_from_tilt = Eigen::Isometry3d::Identity();
-  world_from_tilt.linear() = (Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) *
-                              Eigen::AngleAxisd(p.tilt_rad, Eigen::Vector3d::UnitY()))
-                                 .toRotationMatrix();
+  world_from_tilt.linear() =
+      (Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(p.tilt_rad, Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
   world_from_tilt.translation() = Eigen::Vector3d(p.x_mm, p.y_mm, robot.mast_height_mm);
   Eigen::Isometry3d tilt_from_camera = Eigen::Isometry3d::Identity();
   tilt_from_camera.linear() = TiltFromCameraRotation();
@@ -198,9 +192,9 @@ FloorPose FloorPoseFromWorldFromCamera(const RobotGeometry& robot, const Eigen::
   FloorPose p;
   p.yaw_rad = std::atan2(r_wt(1, 0), r_wt(0, 0));
   p.tilt_rad = std::atan2(-r_wt(2, 0), std::hypot(r_wt(0, 0), r_wt(1, 0)));
-  const Eigen::Matrix3d r_model = (Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) *
-                                   Eigen::AngleAxisd(p.tilt_rad, Eigen::Vector3d::UnitY()))
-                                      .toRotationMatrix();
+  const Eigen::Matrix3d r_model =
+      (Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(p.tilt_rad, Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
   const Eigen::Vector3d o = world_from_camera.translation() - r_model * robot.camera_offset_mm;
   p.x_mm = o.x();
   p.y_mm = o.y();
@@ -276,8 +270,10 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   std::unique_ptr<ceres::LossFunction> loss;
-  if (options.loss == "huber") loss = std::make_unique<ceres::HuberLoss>(options.loss_scale_px);
-  else if (options.loss == "cauchy") loss = std::make_unique<ceres::CauchyLoss>(options.loss_scale_px);
+  if (options.loss == "huber")
+    loss = std::make_unique<ceres::HuberLoss>(options.loss_scale_px);
+  else if (options.loss == "cauchy")
+    loss = std::make_unique<ceres::CauchyLoss>(options.loss_scale_px);
   const Intrinsics k = MakeIntrinsics(camera);
   const FourDofGeometry g = MakeGeometry(robot);
   // Points seen by fewer than two distinct frames carry no information (free, they only make the Schur complement
@@ -287,8 +283,10 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   std::vector<uint8_t> point_multi(num_points, 0);
   for (const auto& o : p->observations) {
     if (o.frame < 0 || o.frame >= num_frames || o.point < 0 || o.point >= num_points) continue;
-    if (point_first_frame[o.point] < 0) point_first_frame[o.point] = o.frame;
-    else if (point_first_frame[o.point] != o.frame) point_multi[o.point] = 1;
+    if (point_first_frame[o.point] < 0)
+      point_first_frame[o.point] = o.frame;
+    else if (point_first_frame[o.point] != o.frame)
+      point_multi[o.point] = 1;
   }
   for (int i = 0; i < num_points && i < static_cast<int>(p->point_fixed.size()); ++i)
     if (p->point_fixed[i]) point_multi[i] = 1;
@@ -300,7 +298,8 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
     double* x = &pts[3 * static_cast<size_t>(o.point)];
     ceres::CostFunction* cost;
     if (six)
-      cost = new ceres::AutoDiffCostFunction<ReprojectionSix, 2, 6, 3>(new ReprojectionSix{k, o.pixel.x(), o.pixel.y()});
+      cost =
+          new ceres::AutoDiffCostFunction<ReprojectionSix, 2, 6, 3>(new ReprojectionSix{k, o.pixel.x(), o.pixel.y()});
     else
       cost = new ceres::AutoDiffCostFunction<ReprojectionFour, 2, 4, 3>(
           new ReprojectionFour{k, g, o.pixel.x(), o.pixel.y()});
@@ -341,7 +340,8 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   for (int i = 0; i < num_points; ++i) {
     if (!point_used[i]) continue;
     double* x = &pts[3 * static_cast<size_t>(i)];
-    if (i < static_cast<int>(p->point_fixed.size()) && p->point_fixed[i]) problem.SetParameterBlockConstant(x);
+    if (i < static_cast<int>(p->point_fixed.size()) && p->point_fixed[i])
+      problem.SetParameterBlockConstant(x);
     else if (i < static_cast<int>(p->point_on_floor.size()) && p->point_on_floor[i])
       problem.SetManifold(x, new ceres::SubsetManifold(3, {2}));
   }
@@ -360,8 +360,10 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   for (int f = 0; f < num_frames; ++f) {
     if (!frame_used[f]) continue;
     const double* c = &cams[static_cast<size_t>(f) * cam_size];
-    if (six) p->world_from_camera[f] = FromSix(c);
-    else p->world_from_camera[f] = WorldFromCameraFloor(robot, {c[0], c[1], c[2], c[3]});
+    if (six)
+      p->world_from_camera[f] = FromSix(c);
+    else
+      p->world_from_camera[f] = WorldFromCameraFloor(robot, {c[0], c[1], c[2], c[3]});
   }
   for (int i = 0; i < num_points; ++i)
     if (point_used[i]) p->points[i] = Eigen::Vector3d(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
@@ -386,8 +388,10 @@ bool RefinePose(const PinholeCamera& camera, const RobotGeometry& robot, const B
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   std::unique_ptr<ceres::LossFunction> loss;
-  if (options.loss == "huber") loss = std::make_unique<ceres::HuberLoss>(options.loss_scale_px);
-  else if (options.loss == "cauchy") loss = std::make_unique<ceres::CauchyLoss>(options.loss_scale_px);
+  if (options.loss == "huber")
+    loss = std::make_unique<ceres::HuberLoss>(options.loss_scale_px);
+  else if (options.loss == "cauchy")
+    loss = std::make_unique<ceres::CauchyLoss>(options.loss_scale_px);
   const Intrinsics k = MakeIntrinsics(camera);
   const FourDofGeometry g = MakeGeometry(robot);
   for (int i : use) {

@@ -2,8 +2,8 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 #include <sstream>
@@ -164,13 +164,15 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
   fr.outlier.assign(fr.ids.size(), 0);
   if (odometry) {
     fr.has_odometry = true;
-    fr.odometry_world_from_camera = WorldFromCamera(options_.robot, odometry->x_mm, odometry->y_mm,
-                                                    odometry->theta_rad, odometry->pan_rad, odometry->tilt_rad);
+    fr.odometry_world_from_camera = WorldFromCamera(options_.robot, odometry->x_mm, odometry->y_mm, odometry->theta_rad,
+                                                    odometry->pan_rad, odometry->tilt_rad);
   }
   // Until posed: initializing frames carry the odometry pose (or identity), lost ones the last good pose.
   fr.status = recovering_ ? PoseStatus::kLost : PoseStatus::kInitializing;
-  if (recovering_ && last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
-  else if (fr.has_odometry) fr.world_from_camera = fr.odometry_world_from_camera;
+  if (recovering_ && last_good_ >= 0)
+    fr.world_from_camera = frames_[last_good_].world_from_camera;
+  else if (fr.has_odometry)
+    fr.world_from_camera = fr.odometry_world_from_camera;
   frames_.push_back(std::move(fr));
 
   FrameResult result;
@@ -323,7 +325,8 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       for (int f = first; f <= last; ++f) {
         const Eigen::Isometry3d& w = frames_[f].world_from_camera;
         measured += w.translation().z();
-        expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, w)).translation().z();
+        expected +=
+            WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, w)).translation().z();
       }
       if (measured > 1e-6) {
         ApplySimilarity(expected / measured, Eigen::Isometry3d::Identity(), first, last, new_points);
@@ -367,24 +370,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   // Span BA in the final model (4-DOF projects the poses onto the robot model here).
   LocalBundleAdjustment(last);
   // Per-frame statistics.
-  for (int f = first; f <= last; ++f) {
-    Frame& fr = frames_[f];
-    const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
-    int n = 0;
-    double sum = 0;
-    for (size_t i = 0; i < fr.ids.size(); ++i) {
-      auto it = points_.find(fr.ids[i]);
-      if (it == points_.end()) continue;
-      Eigen::Vector2d uv;
-      if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
-      const double e2 = (uv - fr.pixels[i]).squaredNorm();
-      if (e2 > options_.pnp.inlier_threshold_px * options_.pnp.inlier_threshold_px) continue;
-      ++n;
-      sum += e2;
-    }
-    fr.inliers = n;
-    fr.rms = n > 0 ? std::sqrt(sum / n) : 0.0;
-  }
+  for (int f = first; f <= last; ++f) UpdateFrameStatistics(&frames_[f]);
   last_keyframe_inliers_ = frames_[last].inliers;
   std::ostringstream m;
   m << "initialized on frames " << frames_[first].seq << ".." << frames_[last].seq << " with " << np
@@ -582,6 +568,25 @@ int PoseEstimator::TriangulateNew(int f) {
   return added;
 }
 
+void PoseEstimator::UpdateFrameStatistics(Frame* frame) const {
+  const Frame& fr = *frame;
+  const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
+  int n = 0;
+  double sum = 0;
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    auto it = points_.find(fr.ids[i]);
+    if (it == points_.end()) continue;
+    Eigen::Vector2d uv;
+    if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
+    const double e2 = (uv - fr.pixels[i]).squaredNorm();
+    if (e2 > options_.pnp.inlier_threshold_px * options_.pnp.inlier_threshold_px) continue;
+    ++n;
+    sum += e2;
+  }
+  frame->inliers = n;
+  frame->rms = n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
 void PoseEstimator::LocalBundleAdjustment(int f) {
   // Window: the last local_window_keyframes posed keyframes up to f.
   std::vector<int> window;
@@ -678,8 +683,8 @@ void PoseEstimator::PruneLandmarks(const std::vector<int64_t>& ids, const std::v
 void PoseEstimator::GlobalBundleAdjustment() {
   std::vector<int> frame_list;
   for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
-    if (frames_[g].posed && (options_.global_ba_all_frames || frames_[g].keyframe || g == gauge_frame_ ||
-                             g == gauge_frame_b_))
+    if (frames_[g].posed &&
+        (options_.global_ba_all_frames || frames_[g].keyframe || g == gauge_frame_ || g == gauge_frame_b_))
       frame_list.push_back(g);
   std::vector<int64_t> point_list;
   std::unordered_map<int64_t, int> point_index;
@@ -783,9 +788,8 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
     measured += n.dot(fr.world_from_camera.translation()) + d;
     Eigen::Isometry3d levelled = Eigen::Isometry3d::Identity();
     levelled.linear() = level * fr.world_from_camera.linear();
-    expected += WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, levelled))
-                    .translation()
-                    .z();
+    expected +=
+        WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, levelled)).translation().z();
   }
   if (!(measured > 1e-6 && expected > 1e-6)) return false;
   const double s = expected / measured;
@@ -875,8 +879,10 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
       if (frames_[f].posed) continue;
       int nearest = -1;
       for (int d = 1; d < static_cast<int>(frames_.size()) && nearest < 0; ++d) {
-        if (f + d < static_cast<int>(frames_.size()) && frames_[f + d].posed) nearest = f + d;
-        else if (f - d >= 0 && frames_[f - d].posed) nearest = f - d;
+        if (f + d < static_cast<int>(frames_.size()) && frames_[f + d].posed)
+          nearest = f + d;
+        else if (f - d >= 0 && frames_[f - d].posed)
+          nearest = f - d;
       }
       if (nearest < 0) break;
       RegisterAgainstMap(f, frames_[nearest].world_from_camera);
@@ -884,24 +890,8 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
     GlobalBundleAdjustment();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
     // Final per-frame statistics.
-    for (auto& fr : frames_) {
-      if (!fr.posed) continue;
-      const Eigen::Isometry3d cw = fr.world_from_camera.inverse();
-      int n = 0;
-      double sum = 0;
-      for (size_t i = 0; i < fr.ids.size(); ++i) {
-        auto it = points_.find(fr.ids[i]);
-        if (it == points_.end()) continue;
-        Eigen::Vector2d uv;
-        if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
-        const double e2 = (uv - fr.pixels[i]).squaredNorm();
-        if (e2 > options_.pnp.inlier_threshold_px * options_.pnp.inlier_threshold_px) continue;
-        ++n;
-        sum += e2;
-      }
-      fr.inliers = n;
-      fr.rms = n > 0 ? std::sqrt(sum / n) : 0.0;
-    }
+    for (auto& fr : frames_)
+      if (fr.posed) UpdateFrameStatistics(&fr);
   }
   final_ba_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   std::vector<CameraPoseEstimate> out;

@@ -56,34 +56,34 @@
 namespace objscan {
 
 struct PoseEstimatorOptions {
-  MotionModel model = MotionModel::kSixDof;  // camera model of all adjustments
-  RobotGeometry robot;                       // mast height and offsets (4-DOF model, odometry poses)
-  StartSpanOptions start_span;               // choice of the preliminary span
-  PnpOptions pnp;                            // per-frame PnP (model is overridden by `model`)
-  TriangulationOptions triangulation;        // acceptance of new landmarks
-  int min_triangulation_views = 3;           // posed views a track needs before it is triangulated
-  int max_triangulation_views = 8;           // views used (evenly spread over the track)
-  int keyframe_interval = 5;                 // frames: at most this many frames between keyframes
-  double keyframe_track_ratio = 0.7;         // keyframe when tracked landmarks < ratio x those of the last keyframe
-  int local_window_keyframes = 5;            // keyframes optimized by the windowed BA
-  int local_ba_iterations = 5;               // Ceres iterations of the windowed BA
-  int local_fixed_keyframes = 4;             // older keyframes (nearest first) held fixed in the windowed BA
-  bool global_ba_all_frames = false;         // final BA over every frame (slow) instead of keyframes + pose refits
-  int global_ba_iterations = 40;             // Ceres iterations of the final BA
+  MotionModel model = MotionModel::kSixDof;    // camera model of all adjustments
+  RobotGeometry robot;                         // mast height and offsets (4-DOF model, odometry poses)
+  StartSpanOptions start_span;                 // choice of the preliminary span
+  PnpOptions pnp;                              // per-frame PnP (model is overridden by `model`)
+  TriangulationOptions triangulation;          // acceptance of new landmarks
+  int min_triangulation_views = 3;             // posed views a track needs before it is triangulated
+  int max_triangulation_views = 8;             // views used (evenly spread over the track)
+  int keyframe_interval = 5;                   // frames: at most this many frames between keyframes
+  double keyframe_track_ratio = 0.7;           // keyframe when tracked landmarks < ratio x those of the last keyframe
+  int local_window_keyframes = 5;              // keyframes optimized by the windowed BA
+  int local_ba_iterations = 5;                 // Ceres iterations of the windowed BA
+  int local_fixed_keyframes = 4;               // older keyframes (nearest first) held fixed in the windowed BA
+  bool global_ba_all_frames = false;           // final BA over every frame (slow) instead of keyframes + pose refits
+  int global_ba_iterations = 40;               // Ceres iterations of the final BA
   double global_ba_function_tolerance = 1e-5;  // final BA stops when a step changes the cost by less than this
                                                // fraction (the Huber loss' IRLS tail creeps at ~1e-6 per step)
-  int init_ba_iterations = 50;               // Ceres iterations of the span BA
-  std::string ba_loss = "huber";             // robust loss: "huber" or "cauchy"
-  double ba_loss_px = 1.0;                   // px, robust loss scale
-  double max_landmark_error_px = 2.5;        // px, landmarks with a larger RMS after BA are removed
-  bool use_floor_for_scale = true;           // level on (4dof) / scale from (both) the floor plane when it is seen
-  double floor_tolerance_mm = 6.0;           // mm, plane inlier distance / floor landmark |z|
-  int min_floor_points = 20;                 // landmarks needed to accept a floor plane
-  bool refine_scale_with_odometry = true;    // kSixDof: rescale at Finish() by odometry / visual path length
-  int online_scale_frames = 100;             // kSixDof: at keyframes within this many frames of the map start,
-                                             // rescale the map by odometry / visual path length (0 = off)
-  int relocalize_after_lost_frames = 10;     // lost frames before the preliminary phase restarts
-  int64_t seed = 1;                          // RANSAC seeds (seed + frame index)
+  int init_ba_iterations = 50;                 // Ceres iterations of the span BA
+  std::string ba_loss = "huber";               // robust loss: "huber" or "cauchy"
+  double ba_loss_px = 1.0;                     // px, robust loss scale
+  double max_landmark_error_px = 2.5;          // px, landmarks with a larger RMS after BA are removed
+  bool use_floor_for_scale = true;             // level on (4dof) / scale from (both) the floor plane when it is seen
+  double floor_tolerance_mm = 6.0;             // mm, plane inlier distance / floor landmark |z|
+  int min_floor_points = 20;                   // landmarks needed to accept a floor plane
+  bool refine_scale_with_odometry = true;      // kSixDof: rescale at Finish() by odometry / visual path length
+  int online_scale_frames = 100;               // kSixDof: at keyframes within this many frames of the map start,
+                                               // rescale the map by odometry / visual path length (0 = off)
+  int relocalize_after_lost_frames = 10;       // lost frames before the preliminary phase restarts
+  int64_t seed = 1;                            // RANSAC seeds (seed + frame index)
 };
 bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& options, std::string* why);
 
@@ -95,11 +95,11 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
                      const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why = nullptr);
 
 struct Landmark {
-  int64_t id = 0;                               // track id
+  int64_t id = 0;                                         // track id
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // world
-  int num_observations = 0;                     // posed frames that observe it
-  double reprojection_rms_px = 0;               // RMS over those
-  bool on_floor = false;                        // held at z = 0 (kFourDof floor mode)
+  int num_observations = 0;                               // posed frames that observe it
+  double reprojection_rms_px = 0;                         // RMS over those
+  bool on_floor = false;                                  // held at z = 0 (kFourDof floor mode)
 };
 
 // Odometry readings, interpolated at frame times (linear in x, y, theta (unwrapped), pan, tilt; clamped at the ends).
@@ -118,8 +118,8 @@ class OdometryBuffer {
 };
 
 struct FrameResult {
-  CameraPoseEstimate pose;     // the pose to publish for this frame now
-  bool keyframe = false;       // a keyframe was added (publish landmarks)
+  CameraPoseEstimate pose;       // the pose to publish for this frame now
+  bool keyframe = false;         // a keyframe was added (publish landmarks)
   bool initialized_now = false;  // the preliminary phase finished with this frame
   // With initialized_now: poses of the EARLIER frames of the preliminary window that the new map registered (the
   // span and the frames before it that PnP against the map accepts), in frame order, to publish now (their first
@@ -157,9 +157,9 @@ class PoseEstimator {
  private:
   struct Frame {
     int64_t utime = 0, seq = 0;
-    std::vector<int64_t> ids;            // sorted
-    std::vector<Eigen::Vector2d> pixels; // undistorted, same order
-    std::vector<uint8_t> outlier;        // PnP outlier flag per feature
+    std::vector<int64_t> ids;             // sorted
+    std::vector<Eigen::Vector2d> pixels;  // undistorted, same order
+    std::vector<uint8_t> outlier;         // PnP outlier flag per feature
     bool has_odometry = false;
     Eigen::Isometry3d odometry_world_from_camera = Eigen::Isometry3d::Identity();
     bool posed = false;
@@ -168,7 +168,7 @@ class PoseEstimator {
     PoseStatus status = PoseStatus::kInitializing;
     int inliers = 0;
     double rms = 0;
-    int Find(int64_t id) const;          // index of id or -1
+    int Find(int64_t id) const;  // index of id or -1
   };
   struct Point {
     Eigen::Vector3d x;
@@ -182,6 +182,8 @@ class PoseEstimator {
   void AddKeyframe(int f);
   int TriangulateNew(int f);
   void LocalBundleAdjustment(int f);
+  // Sets frame->inliers and frame->rms (px) from its observations of the current points (pose solver inlier threshold).
+  void UpdateFrameStatistics(Frame* frame) const;
   void GlobalBundleAdjustment();
   // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
   // its outlier flags set. False (frame untouched) otherwise.
@@ -212,15 +214,15 @@ class PoseEstimator {
   std::unordered_map<int64_t, std::vector<int>> track_frames_;  // track id -> frames that saw it
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
-  int init_start_ = 0;              // first frame considered by the (re)initialization
-  int span_first_ = -1;             // first frame of the last preliminary span
-  int gauge_frame_ = -1;            // first frame of the first map (fixed in BA)
-  int gauge_frame_b_ = -1;          // second frame of the 6-DOF scale gauge
-  int last_good_ = -1;              // last frame with a tracked pose
+  int init_start_ = 0;      // first frame considered by the (re)initialization
+  int span_first_ = -1;     // first frame of the last preliminary span
+  int gauge_frame_ = -1;    // first frame of the first map (fixed in BA)
+  int gauge_frame_b_ = -1;  // second frame of the 6-DOF scale gauge
+  int last_good_ = -1;      // last frame with a tracked pose
   int last_keyframe_ = -1;
   int last_keyframe_inliers_ = 0;
   int lost_count_ = 0;
-  bool recovering_ = false;         // a restart after loss is in progress (chain through odometry)
+  bool recovering_ = false;  // a restart after loss is in progress (chain through odometry)
   ScaleSource scale_source_ = ScaleSource::kNone;
   double init_ms_ = 0, final_ba_ms_ = 0;
   double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;

@@ -118,27 +118,19 @@ PoseSolverNode::PoseSolverNode(Bus& bus, const PoseSolverNodeOptions& options)
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for camera_info and tracks");
   bus_.SubscribeMessage<feature_tracks_t>(
       options_.tracks_channel, [this](const feature_tracks_t& m, const RawMessage&) { OnTracks(m); },
-      [this](const RawMessage& raw) {
-        status_.Reject("tracks: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-      },
+      status_.MalformedHandler("tracks"),
       options_.tracks_queue_capacity);
   bus_.SubscribeMessage<camera_info_t>(
       options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
-      [this](const RawMessage& raw) {
-        status_.Reject("camera_info: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-      });
+      status_.MalformedHandler("camera_info"));
   if (!options_.odometry_channel.empty())
     bus_.SubscribeMessage<odometry_t>(
         options_.odometry_channel, [this](const odometry_t& m, const RawMessage&) { OnOdometry(m); },
-        [this](const RawMessage& raw) {
-          status_.Reject("odometry: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-        },
+        status_.MalformedHandler("odometry"),
         1000);
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
-      [this](const RawMessage& raw) {
-        status_.Reject("control: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-      });
+      status_.MalformedHandler("control"));
 }
 
 void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {

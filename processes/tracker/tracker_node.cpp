@@ -100,22 +100,16 @@ TrackerNode::TrackerNode(Bus& bus, const TrackerNodeOptions& options)
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for images on " + options_.image_channel);
   bus_.SubscribeMessage<image_t>(
       options_.image_channel, [this](const image_t& msg, const RawMessage&) { OnImage(msg); },
-      [this](const RawMessage& raw) {
-        status_.Reject("image: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-      },
+      status_.MalformedHandler("image"),
       options_.image_queue_capacity);
   if (!options_.info_channel.empty()) {
     bus_.SubscribeMessage<camera_info_t>(
         options_.info_channel, [this](const camera_info_t& msg, const RawMessage&) { OnCameraInfo(msg); },
-        [this](const RawMessage& raw) {
-          status_.Reject("camera_info: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-        });
+        status_.MalformedHandler("camera_info"));
   }
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& msg, const RawMessage&) { OnControl(msg); },
-      [this](const RawMessage& raw) {
-        status_.Reject("control: malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
-      });
+      status_.MalformedHandler("control"));
 }
 
 void TrackerNode::OnCameraInfo(const camera_info_t& msg) {

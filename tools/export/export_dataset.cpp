@@ -121,7 +121,7 @@ bool DatasetWriter::Finish(std::string* error) {
   if (has_camera_) {
     for (const auto& f : frames)
       if (f.width != camera_.width || f.height != camera_.height) ++summary_.frames_size_mismatch;
-    if (!WriteDatasetCalibration((root / "calib.yaml").string(), camera_, error)) return false;
+    if (!WriteCalibrationFile((root / "calib.yaml").string(), camera_, error)) return false;
     summary_.has_calibration = true;
   }
 
@@ -166,20 +166,6 @@ bool DatasetWriter::Finish(std::string* error) {
     const bool ok = std::ferror(out) == 0;
     if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path.string());
     summary_.odometry_written = static_cast<int64_t>(odometry_.size());
-  }
-  return true;
-}
-
-bool WriteDatasetCalibration(const std::string& path, const PinholeCamera& camera, std::string* error) {
-  try {
-    cv::FileStorage storage(path, cv::FileStorage::WRITE);
-    if (!storage.isOpened()) return Fail(error, "cannot write " + path);
-    const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, camera.skew, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    const cv::Mat d = (cv::Mat_<double>(1, 5) << camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
-    storage << "image_width" << camera.width << "image_height" << camera.height << "camera_matrix" << k
-            << "distortion_coefficients" << d;
-  } catch (const cv::Exception& e) {
-    return Fail(error, "cannot write " + path + ": " + e.what());
   }
   return true;
 }

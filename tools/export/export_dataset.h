@@ -92,9 +92,9 @@ class DatasetWriter {
 // Image file name of frame seq: 6 digits zero padded ("000042.png"); negative seqs are rejected by AddFrame.
 std::string DatasetImageName(int64_t seq);
 
-// Writes / reads calib.yaml in the format above. The reader needs camera_matrix, image_width, image_height;
-// distortion_coefficients may be absent (zero) or have 4 or 5 values. It checks the camera is valid.
-bool WriteDatasetCalibration(const std::string& path, const PinholeCamera& camera, std::string* error);
+// Reads calib.yaml in the format above (written by WriteCalibrationFile, common/camera_model.h). Needs
+// camera_matrix, image_width, image_height; distortion_coefficients may be absent (zero) or have 4 or 5 values.
+// It checks the camera is valid.
 bool ReadDatasetCalibration(const std::string& path, PinholeCamera* camera, std::string* error);
 
 // One line of a TUM file.
