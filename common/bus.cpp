@@ -43,6 +43,9 @@ class LcmBus final : public Bus {
   }
 
   std::string Describe() const override { return url_.empty() ? std::string("(LCM default)") : url_; }
+  bool IsNetwork() const override {
+    return url_.empty() || url_.rfind("udpm://", 0) == 0 || url_.rfind("tcpq://", 0) == 0;
+  }
 
  private:
   struct Sub {
@@ -74,6 +77,7 @@ class SplitBus final : public Bus {
   }
   int Handle(int timeout_ms) override { return input_->Handle(timeout_ms); }
   std::string Describe() const override { return "in " + input_->Describe() + ", out " + output_->Describe(); }
+  bool IsNetwork() const override { return output_->IsNetwork(); }
 
  private:
   std::unique_ptr<Bus> input_;
@@ -89,12 +93,15 @@ class DataLogBus final : public Bus {
     if (q != std::string::npos) {
       const std::string query = rest.substr(q + 1);
       rest.resize(q);
-      if (query.rfind("exclude=", 0) == 0) exclude = query.substr(8);
-      else throw std::runtime_error("datalog: unknown parameter in '" + url + "'");
+      if (query.rfind("exclude=", 0) == 0)
+        exclude = query.substr(8);
+      else
+        throw std::runtime_error("datalog: unknown parameter in '" + url + "'");
     }
     std::stringstream ss(exclude);
     std::string channel;
-    while (std::getline(ss, channel, ',')) if (!channel.empty()) exclude_.insert(channel);
+    while (std::getline(ss, channel, ','))
+      if (!channel.empty()) exclude_.insert(channel);
     log_ = lcm_eventlog_create(rest.c_str(), "w");
     if (log_ == nullptr) throw std::runtime_error("cannot write log '" + rest + "'");
   }
@@ -110,8 +117,10 @@ class DataLogBus final : public Bus {
     // far-off utime (garbage, wall clock) push every later event into the future.
     constexpr int64_t kMaxJumpUs = 3600LL * 1000000LL;
     const auto data_time = static_cast<int64_t>(utime);
-    if (next_event_ == 0) last_timestamp_ = std::max<int64_t>(0, data_time);
-    else if (data_time > last_timestamp_ && data_time - last_timestamp_ <= kMaxJumpUs) last_timestamp_ = data_time;
+    if (next_event_ == 0)
+      last_timestamp_ = std::max<int64_t>(0, data_time);
+    else if (data_time > last_timestamp_ && data_time - last_timestamp_ <= kMaxJumpUs)
+      last_timestamp_ = data_time;
     lcm_eventlog_event_t event{};
     event.eventnum = next_event_++;
     event.timestamp = last_timestamp_;
@@ -127,6 +136,7 @@ class DataLogBus final : public Bus {
     return 0;
   }
   std::string Describe() const override { return url_; }
+  bool IsNetwork() const override { return false; }
 
  private:
   std::string url_;
@@ -137,6 +147,12 @@ class DataLogBus final : public Bus {
 };
 
 }  // namespace
+
+void BurstPacer::After() {
+  if (!active_ || ++count_ % every_ != 0) return;
+  std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms_));
+  ++pauses_;
+}
 
 std::unique_ptr<Bus> MakeLcmBus(const std::string& url) {
   if (url.rfind("datalog://", 0) == 0) return std::make_unique<DataLogBus>(url);

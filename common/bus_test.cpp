@@ -151,5 +151,38 @@ TEST(BusTest, DataLogStampsEventsWithDataTimeAndSkipsStatus) {
 
 TEST(BusTest, BadUrlThrows) { EXPECT_THROW(MakeLcmBus("nonsense://what"), std::runtime_error); }
 
+// A bus that only says whether it is a network transport.
+class FakeNetworkBus final : public Bus {
+ public:
+  explicit FakeNetworkBus(bool network) : network_(network) {}
+  bool Publish(const std::string&, const void*, int) override { return true; }
+  void Subscribe(const std::string&, RawHandler, int) override {}
+  int Handle(int) override { return 0; }
+  std::string Describe() const override { return "fake"; }
+  bool IsNetwork() const override { return network_; }
+
+ private:
+  bool network_;
+};
+
+TEST(BusTest, LocalTransportsAreNotNetwork) {
+  EXPECT_FALSE(MakeLcmBus("memq://")->IsNetwork());
+  const std::string path = TempPath("net.lcmlog");
+  EXPECT_FALSE(MakeLcmBus("datalog://" + path)->IsNetwork());
+  EXPECT_FALSE(MakeBus("memq://", "file://" + path + "?mode=w")->IsNetwork());
+  std::remove(path.c_str());
+}
+
+TEST(BusTest, BurstPacerPausesOnlyOnNetworkBuses) {
+  FakeNetworkBus network(true), local(false);
+  BurstPacer paced(network, 3, 1), unpaced(local, 3, 1);
+  for (int i = 0; i < 7; ++i) {
+    paced.After();
+    unpaced.After();
+  }
+  EXPECT_EQ(paced.pauses(), 2);  // after messages 3 and 6
+  EXPECT_EQ(unpaced.pauses(), 0);
+}
+
 }  // namespace
 }  // namespace objscan

@@ -118,16 +118,14 @@ PoseSolverNode::PoseSolverNode(Bus& bus, const PoseSolverNodeOptions& options)
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for camera_info and tracks");
   bus_.SubscribeMessage<feature_tracks_t>(
       options_.tracks_channel, [this](const feature_tracks_t& m, const RawMessage&) { OnTracks(m); },
-      status_.MalformedHandler("tracks"),
-      options_.tracks_queue_capacity);
+      status_.MalformedHandler("tracks"), options_.tracks_queue_capacity);
   bus_.SubscribeMessage<camera_info_t>(
       options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
       status_.MalformedHandler("camera_info"));
   if (!options_.odometry_channel.empty())
     bus_.SubscribeMessage<odometry_t>(
         options_.odometry_channel, [this](const odometry_t& m, const RawMessage&) { OnOdometry(m); },
-        status_.MalformedHandler("odometry"),
-        1000);
+        status_.MalformedHandler("odometry"), 1000);
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
       status_.MalformedHandler("control"));
@@ -145,8 +143,10 @@ void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {
                       camera.fy == camera_.fy && camera.cx == camera_.cx && camera.cy == camera_.cy &&
                       camera.skew == camera_.skew && camera.k1 == camera_.k1 && camera.k2 == camera_.k2 &&
                       camera.p1 == camera_.p1 && camera.p2 == camera_.p2 && camera.k3 == camera_.k3;
-    if (!same) status_.Reject("camera_info: changed", "calibration differs from the first; ignored");
-    else status_.CountIn();
+    if (!same)
+      status_.Reject("camera_info: changed", "calibration differs from the first; ignored");
+    else
+      status_.CountIn();
     return;
   }
   status_.CountIn();
@@ -203,9 +203,9 @@ void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
     frame.height = have_camera_ ? camera_.height : frame.height;
   }
   if (have_camera_ && (frame.width != camera_.width || frame.height != camera_.height)) {
-    status_.Reject("tracks: image size differs from camera_info",
-                   "seq " + std::to_string(msg.seq) + " " + std::to_string(frame.width) + "x" +
-                       std::to_string(frame.height));
+    status_.Reject(
+        "tracks: image size differs from camera_info",
+        "seq " + std::to_string(msg.seq) + " " + std::to_string(frame.width) + "x" + std::to_string(frame.height));
     return;
   }
   for (const auto& t : frame.features) {
@@ -240,8 +240,7 @@ void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
 void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   status_.SetLastDataUtime(frame.utime);
   OdometryReading odo;
-  const bool have_odo =
-      odometry_.At(frame.utime, &odo, static_cast<int64_t>(options_.max_odometry_gap_s * 1e6));
+  const bool have_odo = odometry_.At(frame.utime, &odo, static_cast<int64_t>(options_.max_odometry_gap_s * 1e6));
   FrameResult r;
   const int64_t t0 = MonotonicMicros();
   try {
@@ -254,8 +253,10 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   if (r.initialized_now) LogInfo(estimator_->last_message());
   // Earlier frames of the preliminary window, posed by the new map: published now (same seq, late) and recorded
   // in place of their first (INITIALIZING / LOST) publication.
+  BurstPacer pacer(bus_);  // the window can be longer than a subscriber's queue
   for (const CameraPoseEstimate& late : r.late_poses) {
     if (bus_.PublishMessage(options_.pose_channel, PoseToMessage(late))) status_.CountOut();
+    pacer.After();
     for (auto it = online_poses_.rbegin(); it != online_poses_.rend(); ++it)
       if (it->seq == late.seq) {
         *it = late;
@@ -318,8 +319,11 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
     }
     status_.SetValue("final_ba_ms", estimator_->final_ba_ms());
     LogInfo(estimator_->last_message());
-    for (const auto& p : final_poses)
+    BurstPacer pacer(bus_);  // one message per frame: lcm-logger and viewers would drop an unpaced burst
+    for (const auto& p : final_poses) {
       if (bus_.PublishMessage(options_.final_pose_channel, PoseToMessage(p))) status_.CountOut();
+      pacer.After();
+    }
     PublishLandmarks(last_seq_ >= 0 ? last_utime_ : msg.utime, last_seq_);
     if (!options_.output_dir.empty()) {
       std::string error;
@@ -342,8 +346,10 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
         }
         ok = WriteColmapText(options_.output_dir + "/colmap", camera_, images, lms, &error);
       }
-      if (!ok) LogError("writing results: " + error);
-      else LogInfo("results written to " + options_.output_dir);
+      if (!ok)
+        LogError("writing results: " + error);
+      else
+        LogInfo("results written to " + options_.output_dir);
     }
   }
   control_t reply;

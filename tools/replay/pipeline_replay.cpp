@@ -23,7 +23,8 @@ namespace {
 // The nodes' bus: delivers on memq and records every publication.
 class RecordingBus final : public Bus {
  public:
-  RecordingBus(Bus& delivery, Bus& recorder, int64_t* count) : delivery_(delivery), recorder_(recorder), count_(count) {}
+  RecordingBus(Bus& delivery, Bus& recorder, int64_t* count)
+      : delivery_(delivery), recorder_(recorder), count_(count) {}
   bool Publish(const std::string& channel, const void* data, int size) override {
     ++*count_;
     recorder_.Publish(channel, data, size);
@@ -34,6 +35,7 @@ class RecordingBus final : public Bus {
   }
   int Handle(int timeout_ms) override { return delivery_.Handle(timeout_ms); }
   std::string Describe() const override { return "replay(" + delivery_.Describe() + ")"; }
+  bool IsNetwork() const override { return delivery_.IsNetwork(); }
 
  private:
   Bus& delivery_;
