@@ -1,8 +1,11 @@
 #include "viewer/scene_renderer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <limits>
 #include <unordered_set>
 
 #include "objscan/pose_t.hpp"
@@ -62,20 +65,26 @@ void main() {
 }
 )";
 
-// Large models: one screen-aligned square per voxel, sized like the voxel at its depth (much cheaper in software GL).
+// Large or distant models: one screen-aligned square per voxel (or merged cell), sized like it at its depth. In
+// software GL a point costs a fraction of a cube; the colour is flat (no interpolation set-up per point).
 const char* kVoxelPointVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 center;
 layout(location = 1) in vec3 color;
-layout(location = 2) in int neighbours;
 uniform mat4 mvp;
 uniform float half_size;
 uniform float pixels_per_unit;  // projection(1,1) * viewport height / 2
-out vec3 v_color;
+flat out vec3 v_color;
 void main() {
   gl_Position = mvp * vec4(center, 1.0);
   gl_PointSize = max(1.0, 2.0 * half_size * pixels_per_unit / max(gl_Position.w, 1e-3));
-  v_color = color * ((neighbours & 16) != 0 ? 0.8 : 1.0);
+  v_color = color;
 }
+)";
+
+const char* kFlatColorFragmentShader = R"(#version 330 core
+flat in vec3 v_color;
+out vec4 frag_color;
+void main() { frag_color = vec4(v_color, 1.0); }
 )";
 
 unsigned Compile(unsigned type, const char* source, std::string* error) {
@@ -181,6 +190,141 @@ int64_t VoxelKey(int64_t i, int64_t j, int64_t k) {
   return ((i + kOffset) & kMask) << 42 | ((j + kOffset) & kMask) << 21 | ((k + kOffset) & kMask);
 }
 
+// ceil for |v| < 2^30 without a libm call (x86-64 without SSE4.1 has no inline ceil).
+int CeilToInt(float v) {
+  const int t = static_cast<int>(v);  // rounds towards zero
+  return t + (v > static_cast<float>(t) ? 1 : 0);
+}
+
+// Bits of the low 21 bits of v spread to every third bit.
+uint64_t SpreadBits(uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+uint64_t MortonKey(int64_t i, int64_t j, int64_t k) {
+  constexpr int64_t kOffset = 1 << 20;
+  return SpreadBits(static_cast<uint64_t>(i + kOffset)) | SpreadBits(static_cast<uint64_t>(j + kOffset)) << 1 |
+         SpreadBits(static_cast<uint64_t>(k + kOffset)) << 2;
+}
+
+int64_t FloorHalf(int64_t i) { return i >= 0 ? i / 2 : (i - 1) / 2; }
+
+// One vertex of a point buffer: cell centre (mm) and colour (RGBA 0..255), 16 bytes.
+struct PointVertex {
+  float x, y, z;
+  uint8_t rgba[4];
+};
+
+// A cell of one level of detail with its colour sums: over the voxels that can be seen (not enclosed) and over all.
+struct LodCell {
+  uint64_t key;     // Morton key of the level-0 coordinates shifted right by 3 per level: one level up = key >> 3
+  int64_t i, j, k;  // integer cell coordinates at its level
+  float visible_rgb[3];
+  int64_t visible;
+  float all_rgb[3];
+  int64_t all;
+};
+
+uint8_t ToByte(float c) { return static_cast<uint8_t>(std::clamp(c, 0.0f, 1.0f) * 255.0f + 0.5f); }
+
+// A set of integer cells: a bitmap over their bounding box (fast, no allocation per cell) unless that box is huge,
+// then a hash set.
+class CellSet {
+ public:
+  template <class Cells, class Coords>
+  CellSet(const Cells& cells, Coords coords) {
+    if (cells.empty()) return;
+    for (int a = 0; a < 3; ++a) {
+      min_[a] = std::numeric_limits<int64_t>::max();
+      max_[a] = std::numeric_limits<int64_t>::lowest();
+    }
+    for (const auto& cell : cells) {
+      const std::array<int64_t, 3> c = coords(cell);
+      for (int a = 0; a < 3; ++a) min_[a] = std::min(min_[a], c[a]), max_[a] = std::max(max_[a], c[a]);
+    }
+    for (int a = 0; a < 3; ++a) size_[a] = max_[a] - min_[a] + 1;
+    constexpr int64_t kMaxBits = int64_t{1} << 28;  // 32 MB
+    dense_ = size_[0] <= kMaxBits / size_[1] / size_[2];
+    if (dense_)
+      bits_.assign(static_cast<size_t>((size_[0] * size_[1] * size_[2] + 63) / 64), 0);
+    else
+      sparse_.reserve(cells.size() * 2);
+    for (const auto& cell : cells) {
+      const std::array<int64_t, 3> c = coords(cell);
+      if (dense_) {
+        const int64_t bit = Index(c[0], c[1], c[2]);
+        bits_[bit >> 6] |= uint64_t{1} << (bit & 63);
+      } else {
+        sparse_.insert(VoxelKey(c[0], c[1], c[2]));
+      }
+    }
+  }
+  bool Has(int64_t i, int64_t j, int64_t k) const {
+    if (!dense_) return sparse_.count(VoxelKey(i, j, k)) > 0;
+    if (i < min_[0] || i > max_[0] || j < min_[1] || j > max_[1] || k < min_[2] || k > max_[2]) return false;
+    const int64_t bit = Index(i, j, k);
+    return (bits_[bit >> 6] >> (bit & 63) & 1) != 0;
+  }
+
+ private:
+  int64_t Index(int64_t i, int64_t j, int64_t k) const {
+    return ((i - min_[0]) * size_[1] + (j - min_[1])) * size_[2] + (k - min_[2]);
+  }
+  bool dense_ = true;
+  int64_t min_[3] = {0, 0, 0}, max_[3] = {-1, -1, -1}, size_[3] = {0, 0, 0};
+  std::vector<uint64_t> bits_;
+  std::unordered_set<int64_t> sparse_;
+};
+
+// Point vertices of the cells of one level, in the cells' (Morton) order: neighbours in the buffer are neighbours in
+// space and so on screen, which keeps the CPU depth pass's memory accesses local. Cells enclosed on all six sides
+// are left out when cull is set; cells with a neighbour on top are drawn darker (their top face is hidden).
+// cell_mm: cell side; origin: of cell (0, 0, 0).
+std::vector<PointVertex> LevelPoints(const std::vector<LodCell>& cells, const double origin[3], double cell_mm,
+                                     bool cull) {
+  const CellSet occupied(cells, [](const LodCell& c) { return std::array<int64_t, 3>{c.i, c.j, c.k}; });
+  std::vector<PointVertex> points;
+  points.reserve(cells.size());
+  for (const LodCell& c : cells) {
+    auto has = [&](int di, int dj, int dk) { return occupied.Has(c.i + di, c.j + dj, c.k + dk); };
+    const bool top = has(0, 0, 1);
+    if (cull && top && has(1, 0, 0) && has(-1, 0, 0) && has(0, 1, 0) && has(0, -1, 0) && has(0, 0, -1)) continue;
+    const float* sum = c.visible > 0 ? c.visible_rgb : c.all_rgb;
+    const float n = static_cast<float>(c.visible > 0 ? c.visible : std::max<int64_t>(c.all, 1));
+    const float shade = top ? 0.8f : 1.0f;
+    points.push_back({static_cast<float>(origin[0] + (c.i + 0.5) * cell_mm),
+                      static_cast<float>(origin[1] + (c.j + 0.5) * cell_mm),
+                      static_cast<float>(origin[2] + (c.k + 0.5) * cell_mm),
+                      {ToByte(sum[0] / n * shade), ToByte(sum[1] / n * shade), ToByte(sum[2] / n * shade), 255}});
+  }
+  return points;
+}
+
+// The next coarser level: 2x2x2 cells merged into one, colour sums added. cells sorted by key, so the (up to 8)
+// cells of one merged cell are consecutive; the result is sorted by key too.
+std::vector<LodCell> MergeCells(const std::vector<LodCell>& cells) {
+  std::vector<LodCell> merged;
+  merged.reserve(cells.size() / 2);
+  for (const LodCell& c : cells) {
+    if (merged.empty() || merged.back().key != c.key >> 3)
+      merged.push_back({c.key >> 3, FloorHalf(c.i), FloorHalf(c.j), FloorHalf(c.k), {0, 0, 0}, 0, {0, 0, 0}, 0});
+    LodCell& m = merged.back();
+    for (int a = 0; a < 3; ++a) {
+      m.visible_rgb[a] += c.visible_rgb[a];
+      m.all_rgb[a] += c.all_rgb[a];
+    }
+    m.visible += c.visible;
+    m.all += c.all;
+  }
+  return merged;
+}
+
 }  // namespace
 
 SceneRenderer::~SceneRenderer() {
@@ -192,7 +336,11 @@ SceneRenderer::~SceneRenderer() {
   glDeleteBuffers(1, &voxel_vbo_);
   glDeleteVertexArrays(1, &line_vao_);
   glDeleteVertexArrays(1, &voxel_vao_);
-  glDeleteVertexArrays(1, &voxel_point_vao_);
+  for (PointLevel& level : point_levels_) {
+    glDeleteVertexArrays(1, &level.vao);
+    glDeleteBuffers(1, &level.vbo);
+    glDeleteBuffers(1, &level.ebo);
+  }
   glDeleteVertexArrays(1, &voxel_mesh_vao_);
   glDeleteBuffers(1, &voxel_mesh_vbo_);
 }
@@ -200,7 +348,7 @@ SceneRenderer::~SceneRenderer() {
 bool SceneRenderer::Init(std::string* error) {
   line_program_ = Link(kLineVertexShader, kColorFragmentShader, error);
   voxel_program_ = Link(kVoxelVertexShader, kColorFragmentShader, error);
-  voxel_point_program_ = Link(kVoxelPointVertexShader, kColorFragmentShader, error);
+  voxel_point_program_ = Link(kVoxelPointVertexShader, kFlatColorFragmentShader, error);
   if (line_program_ == 0 || voxel_program_ == 0 || voxel_point_program_ == 0) return false;
   point_mvp_location_ = glGetUniformLocation(voxel_point_program_, "mvp");
   point_half_size_location_ = glGetUniformLocation(voxel_point_program_, "half_size");
@@ -242,16 +390,6 @@ bool SceneRenderer::Init(std::string* error) {
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
   glEnableVertexAttribArray(1);
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
-  // The same buffer read per vertex (no instancing): one point per voxel.
-  glGenVertexArrays(1, &voxel_point_vao_);
-  glBindVertexArray(voxel_point_vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, voxel_vbo_);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, kStride, nullptr);
-  glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, kStride, reinterpret_cast<void*>(3 * sizeof(float)));
-  glEnableVertexAttribArray(2);
-  glVertexAttribIPointer(2, 1, GL_INT, kStride, reinterpret_cast<void*>(6 * sizeof(float)));
   glBindVertexArray(0);
 
   float range[2] = {1.0f, 1.0f};
@@ -276,6 +414,8 @@ void SceneRenderer::UpdateVoxelInstances(const ViewerState& state, const SceneOp
   voxel_cull_ = options.cull_hidden_voxels;
   voxel_coloring_ = options.voxel_coloring;
   voxels_shown_ = voxel_instances_ = 0;
+  voxel_levels_ = 0;
+  voxel_mesh_vertices_ = 0;
   if (!state.voxel_map()) return;
   const voxel_map_t& map = *state.voxel_map();
   const size_t n =
@@ -288,29 +428,47 @@ void SceneRenderer::UpdateVoxelInstances(const ViewerState& state, const SceneOp
     shown.push_back(i);
     max_votes = std::max(max_votes, map.votes[i]);
   }
-  std::unordered_set<int64_t> occupied;
-  if (options.cull_hidden_voxels) {
-    occupied.reserve(shown.size() * 2);
-    for (size_t i : shown) occupied.insert(VoxelKey(map.ijk[i][0], map.ijk[i][1], map.ijk[i][2]));
-  }
+  const CellSet occupied(options.cull_hidden_voxels ? shown : std::vector<size_t>(), [&map](size_t i) {
+    return std::array<int64_t, 3>{map.ijk[i][0], map.ijk[i][1], map.ijk[i][2]};
+  });
   std::vector<float> buffer;
   buffer.reserve(shown.size() * 7);
+  std::vector<LodCell> cells;  // level 0 of the level-of-detail pyramid: every shown voxel
+  cells.reserve(shown.size());
   const double size = map.voxel_size_mm;
+  for (int a = 0; a < 3; ++a) {
+    voxel_bounds_min_[a] = std::numeric_limits<float>::max();
+    voxel_bounds_max_[a] = std::numeric_limits<float>::lowest();
+  }
   for (size_t i : shown) {
     const std::vector<int32_t>& ijk = map.ijk[i];
-    int bits = 0;
-    if (options.cull_hidden_voxels) {
-      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-      for (int f = 0; f < 6; ++f)
-        if (occupied.count(VoxelKey(int64_t{ijk[0]} + d[f][0], int64_t{ijk[1]} + d[f][1], int64_t{ijk[2]} + d[f][2])))
-          bits |= 1 << f;
-      if (bits == 63) continue;  // enclosed on all sides: never visible
-    }
     Color c;
     if (options.voxel_coloring == VoxelColoring::kVotes) {
       c = Ramp(static_cast<double>(map.votes[i]) / max_votes);
     } else {
       c = {map.rgb[i][0] / 255.0f, map.rgb[i][1] / 255.0f, map.rgb[i][2] / 255.0f};
+    }
+    int bits = 0;
+    if (options.cull_hidden_voxels) {
+      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      for (int f = 0; f < 6; ++f)
+        if (occupied.Has(int64_t{ijk[0]} + d[f][0], int64_t{ijk[1]} + d[f][1], int64_t{ijk[2]} + d[f][2]))
+          bits |= 1 << f;
+    }
+    const bool enclosed = bits == 63;  // enclosed on all sides: never visible
+    cells.push_back({MortonKey(ijk[0], ijk[1], ijk[2]),
+                     ijk[0],
+                     ijk[1],
+                     ijk[2],
+                     {enclosed ? 0 : c.r, enclosed ? 0 : c.g, enclosed ? 0 : c.b},
+                     enclosed ? 0 : 1,
+                     {c.r, c.g, c.b},
+                     1});
+    if (enclosed) continue;
+    for (int a = 0; a < 3; ++a) {
+      const float centre = static_cast<float>(map.origin_mm[a] + (ijk[a] + 0.5) * size);
+      voxel_bounds_min_[a] = std::min(voxel_bounds_min_[a], centre - static_cast<float>(size / 2));
+      voxel_bounds_max_[a] = std::max(voxel_bounds_max_[a], centre + static_cast<float>(size / 2));
     }
     float bits_as_float;
     static_assert(sizeof(bits_as_float) == sizeof(bits), "int/float size");
@@ -362,6 +520,166 @@ void SceneRenderer::UpdateVoxelInstances(const ViewerState& state, const SceneOp
   voxel_half_size_ = static_cast<float>(size / 2);
   glBindBuffer(GL_ARRAY_BUFFER, voxel_vbo_);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(buffer.size() * sizeof(float)), buffer.data(), GL_STATIC_DRAW);
+
+  // Point buffers: the voxels, then 2x2x2-merged cells level by level until only a handful are left.
+  std::sort(cells.begin(), cells.end(), [](const LodCell& a, const LodCell& b) { return a.key < b.key; });
+  constexpr int kMaxLevels = 9;     // cells of up to 256 voxels per side
+  constexpr size_t kFewCells = 64;  // no coarser level below this many cells
+  int levels = 0;
+  for (int level = 0; level < kMaxLevels && !cells.empty(); ++level) {
+    if (level > 0) {
+      if (cells.size() <= kFewCells) break;
+      cells = MergeCells(cells);
+    }
+    const double cell_mm = size * (int64_t{1} << level);
+    const std::vector<PointVertex> points = LevelPoints(cells, map.origin_mm, cell_mm, options.cull_hidden_voxels);
+    if (static_cast<int>(point_levels_.size()) <= level) {
+      PointLevel created;
+      glGenVertexArrays(1, &created.vao);
+      glGenBuffers(1, &created.vbo);
+      glBindVertexArray(created.vao);
+      glBindBuffer(GL_ARRAY_BUFFER, created.vbo);
+      glEnableVertexAttribArray(0);
+      glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(PointVertex), nullptr);
+      glEnableVertexAttribArray(1);
+      glVertexAttribPointer(1, 3, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(PointVertex),
+                            reinterpret_cast<void*>(offsetof(PointVertex, rgba)));
+      glGenBuffers(1, &created.ebo);
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, created.ebo);  // part of the vertex array's state
+      glBindVertexArray(0);
+      point_levels_.push_back(created);
+    }
+    PointLevel& target = point_levels_[level];
+    target.count = static_cast<int64_t>(points.size());
+    target.half_size = static_cast<float>(cell_mm / 2);
+    target.centers.resize(points.size() * 3);
+    for (size_t p = 0; p < points.size(); ++p) {
+      target.centers[3 * p] = points[p].x;
+      target.centers[3 * p + 1] = points[p].y;
+      target.centers[3 * p + 2] = points[p].z;
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, target.vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(points.size() * sizeof(PointVertex)), points.data(),
+                 GL_STATIC_DRAW);
+    levels = level + 1;
+  }
+  for (size_t level = levels; level < point_levels_.size(); ++level) {
+    point_levels_[level].count = 0;
+    point_levels_[level].centers = {};
+  }
+  voxel_levels_ = levels;
+}
+
+int SceneRenderer::ChooseVoxelLevel(const OrbitView& view, const Viewport& viewport, const SceneOptions& options) {
+  nearest_voxel_depth_mm_ = nearest_voxel_px_ = 0;
+  if (voxel_levels_ < 1) return 0;
+  // Nearest depth of the model: the nearest corner of its bounding box along the viewing direction.
+  const Eigen::Vector3d eye = EyePosition(view);
+  const Eigen::Vector3d forward = (view.target_mm - eye).normalized();
+  double nearest = std::numeric_limits<double>::max();
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p(corner & 1 ? voxel_bounds_max_[0] : voxel_bounds_min_[0],
+                            corner & 2 ? voxel_bounds_max_[1] : voxel_bounds_min_[1],
+                            corner & 4 ? voxel_bounds_max_[2] : voxel_bounds_min_[2]);
+    nearest = std::min(nearest, forward.dot(p - eye));
+  }
+  nearest_voxel_depth_mm_ = nearest;
+  if (nearest <= view.near_mm) return 0;
+  const double pixels_per_mm = ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height)(1, 1) *
+                               viewport.height / 2.0 / nearest;
+  nearest_voxel_px_ = 2.0 * point_levels_[0].half_size * pixels_per_mm;
+  if (voxel_levels_ < 2 || !(options.lod_pixels > 0)) return 0;
+  int level = 0;
+  while (level + 1 < voxel_levels_ && point_levels_[level + 1].count > 0 &&
+         2.0 * point_levels_[level + 1].half_size * pixels_per_mm <= options.lod_pixels)
+    ++level;
+  return level;
+}
+
+bool SceneRenderer::VisiblePoints(const PointLevel& level, const Eigen::Matrix4f& mvp, const Viewport& viewport,
+                                  float pixels_per_unit, double max_point_px, std::vector<uint32_t>* visible) {
+  visible->clear();
+  const int width = viewport.width, height = viewport.height;
+  const float* m = mvp.data();  // column-major
+  // The part of the viewport the model can cover: its projected bounding box (all corners in front of the eye; a
+  // perspective image of the box lies in the hull of its corners' images), widened by the widest point.
+  int window_x0 = 0, window_x1 = width, window_y0 = 0, window_y1 = height;
+  {
+    float u0 = std::numeric_limits<float>::max(), u1 = std::numeric_limits<float>::lowest(), v0 = u0, v1 = u1;
+    bool all_in_front = true;
+    for (int corner = 0; corner < 8 && all_in_front; ++corner) {
+      const float x = corner & 1 ? voxel_bounds_max_[0] : voxel_bounds_min_[0];
+      const float y = corner & 2 ? voxel_bounds_max_[1] : voxel_bounds_min_[1];
+      const float z = corner & 4 ? voxel_bounds_max_[2] : voxel_bounds_min_[2];
+      const float cw = m[3] * x + m[7] * y + m[11] * z + m[15];
+      if (!(cw > 1e-3f)) {
+        all_in_front = false;
+        break;
+      }
+      const float u = ((m[0] * x + m[4] * y + m[8] * z + m[12]) / cw * 0.5f + 0.5f) * width;
+      const float v = ((m[1] * x + m[5] * y + m[9] * z + m[13]) / cw * 0.5f + 0.5f) * height;
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+    if (all_in_front) {
+      const float margin = static_cast<float>(max_point_px) / 2 + 2;
+      window_x0 = std::clamp(static_cast<int>(u0 - margin), 0, width);
+      window_x1 = std::clamp(static_cast<int>(u1 + margin) + 1, window_x0, width);
+      window_y0 = std::clamp(static_cast<int>(v0 - margin), 0, height);
+      window_y1 = std::clamp(static_cast<int>(v1 + margin) + 1, window_y0, height);
+    }
+  }
+  const int window_width = window_x1 - window_x0;
+  constexpr float kEmpty = std::numeric_limits<float>::max();
+  occlusion_pixels_.assign(static_cast<size_t>(window_width) * (window_y1 - window_y0), {kEmpty, 0});
+  const size_t n = level.centers.size() / 3;
+  if (occlusion_stamp_.size() < n) occlusion_stamp_.resize(n, 0);
+  if (++occlusion_frame_ == 0) {  // wrapped: forget the old stamps
+    std::fill(occlusion_stamp_.begin(), occlusion_stamp_.end(), 0);
+    occlusion_frame_ = 1;
+  }
+  const float* c = level.centers.data();
+  const float size_numerator = 2.0f * level.half_size * pixels_per_unit;
+  const float half_width = 0.5f * width, half_height = 0.5f * height;
+  for (size_t i = 0; i < n; ++i) {
+    const float x = c[3 * i], y = c[3 * i + 1], z = c[3 * i + 2];
+    const float cw = m[3] * x + m[7] * y + m[11] * z + m[15];
+    const float cz = m[2] * x + m[6] * y + m[10] * z + m[14];
+    if (!(cw > 0) || std::abs(cz) > cw) continue;  // clipped by the near or far plane: GL drops it too
+    const float cx = m[0] * x + m[4] * y + m[8] * z + m[12];
+    const float cy = m[1] * x + m[5] * y + m[9] * z + m[13];
+    if (std::abs(cx) > cw || std::abs(cy) > cw) {  // centre off the sides: left to GL
+      visible->push_back(static_cast<uint32_t>(i));
+      continue;
+    }
+    const float inv = 1.0f / cw;
+    const float half = 0.5f * std::max(1.0f, size_numerator / std::max(cw, 1e-3f));  // as the vertex shader
+    if (2 * half > max_point_px) {
+      visible->clear();
+      return false;
+    }
+    // The pixels whose centres lie in the point's square (GL window coordinates, y up).
+    const float sx = cx * inv * half_width + half_width, sy = cy * inv * half_height + half_height;
+    const float depth = cz * inv;
+    const int x0 = std::max(window_x0, CeilToInt(sx - half - 0.5f));
+    const int x1 = std::min(window_x1, CeilToInt(sx + half - 0.5f));
+    const int y0 = std::max(window_y0, CeilToInt(sy - half - 0.5f));
+    const int y1 = std::min(window_y1, CeilToInt(sy + half - 0.5f));
+    const OcclusionPixel point{depth, static_cast<uint32_t>(i)};
+    for (int py = y0; py < y1; ++py) {
+      OcclusionPixel* row =
+          occlusion_pixels_.data() + static_cast<size_t>(py - window_y0) * window_width + (x0 - window_x0);
+      for (int k = 0; k < x1 - x0; ++k) {
+        if (depth <= row[k].depth) row[k] = point;  // GL_LEQUAL, drawn in order: the later of equals wins
+      }
+    }
+  }
+  for (const uint32_t i : *visible) occlusion_stamp_[i] = occlusion_frame_;
+  for (const OcclusionPixel& pixel : occlusion_pixels_) {
+    if (pixel.depth == kEmpty || occlusion_stamp_[pixel.winner] == occlusion_frame_) continue;
+    occlusion_stamp_[pixel.winner] = occlusion_frame_;
+    visible->push_back(pixel.winner);
+  }
+  return true;
 }
 
 void SceneRenderer::DrawColored(const std::vector<float>& vertices, unsigned mode, float size) {
@@ -397,10 +715,15 @@ void SceneRenderer::Render(const ViewerState& state, const OrbitView& view, cons
   // Voxels first (opaque, largest depth complexity).
   if (options.layers.voxels) {
     UpdateVoxelInstances(state, options);
-    voxels_as_points_ = options.voxel_style == VoxelStyle::kPoints ||
-                        (options.voxel_style == VoxelStyle::kAuto && voxel_mesh_vertices_ == 0 &&
-                         voxel_instances_ > options.max_cube_instances);
+    voxel_level_ = ChooseVoxelLevel(view, viewport, options);
+    voxels_occlusion_culled_ = false;
+    const bool small = nearest_voxel_px_ > 0 && nearest_voxel_px_ <= options.auto_points_px;
+    voxels_as_points_ = voxel_level_ > 0 || options.voxel_style == VoxelStyle::kPoints ||
+                        (options.voxel_style == VoxelStyle::kAuto &&
+                         (small || (voxel_mesh_vertices_ == 0 && voxel_instances_ > options.max_cube_instances)));
     voxels_as_mesh_ = !voxels_as_points_ && voxel_mesh_vertices_ > 0;
+    voxels_drawn_ =
+        voxels_as_points_ && voxel_level_ < voxel_levels_ ? point_levels_[voxel_level_].count : voxel_instances_;
     if (voxels_as_mesh_) {
       glUseProgram(line_program_);
       glUniformMatrix4fv(line_mvp_location_, 1, GL_FALSE, mvp.data());
@@ -410,14 +733,31 @@ void SceneRenderer::Render(const ViewerState& state, const OrbitView& view, cons
       glFrontFace(GL_CCW);
       glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(voxel_mesh_vertices_));
       glDisable(GL_CULL_FACE);
-    } else if (voxel_instances_ > 0 && voxels_as_points_) {
-      const Eigen::Matrix4f projection = ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height);
-      glUseProgram(voxel_point_program_);
-      glUniformMatrix4fv(point_mvp_location_, 1, GL_FALSE, mvp.data());
-      glUniform1f(point_half_size_location_, voxel_half_size_);
-      glUniform1f(point_pixels_location_, projection(1, 1) * viewport.height / 2.0f);
-      glBindVertexArray(voxel_point_vao_);
-      glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(voxel_instances_));
+    } else if (voxels_as_points_) {
+      if (voxel_level_ < voxel_levels_ && point_levels_[voxel_level_].count > 0) {
+        const PointLevel& level = point_levels_[voxel_level_];
+        const Eigen::Matrix4f projection =
+            ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height);
+        glUseProgram(voxel_point_program_);
+        glUniformMatrix4fv(point_mvp_location_, 1, GL_FALSE, mvp.data());
+        glUniform1f(point_half_size_location_, level.half_size);
+        glUniform1f(point_pixels_location_, projection(1, 1) * viewport.height / 2.0f);
+        glBindVertexArray(level.vao);
+        const float pixels_per_unit = projection(1, 1) * viewport.height / 2.0f;
+        voxels_occlusion_culled_ =
+            options.occlusion_min_points > 0 && level.count >= options.occlusion_min_points &&
+            nearest_voxel_depth_mm_ > view.near_mm &&
+            2.0 * level.half_size * pixels_per_unit / nearest_voxel_depth_mm_ <= options.max_occlusion_point_px &&
+            VisiblePoints(level, mvp, viewport, pixels_per_unit, options.max_occlusion_point_px, &visible_points_);
+        if (voxels_occlusion_culled_) {
+          voxels_drawn_ = static_cast<int64_t>(visible_points_.size());
+          glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(visible_points_.size() * sizeof(uint32_t)),
+                       visible_points_.data(), GL_STREAM_DRAW);
+          glDrawElements(GL_POINTS, static_cast<GLsizei>(visible_points_.size()), GL_UNSIGNED_INT, nullptr);
+        } else {
+          glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(level.count));
+        }
+      }
     } else if (voxel_instances_ > 0) {
       const Eigen::Vector3f eye = EyePosition(view).cast<float>();
       glUseProgram(voxel_program_);

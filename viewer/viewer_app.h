@@ -3,8 +3,9 @@
 // (every channel is subscribed; MessageDispatcher decodes the known ones) or from a log file read directly
 // (LogPlayer: play / pause / step / seek / speed).
 // Headless use: --screenshot FILE.png renders once the chosen log time / message count / end of log is reached,
-// writes the window (scene + panels) as PNG and returns. --benchmark-voxels N renders a synthetic N-voxel model for
-// benchmark_seconds and prints frames/s.
+// writes the window (scene + panels) as PNG and returns. --benchmark-voxels N renders a synthetic N-voxel model
+// (--benchmark --log FILE: the scene at the end of the log) while orbiting the view, for benchmark_seconds or
+// benchmark_frames, and prints frames/s and CPU time per frame.
 // Needs an X display (Xvfb works, with Mesa llvmpipe). Run() does not throw; it returns the process exit code.
 #pragma once
 
@@ -40,24 +41,29 @@ struct ViewerOptions {
   double view_target_y_mm = 0.0;                                     // mm
   double view_target_z_mm = 0.0;                                     // mm
   double view_fov_deg = 50.0;                                        // deg, vertical field of view (1..170)
-  bool follow = false;                      // start in follow-camera mode (target tracks the newest pose)
-  double speed = 1.0;                       // log playback speed (> 0)
-  bool paused = false;                      // start the log paused
-  std::string screenshot;                   // PNG path: take a screenshot and exit
-  int64_t screenshot_at_utime = -1;         // µs, log time to take the screenshot at (-1 = unused)
-  int64_t screenshot_after_messages = -1;   // take it after this many messages (-1 = unused)
-  double screenshot_timeout_s = 30.0;       // s, live only: take it anyway after this wall time
-  int benchmark_voxels = 0;                 // > 0: render a synthetic model of this many voxels and print fps
-  double benchmark_seconds = 5.0;           // s, benchmark duration
-  std::string benchmark_shape = "ball";     // benchmark model: ball (solid) or scatter (no voxel touches another)
-  int min_votes = 0;                        // initial voxel display threshold (votes)
-  bool cull_hidden_voxels = true;           // skip voxel faces hidden by neighbours
-  std::string voxel_style = "auto";         // voxels as cubes, points, or auto (points above max_cube_instances)
-  int64_t max_cube_instances = 100000;      // auto style: most visible voxels drawn as cubes
-  int64_t max_mesh_faces = 300000;          // exposed voxel faces drawn as one static mesh at most (else instanced)
-  std::string landmark_coloring = "error";  // landmark colours: error, age or rgb
-  double max_reprojection_error_px = 3.0;   // px, reprojection error drawn full red (> 0)
-  int max_events_per_frame = 20000;         // messages handled per rendered frame at most (>= 1)
+  bool follow = false;                         // start in follow-camera mode (target tracks the newest pose)
+  double speed = 1.0;                          // log playback speed (> 0)
+  bool paused = false;                         // start the log paused
+  std::string screenshot;                      // PNG path: take a screenshot and exit
+  int64_t screenshot_at_utime = -1;            // µs, log time to take the screenshot at (-1 = unused)
+  int64_t screenshot_after_messages = -1;      // take it after this many messages (-1 = unused)
+  double screenshot_timeout_s = 30.0;          // s, live only: take it anyway after this wall time
+  int benchmark_voxels = 0;                    // > 0: render a synthetic model of this many voxels and print fps
+  bool benchmark = false;                      // with log: orbit the scene at the end of the log and print fps
+  double benchmark_seconds = 5.0;              // s, benchmark duration
+  int benchmark_frames = 0;                    // > 0: benchmark this many frames instead of benchmark_seconds
+  std::string benchmark_shape = "ball";        // benchmark model: ball (solid) or scatter (no voxel touches another)
+  int min_votes = 0;                           // initial voxel display threshold (votes)
+  bool cull_hidden_voxels = true;              // skip voxel faces hidden by neighbours
+  std::string voxel_style = "auto";            // voxels as cubes, points, or auto (points above max_cube_instances)
+  int64_t max_cube_instances = 100000;         // auto style: most visible voxels drawn as cubes
+  int64_t max_mesh_faces = 300000;             // exposed voxel faces drawn as one static mesh at most (else instanced)
+  double voxel_lod_px = 1.0;                   // px, merged level-of-detail cells project at most this wide (0 = off)
+  double voxel_points_px = 3.0;                // px, auto style: points while voxels project at most this wide
+  int64_t voxel_occlusion_min_points = 20000;  // points path: CPU depth pass from this many points (0 = off)
+  std::string landmark_coloring = "error";     // landmark colours: error, age or rgb
+  double max_reprojection_error_px = 3.0;      // px, reprojection error drawn full red (> 0)
+  int max_events_per_frame = 20000;            // messages handled per rendered frame at most (>= 1)
 };
 
 void AddViewerOptions(OptionParser& parser, ViewerOptions* options);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -239,6 +240,29 @@ TEST_F(ViewerRenderTest, InstancedCubesAndPointsDrawTheBlobToo) {
   const cv::Mat points = Render(" --voxel-style points", "points");
   ASSERT_FALSE(points.empty());
   EXPECT_GE(BlobTopFound(points), 0.9);
+}
+
+TEST_F(ViewerRenderTest, PointsDepthPassAndLevelOfDetailKeepThePicture) {
+  // The CPU depth pass (forced on for this small model) sends only the points nearest at some pixel: the scene must
+  // look like the one with every point drawn.
+  const cv::Mat all = Render(" --voxel-style points --voxel-occlusion-min-points 0", "points_all");
+  const cv::Mat visible = Render(" --voxel-style points --voxel-occlusion-min-points 1", "points_visible");
+  ASSERT_FALSE(all.empty());
+  ASSERT_FALSE(visible.empty());
+  EXPECT_GE(BlobTopFound(visible), 0.9);
+  const cv::Rect scene(0, 0, kWidth - kPanel, kHeight);
+  cv::Mat difference;
+  cv::absdiff(all(scene), visible(scene), difference);
+  cv::Mat gray;
+  cv::cvtColor(difference, gray, cv::COLOR_BGR2GRAY);
+  EXPECT_LE(cv::countNonZero(gray > 30), 20) << "pixels that differ with the depth pass";
+  // Level of detail forced to the coarsest merged cells: still the blob, in its colour.
+  const cv::Mat coarse = Render(" --voxel-lod-px 10000", "points_coarse");
+  ASSERT_FALSE(coarse.empty());
+  EXPECT_GE(BlobTopFound(coarse), 0.7);
+  cv::absdiff(all(scene), coarse(scene), difference);  // 80 mm cells overhang the blob: really another level
+  cv::cvtColor(difference, gray, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(gray > 30), 100) << "the coarse level looks exactly like the voxels";
 }
 
 TEST_F(ViewerRenderTest, WholeLogShowsTrajectoriesAndVoxels) {
