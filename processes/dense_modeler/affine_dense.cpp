@@ -62,6 +62,7 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (!(o.epipolar_threshold_px > 0)) e << "epipolar-threshold must be > 0; ";
   if (o.ncc_half_window < 0 || o.ncc_half_window > 10) e << "ncc-half-window must be in [0, 10]; ";
   if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min-ncc must be in [-1, 1]; ";
+  if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction-min-ncc must be in [-1, 1]; ";
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
   if (!(o.max_triangle_edge_px > 0)) e << "max-triangle-edge must be > 0; ";
@@ -80,8 +81,10 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
 
 cv::Mat GrayFloat(const cv::Mat& image) {
   cv::Mat gray;
-  if (image.channels() == 3) cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  else gray = image;
+  if (image.channels() == 3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  else
+    gray = image;
   cv::Mat out;
   gray.convertTo(out, CV_32F);
   return out;
@@ -95,8 +98,8 @@ Eigen::Matrix3d EssentialMatrix(const Eigen::Isometry3d& world_from_a, const Eig
   return tx * b_from_a.linear();
 }
 
-double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera& camera_a, const PinholeCamera& camera_b,
-                          const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera& camera_a,
+                          const PinholeCamera& camera_b, const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
   const Eigen::Vector3d na = camera_a.Unproject(p).homogeneous();
   const Eigen::Vector3d nb = camera_b.Unproject(q).homogeneous();
   const Eigen::Vector3d l = essential * na;
@@ -122,8 +125,8 @@ bool TriangulateMidpoint(const Eigen::Vector3d& oa, const Eigen::Vector3d& da, c
 
 double WarpedNcc(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b, const Eigen::Vector2d& q,
                  const Eigen::Matrix2d& jacobian, int h, double* stddev_a, double* stddev_b) {
-  const double reach_b = h * (std::abs(jacobian(0, 0)) + std::abs(jacobian(0, 1)) + std::abs(jacobian(1, 0)) +
-                              std::abs(jacobian(1, 1)));
+  const double reach_b =
+      h * (std::abs(jacobian(0, 0)) + std::abs(jacobian(0, 1)) + std::abs(jacobian(1, 0)) + std::abs(jacobian(1, 1)));
   if (!Inside(gray_a, p, h + 1) || !Inside(gray_b, q, reach_b + 1)) return -2.0;
   double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
   int n = 0;
@@ -248,8 +251,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     const Eigen::Vector2d b0 = feats[idx[0]].b, b1 = feats[idx[1]].b, b2 = feats[idx[2]].b;
     const double area_a = 0.5 * Cross2(a1 - a0, a2 - a0);
     const double area_b = 0.5 * Cross2(b1 - b0, b2 - b0);
-    const double max_edge = std::max({(a1 - a0).norm(), (a2 - a1).norm(), (a0 - a2).norm(), (b1 - b0).norm(),
-                                      (b2 - b1).norm(), (b0 - b2).norm()});
+    const double max_edge = std::max(
+        {(a1 - a0).norm(), (a2 - a1).norm(), (a0 - a2).norm(), (b1 - b0).norm(), (b2 - b1).norm(), (b0 - b2).norm()});
     if (std::abs(area_a) < o.min_triangle_area_px2 || area_a * area_b <= 0 || max_edge > o.max_triangle_edge_px ||
         SmallestAngleDeg(a0, a1, a2) < o.min_triangle_angle_deg) {
       ++stats.triangles_skipped_shape;
@@ -264,11 +267,16 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
       ++stats.triangles_skipped_depth;
       continue;
     }
-    if (o.region.valid &&
-        o.region.TriangleOutside(a.world_from_camera * vertex_in_a[idx[0]], a.world_from_camera * vertex_in_a[idx[1]],
-                                 a.world_from_camera * vertex_in_a[idx[2]], o.region_slack_mm)) {
-      ++stats.triangles_skipped_region;
-      continue;
+    bool junction = false;  // joins the floor to the object: stricter photometric checks below
+    if (o.region.valid) {
+      const Eigen::Vector3d w0 = a.world_from_camera * vertex_in_a[idx[0]],
+                            w1 = a.world_from_camera * vertex_in_a[idx[1]],
+                            w2 = a.world_from_camera * vertex_in_a[idx[2]];
+      if (o.region.TriangleOutside(w0, w1, w2, o.region_slack_mm)) {
+        ++stats.triangles_skipped_region;
+        continue;
+      }
+      junction = o.region.TriangleSpansFloorJunction(w0, w1, w2);
     }
     // Cheap reject before any pixel work: the triangle's bounding box misses the ROI rectangle.
     if (std::max({a0.x(), a1.x(), a2.x()}) < roi.x || std::min({a0.x(), a1.x(), a2.x()}) > roi.x + roi.width - 1 ||
@@ -332,9 +340,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         }
         const Eigen::Vector3d nb_line = essential * na.homogeneous();
         const double line_norm = std::hypot(nb_line.x(), nb_line.y());
-        if (!(line_norm > 0) ||
-            std::abs(nb_line.dot(b.camera.Unproject(q).homogeneous())) / line_norm * b.camera.fx >
-                o.epipolar_threshold_px) {
+        if (!(line_norm > 0) || std::abs(nb_line.dot(b.camera.Unproject(q).homogeneous())) / line_norm * b.camera.fx >
+                                    o.epipolar_threshold_px) {
           ++stats.rejected_epipolar;
           continue;
         }
@@ -383,6 +390,12 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
             ++stats.rejected_ncc;
             continue;
           }
+          if (junction && o.junction_min_window_stddev >= 0 &&
+              (sd_a < o.junction_min_window_stddev || sd_b < o.junction_min_window_stddev ||
+               ncc < o.junction_min_ncc)) {
+            ++stats.rejected_ncc;
+            continue;
+          }
         }
         const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();
         const Eigen::Vector3d db = (rwb * b.camera.Unproject(q).homogeneous()).normalized();
@@ -404,6 +417,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         dp.point_in_world = x;
         dp.pixel_a = p.cast<float>();
         dp.pixel_b = q.cast<float>();
+        dp.toward_camera = (0.5 * (center_a + center_b) - x).normalized().cast<float>();
         const uint8_t* pa = a.image.ptr<uint8_t>(v) + u * channels;
         for (int k = 0; k < 3; ++k) dp.bgr[k] = pa[channels == 3 ? k : 0];
         out.push_back(dp);

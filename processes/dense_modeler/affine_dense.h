@@ -29,12 +29,12 @@ namespace objscan {
 
 // One posed image.
 struct DenseView {
-  int64_t seq = 0;            // frame sequence number
-  int64_t utime = 0;          // µs, capture time
-  PinholeCamera camera;       // intrinsics matching image
+  int64_t seq = 0;                                                      // frame sequence number
+  int64_t utime = 0;                                                    // µs, capture time
+  PinholeCamera camera;                                                 // intrinsics matching image
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
-  cv::Mat image;              // CV_8UC3 (BGR) or CV_8UC1
-  cv::Mat gray;               // optional CV_32FC1 gray of image (computed per call when empty)
+  cv::Mat image;                                                        // CV_8UC3 (BGR) or CV_8UC1
+  cv::Mat gray;  // optional CV_32FC1 gray of image (computed per call when empty)
 };
 
 // The same feature seen in both views (px).
@@ -47,40 +47,46 @@ struct PointMatch {
 struct DensePoint {
   Eigen::Vector3d point_in_world;  // mm
   std::array<uint8_t, 3> bgr{{0, 0, 0}};
-  Eigen::Vector2f pixel_a = Eigen::Vector2f::Zero();  // px, P in A
-  Eigen::Vector2f pixel_b = Eigen::Vector2f::Zero();  // px, the accepted (possibly refined) Q in B
+  Eigen::Vector2f pixel_a = Eigen::Vector2f::Zero();        // px, P in A
+  Eigen::Vector2f pixel_b = Eigen::Vector2f::Zero();        // px, the accepted (possibly refined) Q in B
+  Eigen::Vector3f toward_camera = Eigen::Vector3f::Zero();  // unit, world, from the point towards the pair's
+                                                            // cameras (midpoint of the two centres); zero = unknown
 };
 
 enum class DenseMapping : int { kAffine = 0, kPlane = 1 };
 
 struct AffineDenseOptions {
-  int mapping = 0;                        // 0 = affine barycentric map, 1 = plane of the triangle (perspective-correct)
-  int pixel_step = 1;                     // px, sample every pixel_step-th row and column of A (>= 1)
-  double epipolar_threshold_px = 1.0;     // px, max distance of Q to the epipolar line of P (> 0)
-  double max_color_difference = 30.0;     // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
-  int ncc_half_window = 2;                // px, half side of the NCC window (0 = no NCC check)
-  double min_ncc = 0.7;                   // min NCC of the warped window, [-1, 1]
-  double min_window_stddev = 0.5;         // gray levels, windows flatter than this skip the NCC test (textureless)
-  bool refine_along_epipolar = true;      // refine Q by a 1-D NCC search along the epipolar line
-  double refine_search_px = 1.5;          // px, half length of the refinement search (> 0)
-  double refine_step_px = 0.25;           // px, refinement search step (> 0)
-  double min_triangle_area_px2 = 4.0;     // px², smaller triangles are skipped
-  double max_triangle_edge_px = 80.0;     // px, triangles with a longer edge in A or B are skipped
-  double min_triangle_angle_deg = 10.0;   // deg, thinner triangles (smallest angle in A) are skipped
-  double max_vertex_depth_ratio = 1.15;   // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
-  double max_triangle_slant_deg = 80.0;   // deg, max angle between the 3-D triangle's normal and the view ray of
-                                          // its centroid in A; more oblique = likely spans a depth edge, skipped
-  double min_triangulation_angle_deg = 1.0;  // deg, rays meeting at a smaller angle are rejected
-  double max_reprojection_px = 1.0;       // px, max reprojection error of the triangulated point in A or B
-  double min_feature_separation_px = 0.5; // px, features closer than this to an earlier one are dropped
-  bool use_world_box = false;             // keep only points inside [box_min, box_max] (world, mm)
+  int mapping = 0;                       // 0 = affine barycentric map, 1 = plane of the triangle (perspective-correct)
+  int pixel_step = 1;                    // px, sample every pixel_step-th row and column of A (>= 1)
+  double epipolar_threshold_px = 1.0;    // px, max distance of Q to the epipolar line of P (> 0)
+  double max_color_difference = 30.0;    // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
+  int ncc_half_window = 2;               // px, half side of the NCC window (0 = no NCC check)
+  double min_ncc = 0.7;                  // min NCC of the warped window, [-1, 1]
+  double min_window_stddev = 0.5;        // gray levels, windows flatter than this skip the NCC test (textureless)
+  bool refine_along_epipolar = true;     // refine Q by a 1-D NCC search along the epipolar line
+  double refine_search_px = 1.5;         // px, half length of the refinement search (> 0)
+  double refine_step_px = 0.25;          // px, refinement search step (> 0)
+  double min_triangle_area_px2 = 4.0;    // px², smaller triangles are skipped
+  double max_triangle_edge_px = 80.0;    // px, triangles with a longer edge in A or B are skipped
+  double min_triangle_angle_deg = 10.0;  // deg, thinner triangles (smallest angle in A) are skipped
+  double max_vertex_depth_ratio = 1.15;  // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
+  double max_triangle_slant_deg = 80.0;  // deg, max angle between the 3-D triangle's normal and the view ray of
+                                         // its centroid in A; more oblique = likely spans a depth edge, skipped
+  double min_triangulation_angle_deg = 1.0;           // deg, rays meeting at a smaller angle are rejected
+  double max_reprojection_px = 1.0;                   // px, max reprojection error of the triangulated point in A or B
+  double min_feature_separation_px = 0.5;             // px, features closer than this to an earlier one are dropped
+  bool use_world_box = false;                         // keep only points inside [box_min, box_max] (world, mm)
   Eigen::Vector3d box_min = Eigen::Vector3d::Zero();  // mm, world
   Eigen::Vector3d box_max = Eigen::Vector3d::Zero();  // mm, world
-  cv::Rect roi_a;                         // px, only pixels of A inside this rectangle (empty = whole image)
-  RegionOfInterest region;                // world region the points must lie in (invalid = everywhere); pixels of A
-                                          // outside its projected box and triangles surely outside it are skipped
-  double region_slack_mm = 10.0;          // mm, a triangle is skipped only when its vertices are this far outside
-  double region_image_margin_px = 8.0;    // px, margin around the region's projected box in A
+  cv::Rect roi_a;           // px, only pixels of A inside this rectangle (empty = whole image)
+  RegionOfInterest region;  // world region the points must lie in (invalid = everywhere); pixels of A
+                            // outside its projected box and triangles surely outside it are skipped
+  // Triangles joining a floor vertex to one above the floor clearance (region with a floor only) cover the
+  // object's shadowed lower part but also the air of the crevice, where flat dark windows pass any NCC test:
+  double junction_min_window_stddev = 4.0;  // gray levels, their pixels need windows this textured (< 0 = off)
+  double junction_min_ncc = 0.9;            // and this NCC, [-1, 1]
+  double region_slack_mm = 10.0;            // mm, a triangle is skipped only when its vertices are this far outside
+  double region_image_margin_px = 8.0;      // px, margin around the region's projected box in A
 };
 
 // Counters of one pair (for status, tests and tuning).
@@ -88,7 +94,8 @@ struct DensePairStats {
   int features = 0;                 // matches used after deduplication
   int triangles = 0;                // Delaunay triangles
   int triangles_skipped_shape = 0;  // too small, too large or too thin
-  int triangles_skipped_depth = 0;  // depth ratio or slant over the limit, or a vertex failed to triangulate
+  int triangles_skipped_depth = 0;  // depth ratio or slant over the limit, floor junction, or a vertex failed to
+                                    // triangulate
   int64_t pixels = 0;               // pixels of A inside used triangles (and the ROI)
   int64_t rejected_outside = 0;     // Q outside B
   int64_t rejected_epipolar = 0;
@@ -96,7 +103,7 @@ struct DensePairStats {
   int64_t rejected_ncc = 0;
   int64_t rejected_triangulation = 0;  // small angle, behind a camera or reprojection error
   int64_t rejected_box = 0;            // outside the world box or the region
-  int triangles_skipped_region = 0;     // vertices surely outside the region
+  int triangles_skipped_region = 0;    // vertices surely outside the region
   int64_t accepted = 0;
   double mean_refine_shift_px = 0;  // mean |Q_refined - Q| (refinement on)
 };
@@ -113,8 +120,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
 Eigen::Matrix3d EssentialMatrix(const Eigen::Isometry3d& world_from_a, const Eigen::Isometry3d& world_from_b);
 
 // Distance (px of B, using fx of B) of pixel q of B from the epipolar line of pixel p of A.
-double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera& camera_a, const PinholeCamera& camera_b,
-                          const Eigen::Vector2d& p, const Eigen::Vector2d& q);
+double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera& camera_a,
+                          const PinholeCamera& camera_b, const Eigen::Vector2d& p, const Eigen::Vector2d& q);
 
 // Midpoint of the shortest segment between two rays (origin, unit direction). False when (nearly) parallel or when
 // the point lies behind either origin. *angle_rad (optional) gets the angle between the rays.

@@ -177,15 +177,16 @@ TEST(AffineDense, EpipolarRefinementFixesAlongLineErrors) {
   for (size_t i = 0; i < matches.size(); ++i) matches[i].b.x() += (i % 2 ? 0.8 : -0.8);  // along the epipolar line
   AffineDenseOptions o;
   o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
-  o.min_ncc = -1;  // keep everything: compare the geometry only
+  o.min_ncc = -1;                   // keep everything: compare the geometry only
   o.max_color_difference = -1;
   const Errors plain = Check(scene, pa, pb, ComputeDensePair(a, b, matches, o));
   o.refine_along_epipolar = true;
   DensePairStats st;
   const Errors refined = Check(scene, pa, pb, ComputeDensePair(a, b, matches, o, &st));
-  std::printf("vertex errors 0.8 px along the line: without refinement mean plane dist %.3f mm (max map %.3f px), "
-              "with %.3f mm (max map %.3f px), mean shift %.3f px\n",
-              plain.mean_plane_mm, plain.max_px, refined.mean_plane_mm, refined.max_px, st.mean_refine_shift_px);
+  std::printf(
+      "vertex errors 0.8 px along the line: without refinement mean plane dist %.3f mm (max map %.3f px), "
+      "with %.3f mm (max map %.3f px), mean shift %.3f px\n",
+      plain.mean_plane_mm, plain.max_px, refined.mean_plane_mm, refined.max_px, st.mean_refine_shift_px);
   EXPECT_LT(refined.mean_plane_mm, 0.5 * plain.mean_plane_mm);
 }
 

@@ -20,6 +20,8 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (!(o.min_relative_votes >= 0 && o.min_relative_votes <= 1)) e << "min relative votes must be in [0, 1]; ";
   if (o.vote_threshold < 1) e << "vote threshold must be >= 1; ";
   if (o.smoothing_passes < 0 || o.smoothing_passes > 5) e << "smoothing passes must be in [0, 5]; ";
+  if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
+  if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -49,8 +51,10 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
     if (it == landmarks.end()) continue;
     Eigen::Vector2d uv;
     const Eigen::Vector3d pc = camera_from_world * it->second;
-    if (pc.z() > 0 && camera.Project(pc, &uv)) errors.push_back((uv - Eigen::Vector2d(f.u, f.v)).norm());
-    else errors.push_back(std::numeric_limits<double>::infinity());
+    if (pc.z() > 0 && camera.Project(pc, &uv))
+      errors.push_back((uv - Eigen::Vector2d(f.u, f.v)).norm());
+    else
+      errors.push_back(std::numeric_limits<double>::infinity());
   }
   if (count) *count = static_cast<int>(errors.size());
   if (errors.empty()) return 0.0;
@@ -59,16 +63,17 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
   return errors[mid];
 }
 
-FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
-                           const DenseModelOptions& o, const RegionOfInterest& region) {
+FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views, const DenseModelOptions& o,
+                           const RegionOfInterest& region) {
   FinalModel model;
+  const bool ridge = o.surface_method == 1;
   std::vector<VoxelRecord> seeds = grid.Extract(o.vote_threshold);
   {
     std::vector<VoxelRecord> kept;
     for (const VoxelRecord& r : seeds) {
       const Eigen::Vector3d c = grid.CenterOf(r.ijk);
       if (!region.Contains(c)) continue;
-      if (o.min_relative_votes > 0) {
+      if (!ridge && o.min_relative_votes > 0) {
         int32_t best = 0;
         for (int dz = -1; dz <= 1; ++dz)
           for (int dy = -1; dy <= 1; ++dy)
@@ -81,8 +86,18 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     seeds.swap(kept);
   }
   model.seeds = static_cast<int64_t>(seeds.size());
+  std::vector<SurfaceVoxel> surface;
+  std::vector<Eigen::Vector3d> normals;
+  if (ridge) {
+    surface = ExtractVoteRidge(grid, seeds, o.ridge, &model.ridge);
+    seeds.clear();
+    for (const SurfaceVoxel& s : surface) {
+      seeds.push_back(s.voxel);
+      normals.push_back(s.normal);
+    }
+  }
   if (o.carve) {
-    model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving);
+    model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving, ridge ? &normals : nullptr);
   } else {
     for (const VoxelRecord& r : seeds) {
       CarvedVoxel c;
@@ -91,9 +106,29 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
       c.bgr = r.bgr;
       model.voxels.push_back(c);
     }
-    model.carving.seeds = model.carving.kept = model.seeds;
+    model.carving.seeds = model.carving.kept = static_cast<int64_t>(seeds.size());
   }
-  model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
+  if (ridge) {
+    // Mesh through the surface points of the voxels that survived carving, coloured as carved.
+    std::unordered_map<uint64_t, const CarvedVoxel*> alive;
+    alive.reserve(model.voxels.size() * 2);
+    auto key = [](const Eigen::Vector3i& v) {
+      return (static_cast<uint64_t>(static_cast<uint32_t>(v.x()) & 0x1FFFFF) << 42) |
+             (static_cast<uint64_t>(static_cast<uint32_t>(v.y()) & 0x1FFFFF) << 21) |
+             (static_cast<uint64_t>(static_cast<uint32_t>(v.z()) & 0x1FFFFF));
+    };
+    for (const CarvedVoxel& v : model.voxels) alive.emplace(key(v.ijk), &v);
+    std::vector<SurfaceVoxel> kept;
+    for (SurfaceVoxel& s : surface) {
+      auto it = alive.find(key(s.voxel.ijk));
+      if (it == alive.end()) continue;
+      s.voxel.bgr = it->second->bgr;
+      kept.push_back(s);
+    }
+    model.mesh = MeshFromSurfacePoints(kept, grid.voxel_size());
+  } else {
+    model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
+  }
   if (!model.voxels.empty()) {
     Eigen::Vector3i lo = model.voxels[0].ijk, hi = lo;
     for (const CarvedVoxel& v : model.voxels) {

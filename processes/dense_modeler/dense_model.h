@@ -13,19 +13,24 @@
 #include "processes/dense_modeler/marching_cubes.h"
 #include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
+#include "processes/dense_modeler/surface_extraction.h"
 #include "processes/dense_modeler/voxel_votes.h"
 
 namespace objscan {
 
 struct DenseModelOptions {
-  AffineDenseOptions dense;       // dense pair matching
-  VoxelVoteOptions votes;         // vote grid
-  SpaceCarvingOptions carving;    // final photometric carving
-  int vote_threshold = 16;        // votes a voxel needs to seed the final model / appear on VOXEL_MAP (>= 1)
+  AffineDenseOptions dense;         // dense pair matching
+  VoxelVoteOptions votes;           // vote grid
+  SpaceCarvingOptions carving;      // final photometric carving
+  int vote_threshold = 16;          // votes a voxel needs to seed the final model / appear on VOXEL_MAP (>= 1)
   double min_relative_votes = 0.5;  // seeds also need votes >= this fraction of their strongest 26-neighbour
                                     // (thins the voted shell to the surface; 0 = off), [0, 1]
-  bool carve = true;              // run space carving in the final phase
-  int smoothing_passes = 1;       // occupancy smoothing passes before meshing (>= 0)
+  bool carve = true;                // run space carving in the final phase
+  int smoothing_passes = 1;         // occupancy smoothing passes before meshing (>= 0; shell method only)
+  int surface_method = 1;           // 0 = shell: seeds thinned by min_relative_votes, carved, meshed from occupancy;
+                                    // 1 = ridge: the vote ridge along the normal (ExtractVoteRidge, min_relative_votes
+                                    // unused), carved with its normals, meshed through its sub-voxel surface points
+  RidgeOptions ridge;               // ridge extraction (surface_method 1)
 };
 
 bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
@@ -45,13 +50,16 @@ struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  int64_t seeds = 0;                // voxels over the vote threshold (inside the box)
+  RidgeStats ridge;                                    // surface_method 1 only
+  int64_t seeds = 0;                                   // voxels over the vote threshold (inside the box)
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
 };
 
-// Seeds = voxels with votes >= threshold and >= min_relative_votes x the largest neighbour count whose centre is
-// inside region (when valid: box and floor half-space), carved against the views (when options.carve), meshed.
+// Seeds = voxels with votes >= threshold whose centre is inside region (when valid: box and floor half-space).
+// Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
+// views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
+// oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen).
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
                            const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
 

@@ -26,8 +26,8 @@ const PairData& SpherePair() {
       v.world_from_camera = pose;
       v.image = scene.Render(pose);
     }
-    d.matches = MatchTracks(scene.Tracks(d.a.world_from_camera, features, 0),
-                            scene.Tracks(d.b.world_from_camera, features, 1));
+    d.matches =
+        MatchTracks(scene.Tracks(d.a.world_from_camera, features, 0), scene.Tracks(d.b.world_from_camera, features, 1));
     return d;
   }();
   return data;

@@ -67,9 +67,14 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   DenseModelOptions* m = &o->model;
   p.Add("vote-threshold", &m->vote_threshold, "votes a voxel needs for VOXEL_MAP and the final model");
-  p.Add("min-relative-votes", &m->min_relative_votes, "final seeds need this fraction of their strongest neighbour's votes");
+  p.Add("min-relative-votes", &m->min_relative_votes,
+        "final seeds need this fraction of their strongest neighbour's votes");
   p.Add("carve", &m->carve, "run photometric space carving in the final phase");
-  p.Add("smoothing-passes", &m->smoothing_passes, "occupancy smoothing passes before meshing");
+  p.Add("smoothing-passes", &m->smoothing_passes, "occupancy smoothing passes before meshing (shell method)");
+  p.Add("surface-method", &m->surface_method, "0 = thresholded shell, 1 = vote ridge along the normal");
+  p.Add("ridge-normal-radius", &m->ridge.normal_radius, "voxels, neighbourhood half-size for the ridge normals");
+  p.Add("ridge-tolerance", &m->ridge.ridge_tolerance, "ridge keeps votes >= this x the votes 1 voxel along +-normal");
+  p.Add("ridge-min-component", &m->ridge.min_component_voxels, "voxels, smaller ridge fragments are dropped");
   AffineDenseOptions* d = &m->dense;
   p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
   p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
@@ -90,6 +95,9 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-max-reprojection", &d->max_reprojection_px, "px, max reprojection error of a dense point");
   p.Add("dense-min-feature-separation", &d->min_feature_separation_px, "px, closer features are dropped");
   p.Add("dense-region-slack", &d->region_slack_mm, "mm, triangles this far outside the region are skipped");
+  p.Add("dense-junction-min-window-stddev", &d->junction_min_window_stddev,
+        "gray levels, floor-object triangles need this texture (< 0 = off)");
+  p.Add("dense-junction-min-ncc", &d->junction_min_ncc, "min NCC in floor-object triangles");
   p.Add("dense-region-margin", &d->region_image_margin_px, "px, margin around the region's projected box");
   VoxelVoteOptions* v = &m->votes;
   p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
@@ -110,12 +118,17 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
 
 bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::string* why) {
   std::ostringstream e;
-  for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
-           {"name", o.name}, {"image-channel", o.image_channel}, {"info-channel", o.info_channel},
-           {"tracks-channel", o.tracks_channel}, {"pose-channel", o.pose_channel},
-           {"voxel-map-channel", o.voxel_map_channel}, {"model-channel", o.model_channel},
-           {"control-channel", o.control_channel}, {"status-channel", o.status_channel},
-           {"finish-sender", o.finish_sender}})
+  for (const auto& [name, value] :
+       std::vector<std::pair<std::string, std::string>>{{"name", o.name},
+                                                        {"image-channel", o.image_channel},
+                                                        {"info-channel", o.info_channel},
+                                                        {"tracks-channel", o.tracks_channel},
+                                                        {"pose-channel", o.pose_channel},
+                                                        {"voxel-map-channel", o.voxel_map_channel},
+                                                        {"model-channel", o.model_channel},
+                                                        {"control-channel", o.control_channel},
+                                                        {"status-channel", o.status_channel},
+                                                        {"finish-sender", o.finish_sender}})
     if (value.empty()) e << name << " must not be empty; ";
   if (o.pair_gap < 1) e << "pair-gap must be >= 1; ";
   if (o.buffer_frames <= o.pair_gap) e << "buffer-frames must be > pair-gap; ";
@@ -186,8 +199,7 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
         malformed("landmarks"));
   ParseRoiBox(options_.roi_box, &config_region_, nullptr);
   bus_.SubscribeMessage<control_t>(
-      options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
-      malformed("control"));
+      options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); }, malformed("control"));
 }
 
 DenseModelerNode::FrameSlot& DenseModelerNode::Slot(int64_t seq) {
@@ -258,8 +270,8 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
     return;
   }
   if (!UsableStatus(pose.status)) {
-    status_.Reject("pose: not tracking", "seq " + std::to_string(msg.seq) + " status " +
-                                              std::to_string(static_cast<int>(pose.status)));
+    status_.Reject("pose: not tracking",
+                   "seq " + std::to_string(msg.seq) + " status " + std::to_string(static_cast<int>(pose.status)));
     return;
   }
   if (final_pose) {
@@ -338,8 +350,8 @@ void DenseModelerNode::UpdateRegion(bool force) {
     }
     if (options_.roi.detect_floor)
       AddFloorNear(landmark_points_, 0.5 * (region.box_min + region.box_max), options_.roi, &region);
-  } else if (options_.auto_roi && AutoRegionOfInterest(landmark_ids_, landmark_points_, central_counts_,
-                                                       options_.roi, &region)) {
+  } else if (options_.auto_roi &&
+             AutoRegionOfInterest(landmark_ids_, landmark_points_, central_counts_, options_.roi, &region)) {
     source = 3;
   }
   region_ = region;
@@ -392,7 +404,8 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   const FrameSlot& pa = partner->second;
   if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
     int na = 0, nb = 0;
-    const double ea = MedianLandmarkReprojectionPx(*camera_, pa.pose->world_from_camera, *pa.tracks, landmark_by_id_, &na);
+    const double ea =
+        MedianLandmarkReprojectionPx(*camera_, pa.pose->world_from_camera, *pa.tracks, landmark_by_id_, &na);
     const double eb =
         MedianLandmarkReprojectionPx(*camera_, slot.pose->world_from_camera, *slot.tracks, landmark_by_id_, &nb);
     if (std::max(ea, eb) > options_.max_pair_landmark_error_px) {
@@ -460,8 +473,10 @@ void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final
     msg.rgb[i] = {static_cast<uint8_t>(voxels[i].bgr[2]), static_cast<uint8_t>(voxels[i].bgr[1]),
                   static_cast<uint8_t>(voxels[i].bgr[0])};
   }
-  if (bus_.PublishMessage(options_.voxel_map_channel, msg)) status_.CountOut();
-  else LogWarning("publishing on " + options_.voxel_map_channel + " failed");
+  if (bus_.PublishMessage(options_.voxel_map_channel, msg))
+    status_.CountOut();
+  else
+    LogWarning("publishing on " + options_.voxel_map_channel + " failed");
 }
 
 void DenseModelerNode::RunFinalPhase(int64_t utime) {
@@ -491,6 +506,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     LogWarning("no region of interest: the model is not restricted");
   }
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
+  if (options_.model.surface_method == 1)
+    LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
+            " seeds, " + std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped");
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
@@ -539,6 +557,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   finished_ = true;
   status_.SetValue("final_ms", (MonotonicMicros() - start_us) * 1e-3);
   status_.SetValue("final_voxels", static_cast<double>(model.voxels.size()));
+  status_.SetValue("final_seeds", static_cast<double>(model.seeds));
   status_.SetState(+process_status_t::STATE_FINISHED, "model written");
   status_.PublishIfDue(WallTimeMicros(), true);
 }

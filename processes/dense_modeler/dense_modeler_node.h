@@ -26,13 +26,13 @@
 // adapter reasons for images/camera info/tracks/poses, "image: no camera_info yet", "image: wrong size" (differs from
 // camera_info), "tracks: malformed", "pose: malformed", "final pose: malformed", "pose: unknown frame" (no image
 // for that seq in the buffer), "pose: not tracking" (initializing or lost),
-// "frame: evicted without pose", "target: malformed", "landmarks: malformed", "landmarks: not in world frame", "control: malformed", "snapshot: no path",
-// "snapshot: write failed".
-// Pair check: when landmarks are known, a pair whose frames see their landmarks with a median reprojection error over
-// max_pair_landmark_error_px is skipped (the pose solver's early live poses can belong to a map it rescaled since).
-// Status values: pairs, pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none,
-// 1 target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region).
-// Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+// "frame: evicted without pose", "target: malformed", "landmarks: malformed", "landmarks: not in world frame",
+// "control: malformed", "snapshot: no path", "snapshot: write failed". Pair check: when landmarks are known, a pair
+// whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped (the
+// pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
+// pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
+// target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region). Handlers run inside
+// Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>
@@ -63,39 +63,39 @@ class Bus;
 class OptionParser;
 
 struct DenseModelerNodeOptions {
-  std::string name = "dense_modeler";                 // process name (status name, control sender)
-  std::string image_channel = "CAMERA_IMAGE";         // images (image_t)
-  std::string info_channel = "CAMERA_INFO";           // intrinsics (camera_info_t)
-  std::string tracks_channel = "FEATURE_TRACKS";      // tracks (feature_tracks_t)
-  std::string pose_channel = "CAMERA_POSE";           // live poses (pose_t)
+  std::string name = "dense_modeler";                    // process name (status name, control sender)
+  std::string image_channel = "CAMERA_IMAGE";            // images (image_t)
+  std::string info_channel = "CAMERA_INFO";              // intrinsics (camera_info_t)
+  std::string tracks_channel = "FEATURE_TRACKS";         // tracks (feature_tracks_t)
+  std::string pose_channel = "CAMERA_POSE";              // live poses (pose_t)
   std::string final_pose_channel = "CAMERA_POSE_FINAL";  // poses after final adjustment (pose_t); "" = ignore
-  std::string target_channel = "TARGET";              // target box (target_t); "" = ignore
-  std::string landmarks_channel = "LANDMARKS";        // sparse landmarks (landmarks_t); "" = ignore
-  std::string voxel_map_channel = "VOXEL_MAP";        // output voxel_map_t
-  std::string model_channel = "MODEL";                // output model_t
-  std::string control_channel = "OBJSCAN_CONTROL";    // control_t in and out
-  std::string status_channel = "PROCESS_STATUS";      // process_status_t
-  std::string finish_sender = "pose_solver";          // COMMAND_FINISHED from this sender starts the final phase
-  std::string output_dir;                             // model files and snapshots go here ("" = no files)
-  int buffer_frames = 40;                             // frames (full images) kept in the ring buffer (> pair_gap)
-  int pair_gap = 6;                                   // frame j is paired with frame j - pair_gap (>= 1)
-  int pair_every = 2;                                 // only frames with seq % pair_every == 0 start a pair (>= 1)
-  double max_pair_landmark_error_px = 3.0;             // px, a pair is skipped when the median landmark reprojection
-                                                      // error in either frame exceeds this (stale pose; 0 = off)
-  int voxel_map_every = 10;                           // pairs between VOXEL_MAP publications (>= 1)
-  int max_map_voxels = 200000;                        // voxels per VOXEL_MAP message at most (>= 1)
-  int carving_downsample = 2;                         // integer downsampling of the images kept for carving (>= 1)
-  int max_carving_views = 200;                        // images kept for carving at most (>= 2)
-  bool use_target_box = true;                         // restrict to the confirmed TARGET box (+ margin)
-  double target_margin_mm = 30.0;                     // mm, added on every side of the target box (>= 0)
-  std::string roi_box;                                // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
-  bool auto_roi = true;                               // derive the region from landmarks when no box is known
-  AutoRoiOptions roi;                                 // automatic region and floor detection
-  int image_queue_capacity = 60;                      // frames buffered by the image subscription (>= 1)
-  int threads = 1;                                    // OpenCV threads (cv::setNumThreads)
-  double status_period_s = 1.0;                       // s, status publication period (> 0)
-  bool exit_when_finished = true;                     // Finished() turns true after the final phase
-  DenseModelOptions model;                            // dense matching, voting, carving, meshing
+  std::string target_channel = "TARGET";                 // target box (target_t); "" = ignore
+  std::string landmarks_channel = "LANDMARKS";           // sparse landmarks (landmarks_t); "" = ignore
+  std::string voxel_map_channel = "VOXEL_MAP";           // output voxel_map_t
+  std::string model_channel = "MODEL";                   // output model_t
+  std::string control_channel = "OBJSCAN_CONTROL";       // control_t in and out
+  std::string status_channel = "PROCESS_STATUS";         // process_status_t
+  std::string finish_sender = "pose_solver";             // COMMAND_FINISHED from this sender starts the final phase
+  std::string output_dir;                                // model files and snapshots go here ("" = no files)
+  int buffer_frames = 40;                                // frames (full images) kept in the ring buffer (> pair_gap)
+  int pair_gap = 6;                                      // frame j is paired with frame j - pair_gap (>= 1)
+  int pair_every = 2;                                    // only frames with seq % pair_every == 0 start a pair (>= 1)
+  double max_pair_landmark_error_px = 3.0;               // px, a pair is skipped when the median landmark reprojection
+                                                         // error in either frame exceeds this (stale pose; 0 = off)
+  int voxel_map_every = 10;                              // pairs between VOXEL_MAP publications (>= 1)
+  int max_map_voxels = 200000;                           // voxels per VOXEL_MAP message at most (>= 1)
+  int carving_downsample = 2;                            // integer downsampling of the images kept for carving (>= 1)
+  int max_carving_views = 200;                           // images kept for carving at most (>= 2)
+  bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
+  double target_margin_mm = 30.0;                        // mm, added on every side of the target box (>= 0)
+  std::string roi_box;                                   // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
+  bool auto_roi = true;                                  // derive the region from landmarks when no box is known
+  AutoRoiOptions roi;                                    // automatic region and floor detection
+  int image_queue_capacity = 60;                         // frames buffered by the image subscription (>= 1)
+  int threads = 1;                                       // OpenCV threads (cv::setNumThreads)
+  double status_period_s = 1.0;                          // s, status publication period (> 0)
+  bool exit_when_finished = true;                        // Finished() turns true after the final phase
+  DenseModelOptions model;                               // dense matching, voting, carving, meshing
 };
 
 // Registers every option field.
@@ -127,10 +127,10 @@ class DenseModelerNode : public Node {
  private:
   struct FrameSlot {
     int64_t utime = 0;
-    cv::Mat image;                              // full resolution (empty until received)
+    cv::Mat image;  // full resolution (empty until received)
     std::optional<TrackFrame> tracks;
-    std::optional<CameraPoseEstimate> pose;     // usable poses only
-    bool processed = false;                     // pairing / carving copy done
+    std::optional<CameraPoseEstimate> pose;  // usable poses only
+    bool processed = false;                  // pairing / carving copy done
   };
   struct StoredView {
     int64_t seq = 0;
@@ -162,14 +162,14 @@ class DenseModelerNode : public Node {
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
   bool have_box_ = false;  // confirmed TARGET box
   Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();
-  RegionOfInterest config_region_;                 // from roi_box
-  std::vector<int64_t> landmark_ids_;              // latest LANDMARKS
-  std::vector<Eigen::Vector3d> landmark_points_;   // mm, world
+  RegionOfInterest config_region_;                               // from roi_box
+  std::vector<int64_t> landmark_ids_;                            // latest LANDMARKS
+  std::vector<Eigen::Vector3d> landmark_points_;                 // mm, world
   std::unordered_map<int64_t, Eigen::Vector3d> landmark_by_id_;  // the same, by track id
-  int64_t pairs_skipped_inconsistent_ = 0;         // pairs skipped by the landmark reprojection check
+  int64_t pairs_skipped_inconsistent_ = 0;                       // pairs skipped by the landmark reprojection check
   std::unordered_map<int64_t, int> central_counts_;  // track id -> posed frames with it in the central window
-  RegionOfInterest region_;                        // current region (invalid = none)
-  int region_source_ = 0;                          // 0 none, 1 target, 2 configuration, 3 automatic
+  RegionOfInterest region_;                          // current region (invalid = none)
+  int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
   int64_t dense_points_ = 0;

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <unistd.h>
 
 #include "common/adapters.h"
 #include "common/bus.h"
@@ -29,9 +29,8 @@ class NodeFixture : public ::testing::Test {
  protected:
   void SetUp() override {
     bus_ = MakeLcmBus("memq://");
-    bus_->SubscribeMessage<voxel_map_t>("VOXEL_MAP", [this](const voxel_map_t& m, const RawMessage&) {
-      out_.maps.push_back(m);
-    });
+    bus_->SubscribeMessage<voxel_map_t>("VOXEL_MAP",
+                                        [this](const voxel_map_t& m, const RawMessage&) { out_.maps.push_back(m); });
     bus_->SubscribeMessage<model_t>("MODEL", [this](const model_t& m, const RawMessage&) { out_.models.push_back(m); });
     bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
       if (m.sender == "dense_modeler") out_.controls.push_back(m);

@@ -66,7 +66,9 @@ Metrics Measure(const SphereScene& scene, const std::vector<Eigen::Isometry3d>& 
 
 struct RunResult {
   Metrics seeds, final;
-  bool closed = false;
+  bool closed = false;  // the old shell mesh was closed; the ridge mesh is open where unseen
+  double mesh_p90 = 0;  // mm, mesh vertices distance to the sphere
+  size_t mesh_triangles = 0;
   double color_err = 0;
 };
 
@@ -111,9 +113,9 @@ RunResult RunSphere(double track_noise_px, bool refine) {
       pixels += st.pixels;
     }
   }
-  std::printf("dense: %lld of %lld pixels accepted, %lld voxels voted, %lld votes\n",
-              static_cast<long long>(accepted), static_cast<long long>(pixels),
-              static_cast<long long>(grid.num_voxels()), static_cast<long long>(grid.total_votes()));
+  std::printf("dense: %lld of %lld pixels accepted, %lld voxels voted, %lld votes\n", static_cast<long long>(accepted),
+              static_cast<long long>(pixels), static_cast<long long>(grid.num_voxels()),
+              static_cast<long long>(grid.total_votes()));
   // Raw dense points accuracy (one pair).
   {
     const auto pts = ComputeDensePair(views[0], views[1], MatchTracks(tracks[0], tracks[1]), options.dense);
@@ -125,8 +127,7 @@ RunResult RunSphere(double track_noise_px, bool refine) {
                 d[d.size() * 9 / 10]);
   }
   std::vector<CarvingView> carving_views;
-  for (int i = 0; i < n_views; ++i)
-    carving_views.push_back(MakeCarvingView(scene.camera, poses[i], views[i].image, 1));
+  for (int i = 0; i < n_views; ++i) carving_views.push_back(MakeCarvingView(scene.camera, poses[i], views[i].image, 1));
 
   std::vector<Eigen::Vector3i> seeds;
   for (const VoxelRecord& r : grid.Extract(options.vote_threshold)) seeds.push_back(r.ijk);
@@ -141,8 +142,8 @@ RunResult RunSphere(double track_noise_px, bool refine) {
   std::printf("carved: %zu voxels (%lld removed in %d passes), p50 %.3f p90 %.3f mm, completeness %.2f%%\n",
               after.voxels, static_cast<long long>(model.carving.removed), model.carving.iterations, after.p50,
               after.p90, 100 * after.completeness);
-  std::printf("mesh: %zu vertices, %zu triangles, closed %d\n", model.mesh.vertices.size(),
-              model.mesh.triangles.size(), IsClosedOrientedMesh(model.mesh) ? 1 : 0);
+  std::printf("mesh: %zu vertices, %zu triangles, closed %d\n", model.mesh.vertices.size(), model.mesh.triangles.size(),
+              IsClosedOrientedMesh(model.mesh) ? 1 : 0);
   // Colour of final voxels close to the texture at their centre projected onto the sphere.
   double color_err = 0;
   for (const CarvedVoxel& v : model.voxels) {
@@ -156,6 +157,14 @@ RunResult RunSphere(double track_noise_px, bool refine) {
   result.seeds = before;
   result.final = after;
   result.closed = IsClosedOrientedMesh(model.mesh);
+  std::vector<double> mesh_error;
+  for (const Eigen::Vector3f& v : model.mesh.vertices)
+    mesh_error.push_back(std::abs((v.cast<double>() - scene.center).norm() - scene.radius));
+  std::sort(mesh_error.begin(), mesh_error.end());
+  result.mesh_p90 = mesh_error.empty() ? 1e9 : mesh_error[mesh_error.size() * 9 / 10];
+  result.mesh_triangles = model.mesh.triangles.size();
+  std::printf("mesh distance to the sphere p90 %.3f mm, max %.3f mm\n", result.mesh_p90,
+              mesh_error.empty() ? 0.0 : mesh_error.back());
   result.color_err = color_err;
   return result;
 }
@@ -164,7 +173,9 @@ TEST(DensePipeline, TexturedSphereFromRingExactTracks) {
   const RunResult r = RunSphere(0.0, false);
   EXPECT_LE(r.final.p90, 1.5);
   EXPECT_GE(r.final.completeness, 0.95);
-  EXPECT_TRUE(r.closed);
+  // The ridge mesh stays open where no camera looked (under the sphere): accuracy, not closedness.
+  EXPECT_GT(r.mesh_triangles, 10000u);
+  EXPECT_LE(r.mesh_p90, 1.0);
   EXPECT_LT(r.color_err, 25.0);
 }
 
@@ -177,7 +188,7 @@ TEST(DensePipeline, TexturedSphereFromRingNoisyTracks) {
   EXPECT_GE(plain.final.completeness, 0.85);
   EXPECT_LE(refined.final.p90, 1.5);
   EXPECT_GE(refined.final.completeness, 0.90);
-  EXPECT_TRUE(refined.closed);
+  EXPECT_LE(refined.mesh_p90, 1.0);
 }
 
 }  // namespace

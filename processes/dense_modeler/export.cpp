@@ -1,9 +1,9 @@
 #include "processes/dense_modeler/export.h"
 
+#include <octomap/OcTree.h>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
-#include <octomap/OcTree.h>
 
 namespace objscan {
 namespace {
@@ -37,8 +37,9 @@ bool WriteVoxelPly(const std::string& path, const std::vector<CarvedVoxel>& voxe
   std::string buf = "ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler voxel centres, mm\n";
   buf += "comment voxel_size_mm " + std::to_string(voxel_size) + "\n";
   buf += "element vertex " + std::to_string(voxels.size()) + "\n";
-  buf += "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
-         "property uchar blue\nproperty int votes\nproperty int views\nend_header\n";
+  buf +=
+      "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\nproperty int votes\nproperty int views\nend_header\n";
   for (const CarvedVoxel& v : voxels) {
     for (int k = 0; k < 3; ++k) Put(&buf, static_cast<float>((v.ijk[k] + 0.5) * voxel_size));
     Put(&buf, v.bgr[2]);
@@ -53,9 +54,11 @@ bool WriteVoxelPly(const std::string& path, const std::vector<CarvedVoxel>& voxe
 bool WriteMeshPly(const std::string& path, const TriangleMesh& mesh, std::string* error) {
   std::string buf = "ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler surface, mm\n";
   buf += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
-  buf += "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
-         "property uchar blue\n";
-  buf += "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\n"
+  buf +=
+      "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+      "property uchar blue\n";
+  buf += "element face " + std::to_string(mesh.triangles.size()) +
+         "\nproperty list uchar int vertex_indices\n"
          "end_header\n";
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
     for (int k = 0; k < 3; ++k) Put(&buf, mesh.vertices[i][k]);
@@ -81,7 +84,8 @@ bool WriteOctomap(const std::string& path, const std::vector<CarvedVoxel>& voxel
     const double res_m = voxel_size * 1e-3;
     octomap::OcTree tree(res_m);
     for (const CarvedVoxel& v : voxels) {
-      const octomap::point3d p(static_cast<float>((v.ijk.x() + 0.5) * res_m), static_cast<float>((v.ijk.y() + 0.5) * res_m),
+      const octomap::point3d p(static_cast<float>((v.ijk.x() + 0.5) * res_m),
+                               static_cast<float>((v.ijk.y() + 0.5) * res_m),
                                static_cast<float>((v.ijk.z() + 0.5) * res_m));
       tree.updateNode(p, true);
     }

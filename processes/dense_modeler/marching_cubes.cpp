@@ -1,5 +1,7 @@
 #include "processes/dense_modeler/marching_cubes.h"
 
+#include <cmath>
+
 #include <algorithm>
 #include <map>
 #include <unordered_map>
@@ -21,8 +23,7 @@ struct EdgeKeyHash {
 
 TriangleMesh ExtractIsosurface(const ScalarVolume& vol, float iso) {
   TriangleMesh mesh;
-  if (vol.nx < 2 || vol.ny < 2 || vol.nz < 2 ||
-      vol.values.size() != static_cast<size_t>(vol.nx) * vol.ny * vol.nz)
+  if (vol.nx < 2 || vol.ny < 2 || vol.nz < 2 || vol.values.size() != static_cast<size_t>(vol.nx) * vol.ny * vol.nz)
     return mesh;
   const bool has_color = vol.bgr.size() == vol.values.size();
   std::unordered_map<std::pair<int64_t, int64_t>, int32_t, EdgeKeyHash> edge_vertex;
@@ -61,19 +62,22 @@ TriangleMesh ExtractIsosurface(const ScalarVolume& vol, float iso) {
     for (int y = 0; y + 1 < vol.ny; ++y) {
       for (int x = 0; x + 1 < vol.nx; ++x) {
         int64_t corner[8];
-        bool any_in = false, any_out = false;
+        bool any_in = false, any_out = false, undefined = false;
         for (int c = 0; c < 8; ++c) {
           corner[c] = vol.Index(x, y, z) + (c & 1) * sx + ((c >> 1) & 1) * sy + ((c >> 2) & 1) * sz;
+          undefined |= !std::isfinite(vol.values[corner[c]]);
           (vol.values[corner[c]] > iso ? any_in : any_out) = true;
         }
-        if (!any_in || !any_out) continue;
+        if (undefined || !any_in || !any_out) continue;
         for (const auto& tet : kTets) {
           int64_t in[4], out[4];
           int n_in = 0, n_out = 0;
           for (int k = 0; k < 4; ++k) {
             const int64_t s = corner[tet[k]];
-            if (vol.values[s] > iso) in[n_in++] = s;
-            else out[n_out++] = s;
+            if (vol.values[s] > iso)
+              in[n_in++] = s;
+            else
+              out[n_out++] = s;
           }
           if (n_in == 0 || n_out == 0) continue;
           Eigen::Vector3d cin = Eigen::Vector3d::Zero(), cout = Eigen::Vector3d::Zero();

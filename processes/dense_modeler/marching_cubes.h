@@ -26,13 +26,14 @@ struct ScalarVolume {
 };
 
 struct TriangleMesh {
-  std::vector<Eigen::Vector3f> vertices;       // mm, world
-  std::vector<std::array<uint8_t, 3>> bgr;     // per vertex
+  std::vector<Eigen::Vector3f> vertices;    // mm, world
+  std::vector<std::array<uint8_t, 3>> bgr;  // per vertex
   std::vector<std::array<int32_t, 3>> triangles;
 };
 
 // Iso-surface at `iso` (inside = value > iso). Samples outside the volume count as outside; when the volume has
-// no inside sample on its border the mesh is closed. Vertex colour = colour of the inside end of its edge.
+// no inside sample on its border the mesh is closed. Non-finite samples are undefined: cells with an undefined
+// corner produce no triangles (the mesh is open there). Vertex colour = colour of the inside end of its edge.
 TriangleMesh ExtractIsosurface(const ScalarVolume& volume, float iso);
 
 // Mesh of a voxel set: occupancy (1 inside, 0 outside) on the voxel centres with a one-voxel empty border plus

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace objscan {
 namespace {
@@ -36,9 +37,27 @@ TEST(MarchingCubes, AnalyticSphereClosedAndAccurate) {
   double volume = 0;
   for (const auto& t : mesh.triangles)
     volume += mesh.vertices[t[0]].cast<double>().dot(
-                  mesh.vertices[t[1]].cast<double>().cross(mesh.vertices[t[2]].cast<double>())) / 6.0;
+                  mesh.vertices[t[1]].cast<double>().cross(mesh.vertices[t[2]].cast<double>())) /
+              6.0;
   EXPECT_NEAR(volume, 4.0 / 3.0 * M_PI * radius * radius * radius, 0.03 * 4.0 / 3.0 * M_PI * std::pow(radius, 3));
   ASSERT_EQ(mesh.bgr.size(), mesh.vertices.size());
+}
+
+TEST(MarchingCubes, UndefinedSamplesLeaveTheMeshOpen) {
+  const double spacing = 2.0, radius = 25.0;
+  const Eigen::Vector3d center(31.3, 30.7, 32.1);
+  ScalarVolume vol = SphereVolume(33, spacing, center, radius);
+  const size_t full = ExtractIsosurface(vol, 0.f).triangles.size();
+  // Undefine every sample below the sphere's centre plane: that half gets no triangles.
+  for (int z = 0; z < vol.nz; ++z)
+    for (int y = 0; y < vol.ny; ++y)
+      for (int x = 0; x < vol.nx; ++x)
+        if (z * spacing < center.z()) vol.values[vol.Index(x, y, z)] = std::numeric_limits<float>::quiet_NaN();
+  const TriangleMesh mesh = ExtractIsosurface(vol, 0.f);
+  ASSERT_GT(mesh.triangles.size(), full / 4);
+  EXPECT_LT(mesh.triangles.size(), full * 3 / 5);
+  EXPECT_FALSE(IsClosedOrientedMesh(mesh));
+  for (const auto& v : mesh.vertices) EXPECT_GE(v.z(), center.z() - spacing);
 }
 
 TEST(MarchingCubes, VoxelisedSphereClosedWithinHalfVoxel) {

@@ -4,6 +4,7 @@
 // so the final voxels must project onto foreground pixels. Skipped when the data set is absent.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -13,7 +14,6 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
-#include <algorithm>
 
 #include "processes/dense_modeler/dense_model.h"
 
@@ -96,10 +96,12 @@ TEST(Middlebury, TempleSparseRingSilhouetteConsistent) {
     const auto pts = ComputeDensePair(views[i], views[j], matches, options.dense, &st);
     grid.AddPoints(pts);
     points += static_cast<int64_t>(pts.size());
-    std::printf("pair %2d-%2d: baseline %.0f mm, %d features, %zu matches, %d triangles (%d shape, %d depth skipped), %lld px, %zu points\n", i, j,
-                (views[i].world_from_camera.translation() - views[j].world_from_camera.translation()).norm(),
-                st.features, matches.size(), st.triangles, st.triangles_skipped_shape, st.triangles_skipped_depth,
-                static_cast<long long>(st.pixels), pts.size());
+    std::printf(
+        "pair %2d-%2d: baseline %.0f mm, %d features, %zu matches, %d triangles (%d shape, %d depth skipped), %lld px, "
+        "%zu points\n",
+        i, j, (views[i].world_from_camera.translation() - views[j].world_from_camera.translation()).norm(), st.features,
+        matches.size(), st.triangles, st.triangles_skipped_shape, st.triangles_skipped_depth,
+        static_cast<long long>(st.pixels), pts.size());
   }
   std::vector<CarvingView> cviews;
   for (const DenseView& v : views) cviews.push_back(MakeCarvingView(v.camera, v.world_from_camera, v.image, 1));
@@ -112,17 +114,18 @@ TEST(Middlebury, TempleSparseRingSilhouetteConsistent) {
     for (const DenseView& view : views) {
       Eigen::Vector2d px;
       if (!view.camera.Project(view.world_from_camera.inverse() * c, &px) || !view.camera.InImage(px, 1)) continue;
-      const cv::Vec3b bgr = view.image.at<cv::Vec3b>(static_cast<int>(std::lround(px.y())),
-                                                     static_cast<int>(std::lround(px.x())));
+      const cv::Vec3b bgr =
+          view.image.at<cv::Vec3b>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x())));
       ++projections;
       foreground += std::max({bgr[0], bgr[1], bgr[2]}) > 25 ? 1 : 0;
     }
   }
   const double fraction = static_cast<double>(foreground) / std::max<int64_t>(1, projections);
-  std::printf("temple: %lld dense points, %lld seeds, %zu final voxels (%lld carved), %zu triangles, "
-              "%.2f%% of projections on foreground\n",
-              static_cast<long long>(points), static_cast<long long>(model.seeds), model.voxels.size(),
-              static_cast<long long>(model.carving.removed), model.mesh.triangles.size(), 100 * fraction);
+  std::printf(
+      "temple: %lld dense points, %lld seeds, %zu final voxels (%lld carved), %zu triangles, "
+      "%.2f%% of projections on foreground\n",
+      static_cast<long long>(points), static_cast<long long>(model.seeds), model.voxels.size(),
+      static_cast<long long>(model.carving.removed), model.mesh.triangles.size(), 100 * fraction);
   EXPECT_GT(fraction, 0.95);
   if (const char* out = std::getenv("OBJSCAN_DENSE_TEST_OUTPUT")) {
     std::string error;

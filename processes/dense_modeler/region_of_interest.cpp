@@ -54,6 +54,13 @@ bool RegionOfInterest::TriangleOutside(const Eigen::Vector3d& p0, const Eigen::V
   return false;
 }
 
+bool RegionOfInterest::TriangleSpansFloorJunction(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                                                  const Eigen::Vector3d& p2) const {
+  if (!has_floor) return false;
+  const double h0 = HeightAboveFloor(p0), h1 = HeightAboveFloor(p1), h2 = HeightAboveFloor(p2);
+  return std::min({h0, h1, h2}) < 0.5 * floor_clearance_mm && std::max({h0, h1, h2}) > floor_clearance_mm;
+}
+
 cv::Rect RegionOfInterest::ImageRect(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
                                      double margin_px) const {
   const cv::Rect whole(0, 0, camera.width, camera.height);

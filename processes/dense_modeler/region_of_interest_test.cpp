@@ -200,5 +200,22 @@ TEST(RegionOfInterestTest, ImageRectTriangleTestAndParsing) {
   EXPECT_TRUE(roi.Contains({0, 0, 5}));
 }
 
+TEST(RegionOfInterestTest, FloorJunctionTriangles) {
+  RegionOfInterest r;
+  r.valid = true;
+  r.box_min = Eigen::Vector3d(-200, -200, -50);
+  r.box_max = Eigen::Vector3d(200, 200, 300);
+  const Eigen::Vector3d floor(0, 0, 1), low(10, 0, 3), high(0, 10, 40), higher(5, 5, 60);
+  EXPECT_FALSE(r.TriangleSpansFloorJunction(low, high, higher));  // no floor known
+  r.has_floor = true;
+  r.floor_normal = Eigen::Vector3d::UnitZ();
+  r.floor_offset_mm = 0;
+  r.floor_clearance_mm = 10;
+  EXPECT_TRUE(r.TriangleSpansFloorJunction(floor, high, higher));  // floor vertex + object vertices
+  EXPECT_TRUE(r.TriangleSpansFloorJunction(high, low, higher));    // order does not matter
+  EXPECT_FALSE(r.TriangleSpansFloorJunction(high, higher, Eigen::Vector3d(1, 1, 12)));  // all on the object
+  EXPECT_FALSE(r.TriangleSpansFloorJunction(floor, low, Eigen::Vector3d(1, 1, 8)));     // all low
+}
+
 }  // namespace
 }  // namespace objscan

@@ -40,12 +40,15 @@ bool ValidateSpaceCarvingOptions(const SpaceCarvingOptions& o, std::string* why)
 
 std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, double voxel_size,
                                      const std::vector<CarvingView>& views_in, const SpaceCarvingOptions& o,
-                                     SpaceCarvingStats* stats_out) {
+                                     SpaceCarvingStats* stats_out, const std::vector<Eigen::Vector3d>* seed_normals) {
   SpaceCarvingStats stats;
+  if (seed_normals && seed_normals->size() != seeds.size()) seed_normals = nullptr;
   std::vector<CarvedVoxel> voxels;
+  std::vector<Eigen::Vector3d> given_normals;
   std::unordered_map<uint64_t, int> index;
   index.reserve(seeds.size() * 2);
-  for (const VoxelRecord& s : seeds) {
+  for (size_t si = 0; si < seeds.size(); ++si) {
+    const VoxelRecord& s = seeds[si];
     auto it = index.find(Key(s.ijk));
     if (it != index.end()) {
       voxels[it->second].votes += s.votes;
@@ -57,6 +60,7 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
     c.votes = s.votes;
     c.bgr = s.bgr;
     voxels.push_back(c);
+    if (seed_normals) given_normals.push_back((*seed_normals)[si]);
   }
   stats.seeds = static_cast<int64_t>(voxels.size());
   if (!(voxel_size > 0) || !ValidateSpaceCarvingOptions(o, nullptr)) {
@@ -95,6 +99,7 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
       }
       if (!is_surface) continue;
       surface.push_back(static_cast<int>(i));
+      if (seed_normals) n = given_normals[i];
       normals.push_back(n.norm() > 0 ? n.normalized() : n);
     }
     const size_t ns = surface.size();
@@ -161,7 +166,8 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
         double* a = &acc[s * 7];
         for (int k = 0; k < 3; ++k) {
           const int c = ch == 3 ? k : 0;
-          const double val = (1 - fy) * ((1 - fx) * r0[c] + fx * r0[ch + c]) + fy * ((1 - fx) * r1[c] + fx * r1[ch + c]);
+          const double val =
+              (1 - fy) * ((1 - fx) * r0[c] + fx * r0[ch + c]) + fy * ((1 - fx) * r1[c] + fx * r1[ch + c]);
           a[k] += val;
           a[3 + k] += val * val;
         }

@@ -27,7 +27,7 @@ namespace objscan {
 struct CarvingView {
   PinholeCamera camera;  // intrinsics of image as stored (scaled when downsampled)
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
-  cv::Mat image;         // CV_8UC3 BGR or CV_8UC1
+  cv::Mat image;                                                        // CV_8UC3 BGR or CV_8UC1
 };
 
 struct SpaceCarvingOptions {
@@ -59,9 +59,12 @@ struct SpaceCarvingStats {
   int64_t projections = 0;  // voxel-view projections done (cost measure)
 };
 
-// Carves the seeds (duplicates are merged). Result sorted by (k, j, i).
+// Carves the seeds (duplicates are merged). Result sorted by (k, j, i). seed_normals (optional, one per seed,
+// outward unit vectors) replace the normals estimated from the empty 6-neighbours: a one-voxel-thin surface has
+// empty neighbours on both sides, so its normals must come from elsewhere (e.g. ExtractVoteRidge).
 std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, double voxel_size_mm,
                                      const std::vector<CarvingView>& views, const SpaceCarvingOptions& options,
-                                     SpaceCarvingStats* stats = nullptr);
+                                     SpaceCarvingStats* stats = nullptr,
+                                     const std::vector<Eigen::Vector3d>* seed_normals = nullptr);
 
 }  // namespace objscan

@@ -81,10 +81,11 @@ TEST(SpaceCarving, RemovesInconsistentVoxelsKeepsSurfaceAndOccluded) {
     }
   for (const auto& s : truth_surface) surface_kept += kept_set.count(s);
   for (const auto& s : interior) interior_kept += kept_set.count(s);
-  std::printf("carving: %lld seeds, %lld removed in %d passes; spurious left %d of %zu, surface kept %d of %zu, "
-              "interior kept %d of %zu\n",
-              static_cast<long long>(st.seeds), static_cast<long long>(st.removed), st.iterations, spurious_left,
-              spurious.size(), surface_kept, truth_surface.size(), interior_kept, interior.size());
+  std::printf(
+      "carving: %lld seeds, %lld removed in %d passes; spurious left %d of %zu, surface kept %d of %zu, "
+      "interior kept %d of %zu\n",
+      static_cast<long long>(st.seeds), static_cast<long long>(st.removed), st.iterations, spurious_left,
+      spurious.size(), surface_kept, truth_surface.size(), interior_kept, interior.size());
   EXPECT_EQ(spurious_left, 0);
   EXPECT_GE(surface_kept, 0.97 * truth_surface.size());
   EXPECT_EQ(interior_kept, static_cast<int>(interior.size()));  // occluded voxels untouched

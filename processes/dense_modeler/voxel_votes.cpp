@@ -12,16 +12,18 @@
 namespace objscan {
 namespace {
 
-// Snapshot format (little endian): 8-byte magic "OSVOTES1", double voxel_size_mm, int32 neighbourhood,
+// Snapshot format (little endian): 8-byte magic "OSVOTES2", double voxel_size_mm, int32 neighbourhood,
 // int32 center/face/edge/corner weights, int64 count, then count records of
-// int32 i, j, k, votes, uint32 color_sum b, g, r, int32 color_count.
-constexpr char kMagic[8] = {'O', 'S', 'V', 'O', 'T', 'E', 'S', '1'};
+// int32 i, j, k, votes, uint32 color_sum b, g, r, int32 color_count, float32 toward_camera_sum x, y, z.
+// ("OSVOTES1" files, without the direction sums, are refused as foreign.)
+constexpr char kMagic[8] = {'O', 'S', 'V', 'O', 'T', 'E', 'S', '2'};
 constexpr int32_t kMaxIndex = 1 << 22;
 
 struct SnapshotRecord {
   int32_t i, j, k, votes;
   uint32_t sum[3];
   int32_t count;
+  float toward_camera_sum[3];
 };
 
 }  // namespace
@@ -92,7 +94,8 @@ void VoxelVoteGrid::AddVotes(Block* block, int local, int32_t weight) {
   total_votes_ += weight;
 }
 
-bool VoxelVoteGrid::AddPoint(const Eigen::Vector3d& p, const std::array<uint8_t, 3>& bgr) {
+bool VoxelVoteGrid::AddPoint(const Eigen::Vector3d& p, const std::array<uint8_t, 3>& bgr,
+                             const Eigen::Vector3f& toward_camera) {
   if (!p.allFinite()) return false;
   const Eigen::Vector3d s = p / options_.voxel_size_mm;
   if ((s.array().abs() >= kMaxIndex - 2).any()) return false;
@@ -105,6 +108,8 @@ bool VoxelVoteGrid::AddPoint(const Eigen::Vector3d& p, const std::array<uint8_t,
   center_block->color_sum[center_local][1] += bgr[1];
   center_block->color_sum[center_local][2] += bgr[2];
   ++center_block->color_count[center_local];
+  if (toward_camera.allFinite())
+    for (int k = 0; k < 3; ++k) center_block->toward_camera_sum[center_local][k] += toward_camera[k];
   ++points_added_;
   if (options_.neighbourhood == 0) {
     AddVotes(center_block, center_local, weight_by_order_[0]);
@@ -132,7 +137,7 @@ bool VoxelVoteGrid::AddPoint(const Eigen::Vector3d& p, const std::array<uint8_t,
 
 int VoxelVoteGrid::AddPoints(const std::vector<DensePoint>& points) {
   int n = 0;
-  for (const DensePoint& p : points) n += AddPoint(p.point_in_world, p.bgr) ? 1 : 0;
+  for (const DensePoint& p : points) n += AddPoint(p.point_in_world, p.bgr, p.toward_camera) ? 1 : 0;
   return n;
 }
 
@@ -157,7 +162,10 @@ std::vector<VoxelRecord> VoxelVoteGrid::Extract(int32_t min_votes) const {
       r.color_count = b.color_count[l];
       if (r.color_count > 0)
         for (int k = 0; k < 3; ++k)
-          r.bgr[k] = static_cast<uint8_t>((b.color_sum[l][k] + r.color_count / 2) / static_cast<uint32_t>(r.color_count));
+          r.bgr[k] =
+              static_cast<uint8_t>((b.color_sum[l][k] + r.color_count / 2) / static_cast<uint32_t>(r.color_count));
+      const Eigen::Vector3f dir(b.toward_camera_sum[l][0], b.toward_camera_sum[l][1], b.toward_camera_sum[l][2]);
+      if (r.color_count > 0) r.toward_camera = dir / static_cast<float>(r.color_count);
       out.push_back(r);
     }
   }
@@ -197,8 +205,13 @@ bool VoxelVoteGrid::SaveSnapshot(const std::string& path, std::string* error) co
       if (b.votes[l] == 0 && b.color_count[l] == 0) continue;
       const Eigen::Vector3i ijk =
           base + Eigen::Vector3i(l & (kBlockSide - 1), (l >> kBlockBits) & (kBlockSide - 1), l >> (2 * kBlockBits));
-      recs.push_back({ijk.x(), ijk.y(), ijk.z(), b.votes[l], {b.color_sum[l][0], b.color_sum[l][1], b.color_sum[l][2]},
-                      b.color_count[l]});
+      recs.push_back({ijk.x(),
+                      ijk.y(),
+                      ijk.z(),
+                      b.votes[l],
+                      {b.color_sum[l][0], b.color_sum[l][1], b.color_sum[l][2]},
+                      b.color_count[l],
+                      {b.toward_camera_sum[l][0], b.toward_camera_sum[l][1], b.toward_camera_sum[l][2]}});
     }
   }
   std::sort(recs.begin(), recs.end(), [](const SnapshotRecord& x, const SnapshotRecord& y) {
@@ -276,6 +289,8 @@ bool VoxelVoteGrid::LoadSnapshot(const std::string& path, std::string* error) {
     b->votes[l] += r.votes;
     loaded.total_votes_ += r.votes;
     for (int k = 0; k < 3; ++k) b->color_sum[l][k] += r.sum[k];
+    for (int k = 0; k < 3; ++k)
+      if (std::isfinite(r.toward_camera_sum[k])) b->toward_camera_sum[l][k] += r.toward_camera_sum[k];
     b->color_count[l] += r.count;
     loaded.points_added_ += r.count;
   }

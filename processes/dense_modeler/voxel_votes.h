@@ -22,7 +22,7 @@ namespace objscan {
 struct VoxelVoteOptions {
   double voxel_size_mm = 2.0;  // mm, voxel edge (> 0)
   int neighbourhood = 26;      // 0 (own voxel only), 6 (faces) or 26 (faces, edges, corners)
-  int center_weight = 10;       // votes for the point's own voxel (>= 1)
+  int center_weight = 10;      // votes for the point's own voxel (>= 1)
   int face_weight = 2;         // votes for each of the 6 face neighbours (>= 0)
   int edge_weight = 1;         // votes for each of the 12 edge neighbours (>= 0, 26-neighbourhood only)
   int corner_weight = 1;       // votes for each of the 8 corner neighbours (>= 0, 26-neighbourhood only)
@@ -32,10 +32,12 @@ bool ValidateVoxelVoteOptions(const VoxelVoteOptions& options, std::string* why)
 
 // One voxel with its votes and mean colour.
 struct VoxelRecord {
-  Eigen::Vector3i ijk = Eigen::Vector3i::Zero();  // voxel index
-  int32_t votes = 0;                               // exact vote count
-  std::array<uint8_t, 3> bgr{{128, 128, 128}};     // mean colour of the points that fell in it (grey if none)
-  int32_t color_count = 0;                         // points that fell in it
+  Eigen::Vector3i ijk = Eigen::Vector3i::Zero();            // voxel index
+  int32_t votes = 0;                                        // exact vote count
+  std::array<uint8_t, 3> bgr{{128, 128, 128}};              // mean colour of the points that fell in it (grey if none)
+  int32_t color_count = 0;                                  // points that fell in it
+  Eigen::Vector3f toward_camera = Eigen::Vector3f::Zero();  // mean unit direction from its points towards the
+                                                            // cameras that triangulated them (zero if unknown)
 };
 
 class VoxelVoteGrid {
@@ -48,7 +50,10 @@ class VoxelVoteGrid {
   Eigen::Vector3d CenterOf(const Eigen::Vector3i& ijk) const;
 
   // Adds the votes of one point. False (nothing added) for non-finite points or points beyond ±2^22 voxels.
-  bool AddPoint(const Eigen::Vector3d& point_in_world, const std::array<uint8_t, 3>& bgr);
+  // toward_camera (unit, world; zero = unknown) is summed in the point's own voxel: the side the point was seen
+  // from, which orients the surface normal.
+  bool AddPoint(const Eigen::Vector3d& point_in_world, const std::array<uint8_t, 3>& bgr,
+                const Eigen::Vector3f& toward_camera = Eigen::Vector3f::Zero());
   // Adds every point; returns how many were accepted.
   int AddPoints(const std::vector<DensePoint>& points);
 
@@ -76,6 +81,7 @@ class VoxelVoteGrid {
     int32_t votes[kBlockVoxels] = {};
     uint32_t color_sum[kBlockVoxels][3] = {};
     int32_t color_count[kBlockVoxels] = {};
+    float toward_camera_sum[kBlockVoxels][3] = {};
   };
   static uint64_t BlockKey(int bx, int by, int bz);
   Block* GetBlock(int bx, int by, int bz, bool create);

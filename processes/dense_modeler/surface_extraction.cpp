@@ -1,0 +1,228 @@
+#include "processes/dense_modeler/surface_extraction.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace objscan {
+namespace {
+
+uint64_t Key(const Eigen::Vector3i& v) {
+  constexpr int64_t kOffset = int64_t{1} << 20;
+  return (static_cast<uint64_t>(v.x() + kOffset) << 42) | (static_cast<uint64_t>(v.y() + kOffset) << 21) |
+         static_cast<uint64_t>(v.z() + kOffset);
+}
+
+// Votes around the seeds: a dense copy of the grid over the seeds' bounding box when it is small enough (the
+// normal and ridge tests read each voxel many times), grid lookups otherwise.
+class VoteField {
+ public:
+  VoteField(const VoxelVoteGrid& grid, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) : grid_(grid), lo_(lo) {
+    dims_ = (hi - lo + Eigen::Vector3i::Ones()).cast<int64_t>();
+    const int64_t n = dims_.prod();
+    if (n <= 0 || n > kMaxDense) return;
+    dense_.resize(static_cast<size_t>(n));
+    for (int64_t z = 0; z < dims_.z(); ++z)
+      for (int64_t y = 0; y < dims_.y(); ++y)
+        for (int64_t x = 0; x < dims_.x(); ++x)
+          dense_[static_cast<size_t>((z * dims_.y() + y) * dims_.x() + x)] =
+              grid.Votes(lo + Eigen::Vector3i(static_cast<int>(x), static_cast<int>(y), static_cast<int>(z)));
+  }
+  int32_t operator()(const Eigen::Vector3i& ijk) const {
+    if (dense_.empty()) return grid_.Votes(ijk);
+    const Eigen::Matrix<int64_t, 3, 1> d = (ijk - lo_).cast<int64_t>();
+    if ((d.array() < 0).any() || (d.array() >= dims_.array()).any()) return 0;
+    return dense_[static_cast<size_t>((d.z() * dims_.y() + d.y()) * dims_.x() + d.x())];
+  }
+  // Trilinear interpolation; position in voxel-index units (voxel ijk's centre at ijk).
+  double Sample(const Eigen::Vector3d& pos) const {
+    const Eigen::Vector3d f = pos.array().floor();
+    const Eigen::Vector3i base = f.cast<int>();
+    const Eigen::Vector3d t = pos - f;
+    double v = 0;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3i o((c & 1), (c >> 1) & 1, (c >> 2) & 1);
+      const double w = (o.x() ? t.x() : 1 - t.x()) * (o.y() ? t.y() : 1 - t.y()) * (o.z() ? t.z() : 1 - t.z());
+      if (w > 0) v += w * (*this)(base + o);
+    }
+    return v;
+  }
+
+ private:
+  static constexpr int64_t kMaxDense = int64_t{32} << 20;  // voxels (128 MB of counts)
+  const VoxelVoteGrid& grid_;
+  Eigen::Vector3i lo_;
+  Eigen::Matrix<int64_t, 3, 1> dims_;
+  std::vector<int32_t> dense_;
+};
+
+}  // namespace
+
+bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (o.normal_radius < 1 || o.normal_radius > 4) e << "ridge normal_radius must be in 1..4; ";
+  if (!(o.ridge_tolerance > 0 && o.ridge_tolerance <= 1)) e << "ridge_tolerance must be in (0, 1]; ";
+  if (o.min_component_voxels < 0) e << "min_component_voxels must be >= 0; ";
+  if (why) *why = e.str();
+  return e.str().empty();
+}
+
+std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std::vector<VoxelRecord>& seeds,
+                                           const RidgeOptions& o, RidgeStats* stats_out) {
+  RidgeStats stats;
+  stats.seeds = static_cast<int64_t>(seeds.size());
+  std::vector<SurfaceVoxel> out;
+  if (seeds.empty()) {
+    if (stats_out) *stats_out = stats;
+    return out;
+  }
+  Eigen::Vector3i lo = seeds[0].ijk, hi = lo;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const VoxelRecord& s : seeds) {
+    lo = lo.cwiseMin(s.ijk);
+    hi = hi.cwiseMax(s.ijk);
+    centroid += s.ijk.cast<double>();
+  }
+  centroid /= static_cast<double>(seeds.size());
+  const int pad = o.normal_radius + 2;
+  const VoteField votes(grid, lo - Eigen::Vector3i::Constant(pad), hi + Eigen::Vector3i::Constant(pad));
+  const int r = o.normal_radius;
+
+  std::vector<SurfaceVoxel> ridge;
+  for (const VoxelRecord& s : seeds) {
+    // Normal: thin axis of the vote-weighted neighbourhood.
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+    double wsum = 0;
+    for (int dz = -r; dz <= r; ++dz)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx) {
+          const double w = votes(s.ijk + Eigen::Vector3i(dx, dy, dz));
+          if (w <= 0) continue;
+          const Eigen::Vector3d d(dx, dy, dz);
+          mean += w * d;
+          second += w * d * d.transpose();
+          wsum += w;
+        }
+    if (wsum <= 0) continue;
+    mean /= wsum;
+    const Eigen::Matrix3d cov = second / wsum - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Eigen::Vector3d n = eig.eigenvectors().col(0);  // smallest eigenvalue
+    if (!n.allFinite() || n.norm() < 0.5) continue;
+    n.normalize();
+    Eigen::Vector3d outward = s.toward_camera.cast<double>();
+    if (outward.squaredNorm() < 1e-12) outward = s.ijk.cast<double>() - centroid;
+    if (n.dot(outward) < 0) n = -n;
+
+    const Eigen::Vector3d c = s.ijk.cast<double>();
+    const double v0 = s.votes;
+    const double vp = votes.Sample(c + n), vm = votes.Sample(c - n);
+    if (v0 < o.ridge_tolerance * vp || v0 < o.ridge_tolerance * vm) continue;
+    const double denom = vm - 2 * v0 + vp;
+    double t = denom < 0 ? 0.5 * (vm - vp) / denom : 0.0;
+    t = std::clamp(t, -0.5, 0.5);
+    SurfaceVoxel sv;
+    sv.voxel = s;
+    sv.normal = n;
+    sv.point_in_world = grid.CenterOf(s.ijk) + t * grid.voxel_size() * n;
+    ridge.push_back(sv);
+  }
+  stats.ridge = static_cast<int64_t>(ridge.size());
+
+  // Drop small 26-connected fragments.
+  std::vector<char> keep(ridge.size(), 1);
+  if (o.min_component_voxels > 1) {
+    std::unordered_map<uint64_t, size_t> index;
+    index.reserve(ridge.size() * 2);
+    for (size_t i = 0; i < ridge.size(); ++i) index.emplace(Key(ridge[i].voxel.ijk), i);
+    std::vector<int> component(ridge.size(), -1);
+    std::vector<size_t> stack, members;
+    for (size_t i = 0; i < ridge.size(); ++i) {
+      if (component[i] >= 0) continue;
+      members.clear();
+      stack.assign(1, i);
+      component[i] = static_cast<int>(i);
+      while (!stack.empty()) {
+        const size_t k = stack.back();
+        stack.pop_back();
+        members.push_back(k);
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              auto it = index.find(Key(ridge[k].voxel.ijk + Eigen::Vector3i(dx, dy, dz)));
+              if (it == index.end() || component[it->second] >= 0) continue;
+              component[it->second] = static_cast<int>(i);
+              stack.push_back(it->second);
+            }
+      }
+      if (static_cast<int>(members.size()) < o.min_component_voxels) {
+        for (size_t k : members) keep[k] = 0;
+        stats.fragments_dropped += static_cast<int64_t>(members.size());
+      }
+    }
+  }
+  for (size_t i = 0; i < ridge.size(); ++i)
+    if (keep[i]) out.push_back(ridge[i]);
+  stats.kept = static_cast<int64_t>(out.size());
+  if (stats_out) *stats_out = stats;
+  return out;
+}
+
+TriangleMesh MeshFromSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size_mm) {
+  if (surface.empty() || !(voxel_size_mm > 0)) return TriangleMesh();
+  Eigen::Vector3d lo = surface[0].point_in_world, hi = lo;
+  for (const SurfaceVoxel& s : surface) {
+    lo = lo.cwiseMin(s.point_in_world);
+    hi = hi.cwiseMax(s.point_in_world);
+  }
+  // Grid of spacing h over the points plus a 3-sample margin; coarser when the box would be huge.
+  double h = voxel_size_mm;
+  constexpr int64_t kMaxSamples = int64_t{16} << 20;
+  ScalarVolume vol;
+  for (;;) {
+    vol.origin = ((lo / h).array().floor() - 3).matrix() * h;
+    const Eigen::Vector3d extent = (hi - vol.origin) / h;
+    vol.nx = static_cast<int>(std::ceil(extent.x())) + 4;
+    vol.ny = static_cast<int>(std::ceil(extent.y())) + 4;
+    vol.nz = static_cast<int>(std::ceil(extent.z())) + 4;
+    if (static_cast<int64_t>(vol.nx) * vol.ny * vol.nz <= kMaxSamples) break;
+    h *= 2;
+  }
+  vol.spacing = h;
+  const size_t n = static_cast<size_t>(vol.nx) * vol.ny * vol.nz;
+  std::vector<float> wsum(n, 0.f), dsum(n, 0.f), nearest(n, std::numeric_limits<float>::infinity());
+  vol.bgr.assign(n, {{160, 160, 160}});
+  const double sigma = h, radius = 2 * h;
+  for (const SurfaceVoxel& s : surface) {
+    const Eigen::Vector3d g = (s.point_in_world - vol.origin) / h;
+    const Eigen::Vector3i g0 = (g.array() - 2).ceil().cast<int>().max(0), g1 = (g.array() + 2).floor().cast<int>();
+    for (int z = g0.z(); z <= std::min(g1.z(), vol.nz - 1); ++z)
+      for (int y = g0.y(); y <= std::min(g1.y(), vol.ny - 1); ++y)
+        for (int x = g0.x(); x <= std::min(g1.x(), vol.nx - 1); ++x) {
+          const Eigen::Vector3d pos = vol.origin + Eigen::Vector3d(x, y, z) * h;
+          const Eigen::Vector3d d = pos - s.point_in_world;
+          const double dist = d.norm();
+          if (dist > radius) continue;
+          const size_t i = vol.Index(x, y, z);
+          const double w = std::exp(-0.5 * dist * dist / (sigma * sigma));
+          wsum[i] += static_cast<float>(w);
+          dsum[i] += static_cast<float>(w * s.normal.dot(d));
+          if (dist < nearest[i]) {
+            nearest[i] = static_cast<float>(dist);
+            vol.bgr[i] = s.voxel.bgr;
+          }
+        }
+  }
+  vol.values.assign(n, std::numeric_limits<float>::quiet_NaN());
+  for (size_t i = 0; i < n; ++i)
+    if (wsum[i] > 1e-3f) vol.values[i] = -dsum[i] / wsum[i];  // inside (behind the normal) positive
+  return ExtractIsosurface(vol, 0.0f);
+}
+
+}  // namespace objscan

@@ -1,0 +1,57 @@
+// The object's surface from the vote grid (LCM-free).
+// Dense points scatter around the true surface by their matching and pose noise, and each point also votes into
+// its neighbours, so the voxels over the vote threshold form a shell 3-5 voxels thick. The surface is the ridge of
+// the vote field across that shell. ExtractVoteRidge keeps, for every seed, the voxels whose votes are a local
+// maximum along the local surface normal (non-maximum suppression, as in edge detection), and places a sub-voxel
+// surface point on the normal through a parabola fit of the votes at -1, 0, +1 voxel. Normals come from the
+// principal axes of the vote-weighted seed neighbourhood (the shell is locally a slab; the normal is its thin axis)
+// and point outwards: towards the cameras that saw the voxel's points when the grid recorded view directions,
+// otherwise away from the seeds' centroid. Small disconnected ridge fragments (stray matches) are dropped.
+// MeshFromSurfacePoints turns the oriented surface points into a mesh through a signed distance field sampled in
+// a narrow band around them: the surface has holes where nothing was seen, and the mesh keeps them open rather than
+// invent a surface there.
+// Voxel (i, j, k) has its centre at (i + 0.5, j + 0.5, k + 0.5) * voxel_size_mm (world, mm). Never throws.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "processes/dense_modeler/marching_cubes.h"
+#include "processes/dense_modeler/voxel_votes.h"
+
+namespace objscan {
+
+struct RidgeOptions {
+  int normal_radius = 2;          // voxels, half-size of the neighbourhood whose votes give the normal (1..4)
+  double ridge_tolerance = 1.0;   // keep a voxel when votes >= tolerance x the interpolated votes one voxel along
+                                  // +normal and -normal (1 = strict local maximum; < 1 keeps a thicker ridge), (0, 1]
+  int min_component_voxels = 30;  // ridge fragments (26-connected) with fewer voxels are dropped (0 = keep all)
+};
+
+bool ValidateRidgeOptions(const RidgeOptions& options, std::string* why);
+
+struct SurfaceVoxel {
+  VoxelRecord voxel;                                         // the ridge voxel (votes, colour)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();         // unit, outwards
+  Eigen::Vector3d point_in_world = Eigen::Vector3d::Zero();  // mm, sub-voxel surface point (centre + t * normal)
+};
+
+struct RidgeStats {
+  int64_t seeds = 0;              // input voxels
+  int64_t ridge = 0;              // local maxima along the normal
+  int64_t fragments_dropped = 0;  // voxels in dropped fragments
+  int64_t kept = 0;
+};
+
+// Ridge voxels of the seeds (voxels over the vote threshold; their votes are read from grid), sorted by (k, j, i).
+std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std::vector<VoxelRecord>& seeds,
+                                           const RidgeOptions& options, RidgeStats* stats = nullptr);
+
+// Mesh through oriented surface points: the signed distance n . (x - p), averaged with Gaussian weights
+// (sigma = voxel_size_mm) over the points within 2 voxels, is sampled on a grid of spacing voxel_size_mm; samples
+// with no point near stay undefined and cells touching them produce no triangles. Vertex colours come from the
+// nearest point. Empty mesh for no points.
+TriangleMesh MeshFromSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size_mm);
+
+}  // namespace objscan

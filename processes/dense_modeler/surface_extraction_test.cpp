@@ -1,0 +1,115 @@
+#include "processes/dense_modeler/surface_extraction.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace objscan {
+namespace {
+
+constexpr double kRadius = 40.0;  // mm
+const Eigen::Vector3d kCentre(3.3, -2.1, 50.7);
+
+// Noisy samples of a sphere voted into a 2 mm grid, as the dense pairs would: each point scattered along the normal
+// (sigma 0.8 mm) and tagged with the direction towards a camera outside.
+VoxelVoteGrid NoisySphereVotes(int points, uint32_t seed) {
+  VoxelVoteGrid grid;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int i = 0; i < points; ++i) {
+    Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
+    n.normalize();
+    const Eigen::Vector3d p = kCentre + (kRadius + 0.8 * gauss(rng)) * n;
+    grid.AddPoint(p, {{100, 150, 200}}, n.cast<float>());
+  }
+  return grid;
+}
+
+TEST(SurfaceExtractionTest, RidgeIsThinAccurateAndOutward) {
+  const VoxelVoteGrid grid = NoisySphereVotes(400000, 1);
+  const std::vector<VoxelRecord> seeds = grid.Extract(16);
+  RidgeOptions options;
+  RidgeStats stats;
+  const std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, seeds, options, &stats);
+  ASSERT_GT(ridge.size(), 1000u);
+  EXPECT_EQ(stats.seeds, static_cast<int64_t>(seeds.size()));
+  // The shell of seeds is several voxels thick; the ridge about one (sphere area / voxel face ~ 5000 voxels).
+  const double sphere_voxels = 4 * M_PI * kRadius * kRadius / (2.0 * 2.0);
+  EXPECT_GT(static_cast<double>(seeds.size()), 2.0 * sphere_voxels);
+  EXPECT_LT(static_cast<double>(ridge.size()), 1.6 * sphere_voxels);
+  EXPECT_GT(static_cast<double>(ridge.size()), 0.8 * sphere_voxels);
+  std::vector<double> centre_error, point_error;
+  int outward = 0;
+  for (const SurfaceVoxel& s : ridge) {
+    const Eigen::Vector3d radial = (grid.CenterOf(s.voxel.ijk) - kCentre).normalized();
+    centre_error.push_back(std::abs((grid.CenterOf(s.voxel.ijk) - kCentre).norm() - kRadius));
+    point_error.push_back(std::abs((s.point_in_world - kCentre).norm() - kRadius));
+    outward += s.normal.dot(radial) > 0.9;
+  }
+  std::sort(centre_error.begin(), centre_error.end());
+  std::sort(point_error.begin(), point_error.end());
+  const size_t p90 = centre_error.size() * 9 / 10;
+  EXPECT_LT(centre_error[p90], 1.5);  // voxel centres: within the voxel that the surface crosses
+  EXPECT_LT(point_error[p90], 0.6);   // sub-voxel points: much closer
+  EXPECT_GT(outward, static_cast<int>(0.98 * ridge.size()));
+}
+
+TEST(SurfaceExtractionTest, SmallFragmentsAreDropped) {
+  VoxelVoteGrid grid = NoisySphereVotes(200000, 2);
+  // A stray blob far from the sphere.
+  for (int i = 0; i < 200; ++i) grid.AddPoint(Eigen::Vector3d(200, 200, 200), {{0, 0, 0}});
+  RidgeOptions options;
+  options.min_component_voxels = 30;
+  RidgeStats stats;
+  const std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, grid.Extract(16), options, &stats);
+  for (const SurfaceVoxel& s : ridge) EXPECT_LT((s.point_in_world - kCentre).norm(), kRadius + 5);
+  EXPECT_GT(stats.fragments_dropped, 0);
+  options.min_component_voxels = 0;
+  const std::vector<SurfaceVoxel> all = ExtractVoteRidge(grid, grid.Extract(16), options);
+  EXPECT_GT(all.size(), ridge.size());
+}
+
+TEST(SurfaceExtractionTest, MeshThroughSurfacePointsLiesOnTheSphere) {
+  const VoxelVoteGrid grid = NoisySphereVotes(400000, 3);
+  const std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions());
+  const TriangleMesh mesh = MeshFromSurfacePoints(ridge, grid.voxel_size());
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  std::vector<double> error;
+  for (const Eigen::Vector3f& v : mesh.vertices)
+    error.push_back(std::abs((v.cast<double>() - kCentre).norm() - kRadius));
+  std::sort(error.begin(), error.end());
+  EXPECT_LT(error[error.size() * 9 / 10], 0.5);
+  EXPECT_LT(error.back(), 2.0);
+  // Colour of the points.
+  EXPECT_EQ(mesh.bgr[0][2], 200);
+}
+
+TEST(SurfaceExtractionTest, MeshLeavesUnseenPartsOpen) {
+  const VoxelVoteGrid grid = NoisySphereVotes(400000, 4);
+  std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions());
+  // Nothing seen below the equator.
+  ridge.erase(std::remove_if(ridge.begin(), ridge.end(),
+                             [](const SurfaceVoxel& s) { return s.point_in_world.z() < kCentre.z(); }),
+              ridge.end());
+  const TriangleMesh mesh = MeshFromSurfacePoints(ridge, grid.voxel_size());
+  ASSERT_GT(mesh.triangles.size(), 500u);
+  for (const Eigen::Vector3f& v : mesh.vertices) EXPECT_GT(v.z(), kCentre.z() - 5);  // no invented bottom
+  EXPECT_FALSE(IsClosedOrientedMesh(mesh));
+}
+
+TEST(SurfaceExtractionTest, EmptyInputAndOptions) {
+  VoxelVoteGrid grid;
+  EXPECT_TRUE(ExtractVoteRidge(grid, {}, RidgeOptions()).empty());
+  EXPECT_TRUE(MeshFromSurfacePoints({}, 2.0).triangles.empty());
+  RidgeOptions bad;
+  bad.normal_radius = 0;
+  std::string why;
+  EXPECT_FALSE(ValidateRidgeOptions(bad, &why));
+  EXPECT_NE(why.find("normal_radius"), std::string::npos);
+  EXPECT_TRUE(ValidateRidgeOptions(RidgeOptions(), &why));
+}
+
+}  // namespace
+}  // namespace objscan
