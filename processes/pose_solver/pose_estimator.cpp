@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <random>
 #include <set>
 #include <sstream>
@@ -52,6 +54,8 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.min_floor_points < 3) e << "min floor points must be >= 3; ";
   if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
   if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
+  if (o.two_view_min_matches != 0 && o.two_view_min_matches < 8) e << "two view min matches must be 0 or >= 8; ";
+  if (o.two_view_min_landmarks < 2) e << "two view min landmarks must be >= 2; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -500,6 +504,7 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
   }
   if (static_cast<int>(pts.size()) < po.min_inliers ||
       !SolvePnp(camera_, options_.robot, pts, px, last_good_ >= 0 ? &prior : nullptr, po, &r, &last_message_)) {
+    if (TwoViewPose(f)) return true;
     fr.status = PoseStatus::kLost;
     if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
     phase_ = Phase::kLost;
@@ -839,6 +844,90 @@ double PoseEstimator::RescaleToOdometryPath(int first_frame) {
   for (const auto& kv : points_) all.push_back(kv.first);
   ApplySimilarity(s, t, 0, static_cast<int>(frames_.size()) - 1, all);
   return s;
+}
+
+bool PoseEstimator::TwoViewPose(int f) {
+  if (options_.two_view_min_matches <= 0 || last_good_ < 0 || options_.model != MotionModel::kSixDof) return false;
+  Frame& fr = frames_[f];
+  const Frame& ref = frames_[last_good_];
+  // Tracks shared with the last posed frame (ids sorted in both).
+  std::vector<cv::Point2d> a, b;
+  for (size_t i = 0, j = 0; i < ref.ids.size() && j < fr.ids.size();) {
+    if (ref.ids[i] < fr.ids[j]) {
+      ++i;
+    } else if (fr.ids[j] < ref.ids[i]) {
+      ++j;
+    } else {
+      a.emplace_back(ref.pixels[i].x(), ref.pixels[i].y());
+      b.emplace_back(fr.pixels[j].x(), fr.pixels[j].y());
+      ++i;
+      ++j;
+    }
+  }
+  auto fail = [&](const std::string& why) {
+    last_message_ = "frame " + std::to_string(fr.seq) + ": two-view pose failed: " + why;
+    return false;
+  };
+  if (static_cast<int>(a.size()) < options_.two_view_min_matches)
+    return fail(std::to_string(a.size()) + " tracks shared with frame " + std::to_string(ref.seq));
+  cv::Mat k;
+  cv::eigen2cv(camera_.K(), k);
+  cv::Mat mask;
+  const cv::Mat e = cv::findEssentialMat(a, b, k, cv::RANSAC, 0.999, options_.pnp.inlier_threshold_px * 0.5, mask);
+  if (e.rows != 3 || e.cols != 3) return fail("no unique essential matrix");
+  cv::Mat r_cv, t_cv;
+  const int good = cv::recoverPose(e, a, b, k, r_cv, t_cv, mask);
+  if (good < options_.two_view_min_matches) return fail(std::to_string(good) + " essential-matrix inliers");
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  cv::cv2eigen(r_cv, r);
+  cv::cv2eigen(t_cv, t);  // x_f = r x_ref + s t, |t| = 1, s unknown
+  // Scale: every landmark seen in f gives s from its viewing ray (least squares along the ray's normal plane).
+  const Eigen::Isometry3d ref_from_world = ref.world_from_camera.inverse();
+  const Eigen::Matrix3d k_inv = camera_.K().inverse();
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector2d>> seen;  // landmark in ref's frame, pixel in f
+  std::vector<double> scales;
+  for (size_t j = 0; j < fr.ids.size(); ++j) {
+    const auto it = points_.find(fr.ids[j]);
+    if (it == points_.end()) continue;
+    const Eigen::Vector3d x_ref = ref_from_world * it->second.x;
+    const Eigen::Vector3d d = (k_inv * fr.pixels[j].homogeneous()).normalized();
+    const Eigen::Matrix3d proj = Eigen::Matrix3d::Identity() - d * d.transpose();
+    const Eigen::Vector3d pt = proj * t, prx = proj * (r * x_ref);
+    if (pt.squaredNorm() < 1e-12) continue;
+    seen.emplace_back(x_ref, fr.pixels[j]);
+    scales.push_back(-pt.dot(prx) / pt.squaredNorm());
+  }
+  if (static_cast<int>(scales.size()) < options_.two_view_min_landmarks)
+    return fail(std::to_string(scales.size()) + " landmarks seen");
+  std::vector<double> sorted = scales;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double s = sorted[sorted.size() / 2];
+  if (!(s > 0)) return fail("scale not positive");
+  // The landmarks that agree with the scaled pose.
+  int agree = 0;
+  for (const auto& [x_ref, pixel] : seen) {
+    Eigen::Vector2d uv;
+    if (ProjectIdeal(camera_, r * x_ref + s * t, &uv) && (uv - pixel).norm() < options_.pnp.inlier_threshold_px)
+      ++agree;
+  }
+  if (agree < options_.two_view_min_landmarks)
+    return fail(std::to_string(agree) + " of " + std::to_string(seen.size()) + " landmarks agree with the scale");
+  Eigen::Isometry3d f_from_ref = Eigen::Isometry3d::Identity();
+  f_from_ref.linear() = r;
+  f_from_ref.translation() = s * t;
+  std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
+  fr.posed = true;
+  fr.world_from_camera = ref.world_from_camera * f_from_ref.inverse();
+  UpdateFrameStatistics(&fr);
+  fr.status = phase_ == Phase::kLost ? PoseStatus::kRelocalized : PoseStatus::kTracking;
+  phase_ = Phase::kTracking;
+  last_good_ = f;
+  std::ostringstream m;
+  m << "frame " << fr.seq << " posed from the essential matrix with frame " << ref.seq << " (" << good
+    << " inliers), scale from " << agree << "/" << seen.size() << " landmarks";
+  last_message_ = m.str();
+  return true;
 }
 
 bool PoseEstimator::RegisterAgainstMap(int f, const Eigen::Isometry3d& prior) {

@@ -23,6 +23,9 @@
 //     last keyframe's; at a keyframe: new landmarks by multi-view triangulation (motion stereo over the posed frames
 //     that saw the track), windowed BA over the last local_window_keyframes keyframes (other keyframes seeing those
 //     points held fixed), landmarks with large reprojection error removed.
+//     Wide-baseline option (two_view_min_matches > 0, 6-DOF): a frame that PnP cannot pose (short tracks see few
+//     landmarks) is posed from the essential matrix of the tracks it shares with the last posed frame, the step's
+//     scale from the landmarks it sees; the keyframe rules then apply as after PnP. Off by default.
 //  3. Lost: fewer than min_inliers PnP inliers -> the frame is reported with status LOST, num_inliers 0 and the LAST
 //     GOOD pose (not a made-up one: consumers must ignore the pose of LOST frames). Every later frame tries PnP against
 //     all landmarks (relocalization works when track ids reappear). After relocalize_after_lost_frames lost frames the
@@ -83,6 +86,12 @@ struct PoseEstimatorOptions {
   int online_scale_frames = 100;               // kSixDof: at keyframes within this many frames of the map start,
                                                // rescale the map by odometry / visual path length (0 = off)
   int relocalize_after_lost_frames = 10;       // lost frames before the preliminary phase restarts
+  int two_view_min_matches = 0;                // wide baseline (short tracks): when PnP fails, pose the frame from
+                                               // the essential matrix of its tracks shared with the last posed frame
+                                               // if at least this many are E-RANSAC inliers, scale from the landmarks
+                                               // it sees; 0 = off (the frame is lost)
+  int two_view_min_landmarks = 3;              // landmarks the frame must see (consistent with the two-view pose
+                                               // within pnp.inlier_threshold_px) to fix that step's scale (>= 2)
   int64_t seed = 1;                            // RANSAC seeds (seed + frame index)
 };
 bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& options, std::string* why);
@@ -188,6 +197,9 @@ class PoseEstimator {
   // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
   // its outlier flags set. False (frame untouched) otherwise.
   bool RegisterAgainstMap(int f, const Eigen::Isometry3d& prior);
+  // two_view_min_matches > 0: poses frame f relative to the last good frame from the essential matrix of their common
+  // tracks, with the step's scale from the landmarks f sees (see the option). False (frame untouched) otherwise.
+  bool TwoViewPose(int f);
   // kSixDof with odometry scale: rescales everything about the gauge camera so that the visual path length from
   // first_frame on matches the odometry's. Returns the factor applied (1 when not possible).
   double RescaleToOdometryPath(int first_frame);

@@ -65,6 +65,22 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
         "max scale change since the anchor in any direction before re-anchoring (> 1)");
   p.Add("klt-anchor-reanchor", &k->anchor_reanchor,
         "re-take templates whose distortion exceeds klt-anchor-max-distortion (false = drop the track)");
+  p.Add("descriptor-tracking", &o->descriptor_tracking,
+        "off (KLT) | on (descriptor matching only, wide-baseline image sets) | auto (KLT, switch to descriptors "
+        "when KLT continues < descriptor-auto-keep-fraction of the tracks)");
+  p.Add("descriptor-kind", &o->descriptor_kind, "sift | akaze | orb");
+  p.Add("descriptor-auto-keep-fraction", &o->descriptor_auto_keep_fraction,
+        "auto: fraction of the previous frame's KLT tracks below which the node switches, (0, 1)");
+  DescriptorTrackerOptions* d = &o->descriptor;
+  p.Add("descriptor-max-features", &d->max_features, "keypoints kept per frame (strongest first)");
+  p.Add("descriptor-sift-contrast", &d->sift_contrast_threshold, "SIFT contrast threshold (lower = more keypoints)");
+  p.Add("descriptor-akaze-threshold", &d->akaze_threshold, "AKAZE response threshold");
+  p.Add("descriptor-clahe", &d->clahe_clip_limit, "CLAHE clip limit before detection (0 = off)");
+  p.Add("descriptor-ratio", &d->ratio, "Lowe ratio test threshold, (0, 1]");
+  p.Add("descriptor-mutual-check", &d->mutual_check, "keep only mutual best matches");
+  p.Add("descriptor-ransac-threshold", &d->ransac_threshold_px, "px, fundamental-matrix RANSAC inlier distance");
+  p.Add("descriptor-min-inliers", &d->min_inliers, "F-RANSAC inliers needed to carry ids from a frame (>= 8)");
+  p.Add("descriptor-history", &d->history_frames, "earlier frames matched against (2 = also the one before), [1, 10]");
 }
 
 bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
@@ -78,6 +94,14 @@ bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
   if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
   std::string tracker_why;
   if (!ValidateKltTrackerOptions(o.tracker, &tracker_why)) e << tracker_why << "; ";
+  if (o.descriptor_tracking != "off" && o.descriptor_tracking != "on" && o.descriptor_tracking != "auto")
+    e << "descriptor-tracking must be off, on or auto; ";
+  DescriptorKind kind;
+  if (!ParseDescriptorKind(o.descriptor_kind, &kind)) e << "descriptor-kind must be sift, akaze or orb; ";
+  if (!(o.descriptor_auto_keep_fraction > 0 && o.descriptor_auto_keep_fraction < 1))
+    e << "descriptor-auto-keep-fraction must be in (0, 1); ";
+  std::string descriptor_why;
+  if (!ValidateDescriptorTrackerOptions(o.descriptor, &descriptor_why)) e << "descriptor: " << descriptor_why << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -97,11 +121,17 @@ TrackerNode::TrackerNode(Bus& bus, const TrackerNodeOptions& options)
       options_(ValidatedOrThrow(options)),
       tracker_(options_.tracker),
       status_(&bus, options_.name, options_.status_channel, options_.status_period_s) {
+  if (options_.descriptor_tracking != "off") {
+    DescriptorTrackerOptions d = options_.descriptor;
+    ParseDescriptorKind(options_.descriptor_kind, &d.kind);  // validated above
+    d.threads = options_.tracker.threads;
+    descriptor_ = std::make_unique<DescriptorTracker>(d);
+    descriptor_active_ = options_.descriptor_tracking == "on";
+  }
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for images on " + options_.image_channel);
   bus_.SubscribeMessage<image_t>(
       options_.image_channel, [this](const image_t& msg, const RawMessage&) { OnImage(msg); },
-      status_.MalformedHandler("image"),
-      options_.image_queue_capacity);
+      status_.MalformedHandler("image"), options_.image_queue_capacity);
   if (!options_.info_channel.empty()) {
     bus_.SubscribeMessage<camera_info_t>(
         options_.info_channel, [this](const camera_info_t& msg, const RawMessage&) { OnCameraInfo(msg); },
@@ -156,7 +186,32 @@ void TrackerNode::OnImage(const image_t& msg) {
   TrackFrame tracks;
   const int64_t track_start_us = MonotonicMicros();
   try {
-    tracks = tracker_.Track(frame);
+    if (descriptor_active_) {
+      tracks = descriptor_->Track(frame);
+    } else {
+      tracks = tracker_.Track(frame);
+      if (descriptor_) {  // auto: KLT until it cannot follow the motion
+        const KltTrackStats& k = tracker_.last_stats();
+        const bool switch_now = frames_tracked_ > 0 && !k.reset && previous_live_ >= 20 &&
+                                previous_live_ - k.lost < options_.descriptor_auto_keep_fraction * previous_live_;
+        if (switch_now)
+          LogInfo("KLT continued " + std::to_string(previous_live_ - k.lost) + " of " + std::to_string(previous_live_) +
+                  " tracks at seq " + std::to_string(msg.seq) + ": switching to descriptor tracking (" +
+                  options_.descriptor_kind + ")");
+        previous_live_ = k.live;
+        if (switch_now) {
+          descriptor_->set_first_id(tracker_.next_id());
+          for (const ImageFrame& f : recent_frames_) descriptor_->Track(f);
+          recent_frames_.clear();
+          descriptor_active_ = true;
+          tracks = descriptor_->Track(frame);
+        } else {
+          recent_frames_.push_back(frame);
+          while (static_cast<int>(recent_frames_.size()) > options_.descriptor.history_frames)
+            recent_frames_.pop_front();
+        }
+      }
+    }
   } catch (const std::exception& e) {  // cannot happen for a decoded frame; never let it stop the process
     status_.Reject("image: tracker error", e.what());
     return;
@@ -169,17 +224,32 @@ void TrackerNode::OnImage(const image_t& msg) {
   last_seq_ = msg.seq;
   last_utime_ = msg.utime;
   ++frames_tracked_;
-  const KltTrackStats& s = tracker_.last_stats();
-  status_.SetValue("live_tracks", s.live);
-  status_.SetValue("new_tracks", s.born);
-  status_.SetValue("lost_tracks", s.lost);
-  status_.SetValue("track_ms", track_ms);
-  status_.SetValue("lk_ms", s.lk_ms);
-  status_.SetValue("detect_ms", s.detect_ms);
-  status_.SetValue("refine_ms", s.refine_ms);
-  status_.SetValue("anchor_rejected", s.anchor_rejected);
-  status_.SetValue("reanchored", s.reanchored);
+  if (!descriptor_active_) {
+    const KltTrackStats& s = tracker_.last_stats();
+    status_.SetValue("live_tracks", s.live);
+    status_.SetValue("new_tracks", s.born);
+    status_.SetValue("lost_tracks", s.lost);
+    status_.SetValue("track_ms", track_ms);
+    status_.SetValue("lk_ms", s.lk_ms);
+    status_.SetValue("detect_ms", s.detect_ms);
+    status_.SetValue("refine_ms", s.refine_ms);
+    status_.SetValue("anchor_rejected", s.anchor_rejected);
+    status_.SetValue("reanchored", s.reanchored);
+  } else {
+    status_.SetValue("live_tracks", static_cast<double>(tracks.features.size()));
+    status_.SetValue("new_tracks", descriptor_->last_stats().born);
+    status_.SetValue("track_ms", track_ms);
+  }
   status_.SetValue("frames_tracked", static_cast<double>(frames_tracked_));
+  if (descriptor_) {
+    status_.SetValue("descriptor_active", descriptor_active_ ? 1.0 : 0.0);
+    if (descriptor_active_) {
+      const DescriptorTrackStats& d = descriptor_->last_stats();
+      status_.SetValue("descriptor_keypoints", d.keypoints);
+      status_.SetValue("descriptor_continued", d.continued);
+      status_.SetValue("descriptor_ms", d.detect_ms + d.match_ms);
+    }
+  }
   if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
     status_.SetState(+process_status_t::STATE_RUNNING);
   status_.RecordLatencyMs((MonotonicMicros() - start_us) * 1e-3);

@@ -10,11 +10,23 @@
 // End of stream: control_t COMMAND_END_OF_STREAM on OBJSCAN_CONTROL (target "*", "" or this process) makes it
 // publish control_t COMMAND_FINISHED (sender = process name, last_seq = seq of the last frame tracked, -1 if none,
 // utime = that frame's utime) and, with exit_when_finished, Finished() becomes true.
-// Status values: live_tracks, new_tracks, lost_tracks, track_ms, lk_ms, detect_ms (wall clock), frames_tracked.
+// Status values: live_tracks, new_tracks, lost_tracks, track_ms, lk_ms, detect_ms (wall clock), frames_tracked;
+// with descriptor tracking also descriptor_active (0/1), descriptor_keypoints, descriptor_continued, descriptor_ms.
+// Descriptor tracking (descriptor_seeding.h), option descriptor_tracking:
+//   "off"  (default) KLT only.
+//   "on"   descriptor tracks only (SIFT/AKAZE/ORB matching against the last frames): wide-baseline image sets
+//          (turntables, Middlebury rings) where KLT cannot follow the steps.
+//   "auto" KLT until the first frame in which KLT continues fewer than descriptor_auto_keep_fraction of the previous
+//          frame's tracks (>= 20 tracks before), then descriptor tracks for the rest of the stream (latched). The
+//          descriptor tracker is primed with the frames kept since then (descriptor.history_frames), so its tracks
+//          continue theirs, but those frames were published with KLT ids: downstream the switch looks like a
+//          fresh set of tracks. Descriptor ids start above every KLT id (never reused).
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>
+#include <deque>
+#include <memory>
 #include <string>
 
 #include "common/node.h"
@@ -22,6 +34,7 @@
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/image_t.hpp"
+#include "processes/tracker/descriptor_seeding.h"
 #include "processes/tracker/klt_tracker.h"
 
 namespace objscan {
@@ -40,6 +53,12 @@ struct TrackerNodeOptions {
   double status_period_s = 1.0;                     // s, status publication period (> 0)
   bool exit_when_finished = true;                   // Finished() turns true after end of stream was answered
   KltTrackerOptions tracker;                        // the KLT tracker's options
+  std::string descriptor_tracking = "off";          // "off" | "on" | "auto" (see above)
+  std::string descriptor_kind = "sift";             // "sift" | "akaze" | "orb" (overrides descriptor.kind)
+  double descriptor_auto_keep_fraction = 0.2;       // auto: switch when KLT continues fewer than this fraction of
+                                                    // the previous frame's tracks, (0, 1)
+  DescriptorTrackerOptions descriptor;              // the descriptor tracker's options (kind and threads are
+                                                    // taken from descriptor_kind and tracker.threads)
 };
 
 // Registers every option field (tracker options with prefix "klt-").
@@ -69,6 +88,10 @@ class TrackerNode : public Node {
   Bus& bus_;
   TrackerNodeOptions options_;
   KltTracker tracker_;
+  std::unique_ptr<DescriptorTracker> descriptor_;  // null with descriptor_tracking "off"
+  bool descriptor_active_ = false;                 // descriptor tracks are published ("on", or "auto" after the switch)
+  std::deque<ImageFrame> recent_frames_;           // "auto" before the switch: the last frames, to prime the tracker
+  int previous_live_ = 0;                          // KLT tracks of the previous frame
   StatusReporter status_;
   int expected_width_ = 0;   // px, from CAMERA_INFO or the first good frame (0 = unknown yet)
   int expected_height_ = 0;  // px
