@@ -10,7 +10,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/video/tracking.hpp>
 
 namespace objscan {
 namespace {
@@ -59,11 +58,18 @@ struct Candidate {
 
 // Reference template of a track: the (2h+1)^2 pixels of its anchor frame around the anchor position p0, on that
 // frame's integer pixel grid (no resampling). Template pixel (c, r) lies at y = origin + (c, r) relative to p0.
+// Everything the alignment needs from the template alone is computed here once per anchor (inverse-compositional
+// formulation), so that an alignment iteration only samples the image and accumulates nine sums.
 struct KltTracker::Anchor {
   int side = 0;                             // 2h + 1
   cv::Point2f origin;                       // px, template pixel (0, 0) relative to the anchor position
+  float mean = 0.0f;                        // gray levels, mean of the template pixels
+  std::vector<float> yx, yy;                // side * side template pixel positions relative to the anchor position
   std::vector<float> value;                 // side * side gray levels minus their mean
-  std::vector<float> sd;                    // 6 per pixel: steepest-descent images grad(T) * dW/dp (see AlignToAnchor)
+  std::vector<float> sd;                    // 6 planes of side * side: steepest-descent images grad(T) * dW/dp
+  double sd_sum[6] = {0, 0, 0, 0, 0, 0};    // per plane: sum of the steepest-descent image
+  double sd_value[6] = {0, 0, 0, 0, 0, 0};  // per plane: sum of steepest-descent image times value
+  double value_ss = 0.0;                    // sum of value^2
   Eigen::Matrix<double, 6, 6> inv_hessian;  // inverse of sum sd^T sd
   double rms = 0.0;                         // gray levels, RMS of value (the template's contrast)
 };
@@ -82,6 +88,8 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
     return static_cast<float>(gray.at<uchar>(std::clamp(r, 0, gray.rows - 1), std::clamp(c, 0, gray.cols - 1)));
   };
   a->value.resize(static_cast<size_t>(n));
+  a->yx.resize(static_cast<size_t>(n));
+  a->yy.resize(static_cast<size_t>(n));
   a->sd.resize(static_cast<size_t>(6 * n));
   double sum = 0.0;
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
@@ -94,13 +102,10 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
       const float gx = 0.5f * (at(r0 + r, c0 + c + 1) - at(r0 + r, c0 + c - 1));
       const float gy = 0.5f * (at(r0 + r + 1, c0 + c) - at(r0 + r - 1, c0 + c));
       const float yx = a->origin.x + static_cast<float>(c), yy = a->origin.y + static_cast<float>(r);
-      float* d = &a->sd[static_cast<size_t>(6 * k)];
-      d[0] = gx * yx;
-      d[1] = gx * yy;
-      d[2] = gy * yx;
-      d[3] = gy * yy;
-      d[4] = gx;
-      d[5] = gy;
+      a->yx[static_cast<size_t>(k)] = yx;
+      a->yy[static_cast<size_t>(k)] = yy;
+      const float d[6] = {gx * yx, gx * yy, gy * yx, gy * yy, gx, gy};
+      for (int j = 0; j < 6; ++j) a->sd[static_cast<size_t>(j * n + k)] = d[j];
       Eigen::Matrix<double, 6, 1> dv;
       dv << d[0], d[1], d[2], d[3], d[4], d[5];
       hessian.selfadjointView<Eigen::Lower>().rankUpdate(dv);
@@ -108,11 +113,19 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
   }
   hessian = hessian.selfadjointView<Eigen::Lower>();
   const float mean = static_cast<float>(sum / n);
+  a->mean = mean;
   double ss = 0.0;
-  for (float& v : a->value) {
+  for (int k = 0; k < n; ++k) {
+    float& v = a->value[static_cast<size_t>(k)];
     v -= mean;
     ss += static_cast<double>(v) * v;
+    for (int j = 0; j < 6; ++j) {
+      const double d = a->sd[static_cast<size_t>(j * n + k)];
+      a->sd_sum[j] += d;
+      a->sd_value[j] += d * v;
+    }
   }
+  a->value_ss = ss;
   a->rms = std::sqrt(ss / n);
   // Flat patches and (near-)singular systems cannot be aligned: translation block min eigenvalue per pixel below
   // 1 gray level^2 per px^2, or a failing Cholesky factorisation.
@@ -128,21 +141,46 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
 // Result of aligning an anchor template to an image.
 enum class AlignResult { kOk, kOutside, kFlat, kNoConvergence };
 
+// Scratch space of AlignToAnchor (per template pixel).
+struct AlignScratch {
+  std::vector<float> fx, fy;     // bilinear fractions
+  std::vector<int> offset;       // byte offset of the top-left neighbour in the image
+  std::vector<int> top, bottom;  // neighbour pairs: left + 256 * right, in the top and bottom row
+  void Resize(size_t n) {
+    for (std::vector<float>* v : {&fx, &fy}) v->resize(n);
+    for (std::vector<int>* v : {&offset, &top, &bottom}) v->resize(n);
+  }
+};
+
+// Number of independent partial sums per accumulated quantity: the sums are split over this many lanes (fixed
+// order, so the result is deterministic) so that the compiler can vectorise them without reassociating.
+constexpr int kLanes = 8;
+
 // Inverse-compositional Lucas-Kanade (Baker and Matthews, 2004) of the anchor template to `gray` with the warp
 // W(y) = *p + *affine * y (y relative to the anchor position) and a gain/bias compensation (the warped patch is
 // normalised to the template's mean and RMS contrast). *p and *affine are the start and the result; *rel_residual is
-// the final RMS residual divided by the template's RMS contrast. `buffer` is scratch space.
+// the RMS residual (at the last iterate before the final update) divided by the template's RMS contrast.
 AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int max_iterations, double epsilon,
-                          cv::Point2f* p, cv::Matx22f* affine, double* rel_residual, std::vector<float>* buffer) {
+                          cv::Point2f* p, cv::Matx22f* affine, double* rel_residual, AlignScratch* scratch) {
   const int s = a.side, n = s * s;
-  buffer->resize(static_cast<size_t>(n));
-  float* w = buffer->data();
-  const float max_x = static_cast<float>(gray.cols - 1), max_y = static_cast<float>(gray.rows - 1);
+  scratch->Resize(static_cast<size_t>(n));
+  float* fx = scratch->fx.data();
+  float* fy = scratch->fy.data();
+  int* offset = scratch->offset.data();
+  int* pair0 = scratch->top.data();
+  int* pair1 = scratch->bottom.data();
+  const float* yx = a.yx.data();
+  const float* yy = a.yy.data();
+  // A margin keeps every template pixel's left/top neighbour strictly inside despite rounding.
+  const float max_x = static_cast<float>(gray.cols - 1) - 0.01f, max_y = static_cast<float>(gray.rows - 1) - 0.01f;
   const size_t step = gray.step[0];
   const float e2 = static_cast<float>(epsilon * epsilon);
   const cv::Point2f corners[4] = {a.origin, a.origin + cv::Point2f(static_cast<float>(s - 1), 0.0f),
                                   a.origin + cv::Point2f(0.0f, static_cast<float>(s - 1)),
                                   a.origin + cv::Point2f(static_cast<float>(s - 1), static_cast<float>(s - 1))};
+  const float* value = a.value.data();
+  const float* sd = a.sd.data();
+  const int n_main = n - n % kLanes;
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
     const cv::Matx22f& A = *affine;
     // The warp is affine, so the template lies inside the image when its corners do.
@@ -150,44 +188,67 @@ AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int 
       const float zx = p->x + A(0, 0) * y.x + A(0, 1) * y.y, zy = p->y + A(1, 0) * y.x + A(1, 1) * y.y;
       if (!(zx >= 0.0f && zy >= 0.0f && zx < max_x && zy < max_y)) return AlignResult::kOutside;
     }
-    double sum = 0.0;
-    for (int r = 0; r < s; ++r) {
-      const float yy = a.origin.y + static_cast<float>(r);
-      float zx = p->x + A(0, 0) * a.origin.x + A(0, 1) * yy;
-      float zy = p->y + A(1, 0) * a.origin.x + A(1, 1) * yy;
-      for (int c = 0; c < s; ++c, zx += A(0, 0), zy += A(1, 0)) {
-        const int x0 = std::min(static_cast<int>(zx), gray.cols - 2),
-                  y0 = std::min(static_cast<int>(zy), gray.rows - 2);
-        const float ax = zx - static_cast<float>(x0), ay = zy - static_cast<float>(y0);
-        const uchar* q = gray.data + static_cast<size_t>(y0) * step + static_cast<size_t>(x0);
-        const float top = static_cast<float>(q[0]) + ax * static_cast<float>(q[1] - q[0]);
-        const float bottom = static_cast<float>(q[step]) + ax * static_cast<float>(q[step + 1] - q[step]);
-        const float v = top + ay * (bottom - top);
-        w[r * s + c] = v;
-        sum += v;
+    // Warped patch (bilinear) in three passes so that all but the gathering of the neighbours vectorise.
+    const float a00 = A(0, 0), a01 = A(0, 1), a10 = A(1, 0), a11 = A(1, 1), px = p->x, py = p->y;
+    const int istep = static_cast<int>(step);
+    for (int k = 0; k < n; ++k) {
+      const float zx = px + a00 * yx[k] + a01 * yy[k], zy = py + a10 * yx[k] + a11 * yy[k];
+      const int x0 = static_cast<int>(zx), y0 = static_cast<int>(zy);  // zx, zy >= 0: truncation is floor
+      fx[k] = zx - static_cast<float>(x0);
+      fy[k] = zy - static_cast<float>(y0);
+      offset[k] = y0 * istep + x0;
+    }
+    for (int k = 0; k < n; ++k) {
+      const uchar* q = gray.data + offset[k];
+      pair0[k] = q[0] | (q[1] << 8);  // compilers merge each pair into one 16-bit load
+      pair1[k] = q[step] | (q[step + 1] << 8);
+    }
+    // Interpolation and, in the same pass, sum w, sum w^2, sum w * value and, per steepest-descent plane j,
+    // sum sd_j * w, with w the warped patch minus the template's mean (keeps the sums of squares well
+    // conditioned). The residual e = gain * (w - m) - value then follows in closed form from these and the anchor's
+    // precomputed sums.
+    const float mean = a.mean;
+    auto sample = [&](int k) {
+      const float v00 = static_cast<float>(pair0[k] & 255), v01 = static_cast<float>(pair0[k] >> 8);
+      const float v10 = static_cast<float>(pair1[k] & 255), v11 = static_cast<float>(pair1[k] >> 8);
+      const float top = v00 + fx[k] * (v01 - v00);
+      const float bottom = v10 + fx[k] * (v11 - v10);
+      return top + fy[k] * (bottom - top) - mean;
+    };
+    float acc[9][kLanes] = {};
+    for (int k0 = 0; k0 < n_main; k0 += kLanes) {
+      for (int l = 0; l < kLanes; ++l) {
+        const int k = k0 + l;
+        const float x = sample(k);
+        acc[0][l] += x;
+        acc[1][l] += x * x;
+        acc[2][l] += x * value[k];
+        for (int j = 0; j < 6; ++j) acc[3 + j][l] += x * sd[j * n + k];
       }
     }
-    const float mean = static_cast<float>(sum / n);
-    double ss = 0.0;
-    for (int k = 0; k < n; ++k) {
-      w[k] -= mean;
-      ss += static_cast<double>(w[k]) * w[k];
+    for (int k = n_main; k < n; ++k) {
+      const float x = sample(k);
+      acc[0][0] += x;
+      acc[1][0] += x * x;
+      acc[2][0] += x * value[k];
+      for (int j = 0; j < 6; ++j) acc[3 + j][0] += x * sd[j * n + k];
     }
+    double sums[9];
+    for (int q = 0; q < 9; ++q) {
+      double t = 0.0;
+      for (int l = 0; l < kLanes; ++l) t += acc[q][l];
+      sums[q] = t;
+    }
+    const double m = sums[0] / n;
+    const double ss = std::max(0.0, sums[1] - n * m * m);
     const double rms = std::sqrt(ss / n);
     if (!(rms > 1e-3 * a.rms) || !(rms > 0.1)) return AlignResult::kFlat;
-    const float gain = static_cast<float>(a.rms / rms);
-    // Float sums over at most 51^2 terms of moderate size: ample precision, and the loop vectorises.
-    float bf[6] = {0, 0, 0, 0, 0, 0};
-    float err2 = 0.0f;
-    const float* value = a.value.data();
-    const float* d = a.sd.data();
-    for (int k = 0; k < n; ++k, d += 6) {
-      const float e = gain * w[k] - value[k];
-      err2 += e * e;
-      for (int j = 0; j < 6; ++j) bf[j] += d[j] * e;
-    }
-    const double b[6] = {bf[0], bf[1], bf[2], bf[3], bf[4], bf[5]};
-    *rel_residual = std::sqrt(static_cast<double>(err2) / n) / a.rms;
+    const double gain = a.rms / rms;
+    // sum e^2 = gain^2 ss - 2 gain sum (w - m) value + sum value^2, with gain^2 ss = sum value^2 and sum value = 0.
+    const double err2 = std::max(0.0, 2.0 * a.value_ss - 2.0 * gain * sums[2]);
+    *rel_residual = std::sqrt(err2 / n) / a.rms;
+    double b[6];
+    for (int j = 0; j < 6; ++j) b[j] = gain * (sums[3 + j] - m * a.sd_sum[j]) - a.sd_value[j];
     const Eigen::Matrix<double, 6, 1> delta = a.inv_hessian * Eigen::Map<const Eigen::Matrix<double, 6, 1>>(b);
     // W <- W o dW^-1 with dW(y) = (I + dA) y + dt: A' = A (I + dA)^-1, t' = t - A' dt.
     const cv::Matx22f I_plus(static_cast<float>(1.0 + delta(0)), static_cast<float>(delta(1)),
@@ -211,6 +272,144 @@ AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int 
     if (worst <= e2) return AlignResult::kOk;
   }
   return AlignResult::kNoConvergence;
+}
+
+// ---- Pyramidal Lucas-Kanade (translation, inverse compositional) ----
+//
+// Pyramid levels are float images with a replicated border of `pad` px on every side, so that windows reaching a
+// little beyond the image need no per-pixel bounds checks. Level l has the size of cv::pyrDown applied l times;
+// a point (u, v) of the base image is (u, v) / 2^l on level l.
+
+// Level l of the LK pyramid of `gray`: levels below `finest` are left empty (never used).
+void BuildLkPyramid(const cv::Mat& gray, int levels, int finest, int pad, std::vector<cv::Mat>* pyramid) {
+  pyramid->assign(static_cast<size_t>(levels + 1), cv::Mat());
+  cv::Mat level = gray, padded;
+  for (int l = 0; l <= levels; ++l) {
+    if (l > 0) {
+      cv::Mat down;
+      cv::pyrDown(level, down);
+      level = down;
+    }
+    if (l < finest) continue;
+    cv::copyMakeBorder(level, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
+    padded.convertTo((*pyramid)[static_cast<size_t>(l)], CV_32F);
+  }
+}
+
+// Scratch buffers of LkLevel.
+struct LkScratch {
+  std::vector<float> patch;   // (W + 2)^2 template samples (with a one pixel ring for the gradient)
+  std::vector<float> tpl;     // W^2 template values
+  std::vector<float> gx, gy;  // W^2 template gradients
+  std::vector<float> acc;     // per-column partial sums
+};
+
+// Bilinear weights of the fractional offsets (ax, ay).
+struct Bilinear {
+  float w00, w01, w10, w11;
+  Bilinear(float ax, float ay)
+      : w00((1.0f - ax) * (1.0f - ay)), w01(ax * (1.0f - ay)), w10((1.0f - ax) * ay), w11(ax * ay) {}
+};
+
+// One pyramid level of LK for one point: the W x W window (W = 2 half + 1) of `from` around p is the template; *q
+// (start and result, level px) is moved until the window of `to` around it matches (inverse compositional: the
+// template's gradients and 2x2 Hessian are computed once). Returns false when a window leaves the padded image,
+// the gradient matrix is (near) singular (min eigenvalue per pixel < min_eig) or the result is not finite.
+// *err: mean absolute difference of the windows at the last iterate (gray levels).
+bool LkLevel(const cv::Mat& from, const cv::Mat& to, int pad, int half, const cv::Point2f& p, cv::Point2f* q,
+             int max_iterations, float eps2, float min_eig, float* err, LkScratch* s) {
+  const int W = 2 * half + 1, P = W + 2, n = W * W;
+  const size_t from_step = from.step[0] / sizeof(float), to_step = to.step[0] / sizeof(float);
+  // Template with a one pixel ring, top-left sample at p - (half + 1).
+  {
+    const float x = p.x + static_cast<float>(pad - half - 1), y = p.y + static_cast<float>(pad - half - 1);
+    if (!(x >= 0.0f && y >= 0.0f && x < static_cast<float>(from.cols - P) && y < static_cast<float>(from.rows - P)))
+      return false;
+    const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+    const Bilinear b(x - static_cast<float>(ix), y - static_cast<float>(iy));
+    s->patch.resize(static_cast<size_t>(P * P));
+    for (int r = 0; r < P; ++r) {
+      const float* a0 = from.ptr<float>(iy + r) + ix;
+      const float* a1 = a0 + from_step;
+      float* out = s->patch.data() + r * P;
+      for (int c = 0; c < P; ++c) out[c] = b.w00 * a0[c] + b.w01 * a0[c + 1] + b.w10 * a1[c] + b.w11 * a1[c + 1];
+    }
+  }
+  s->tpl.resize(static_cast<size_t>(n));
+  s->gx.resize(static_cast<size_t>(n));
+  s->gy.resize(static_cast<size_t>(n));
+  s->acc.assign(static_cast<size_t>(3 * W), 0.0f);
+  float* sxx = s->acc.data();
+  float* sxy = sxx + W;
+  float* syy = sxy + W;
+  for (int r = 0; r < W; ++r) {
+    const float* above = s->patch.data() + r * P + 1;
+    const float* mid = above + P;
+    const float* below = mid + P;
+    float* t = s->tpl.data() + r * W;
+    float* gx = s->gx.data() + r * W;
+    float* gy = s->gy.data() + r * W;
+    for (int c = 0; c < W; ++c) {
+      t[c] = mid[c];
+      gx[c] = 0.5f * (mid[c + 1] - mid[c - 1]);
+      gy[c] = 0.5f * (below[c] - above[c]);
+      sxx[c] += gx[c] * gx[c];
+      sxy[c] += gx[c] * gy[c];
+      syy[c] += gy[c] * gy[c];
+    }
+  }
+  float hxx = 0.0f, hxy = 0.0f, hyy = 0.0f;
+  for (int c = 0; c < W; ++c) {
+    hxx += sxx[c];
+    hxy += sxy[c];
+    hyy += syy[c];
+  }
+  const float det = hxx * hyy - hxy * hxy;
+  const float eig = 0.5f * (hxx + hyy - std::sqrt((hxx - hyy) * (hxx - hyy) + 4.0f * hxy * hxy)) / n;
+  if (!(eig >= min_eig) || !(det > 1e-6f * (hxx + hyy) * (hxx + hyy))) return false;
+  const float ixx = hyy / det, ixy = -hxy / det, iyy = hxx / det;
+  cv::Point2f d = *q;
+  float abs_sum = 0.0f;
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    const float x = d.x + static_cast<float>(pad - half), y = d.y + static_cast<float>(pad - half);
+    if (!(x >= 0.0f && y >= 0.0f && x < static_cast<float>(to.cols - W - 1) && y < static_cast<float>(to.rows - W - 1)))
+      return false;
+    const int ix = static_cast<int>(x), iy = static_cast<int>(y);
+    const Bilinear b(x - static_cast<float>(ix), y - static_cast<float>(iy));
+    std::fill(s->acc.begin(), s->acc.end(), 0.0f);
+    float* bx = s->acc.data();
+    float* by = bx + W;
+    float* ba = by + W;
+    for (int r = 0; r < W; ++r) {
+      const float* a0 = to.ptr<float>(iy + r) + ix;
+      const float* a1 = a0 + to_step;
+      const float* t = s->tpl.data() + r * W;
+      const float* gx = s->gx.data() + r * W;
+      const float* gy = s->gy.data() + r * W;
+      for (int c = 0; c < W; ++c) {
+        const float e = b.w00 * a0[c] + b.w01 * a0[c + 1] + b.w10 * a1[c] + b.w11 * a1[c + 1] - t[c];
+        bx[c] += e * gx[c];
+        by[c] += e * gy[c];
+        ba[c] += std::abs(e);
+      }
+    }
+    float sx = 0.0f, sy = 0.0f;
+    abs_sum = 0.0f;
+    for (int c = 0; c < W; ++c) {
+      sx += bx[c];
+      sy += by[c];
+      abs_sum += ba[c];
+    }
+    // Template update dp = H^-1 sum grad(T) e; the warp x + d composed with the inverse of x + dp: d -= dp.
+    const float dx = ixx * sx + ixy * sy, dy = ixy * sx + iyy * sy;
+    d.x -= dx;
+    d.y -= dy;
+    if (!std::isfinite(d.x) || !std::isfinite(d.y)) return false;
+    if (dx * dx + dy * dy < eps2) break;
+  }
+  *q = d;
+  *err = abs_sum / static_cast<float>(n);
+  return true;
 }
 
 }  // namespace
@@ -240,6 +439,7 @@ bool ValidateKltTrackerOptions(const KltTrackerOptions& o, std::string* why) {
   if (!(o.max_patch_error >= 0.0) || !std::isfinite(o.max_patch_error)) e << "max_patch_error must be >= 0; ";
   if (o.coarse_win_size != 0 && (o.coarse_win_size < 5 || o.coarse_win_size % 2 == 0 || o.coarse_win_size > o.win_size))
     e << "coarse_win_size must be 0 or odd in [5, win_size]; ";
+  if (o.lk_stop_level < 0 || o.lk_stop_level > o.max_level) e << "lk_stop_level must be in [0, max_level]; ";
   if (o.threads < 1) e << "threads must be >= 1; ";
   if (o.anchor_half_window < 2 || o.anchor_half_window > 25) e << "anchor_half_window must be in [2, 25]; ";
   if (o.anchor_max_iterations < 1) e << "anchor_max_iterations must be >= 1; ";
@@ -261,6 +461,9 @@ KltTracker::KltTracker(const KltTrackerOptions& options) : options_(options) {
   if (!ValidateKltTrackerOptions(options_, &why)) throw std::invalid_argument(why);
   const int cells = options_.grid_cols * options_.grid_rows;
   quota_ = options_.max_per_cell > 0 ? options_.max_per_cell : (options_.max_tracks + cells - 1) / cells;
+  finest_level_ = options_.anchor_refine ? options_.lk_stop_level : 0;
+  // The border must hold a window with its gradient ring and bilinear neighbour, plus some travel.
+  pad_ = std::max(options_.win_size, options_.coarse_win_size) / 2 + 4;
 }
 
 void KltTracker::Reset() {
@@ -293,10 +496,20 @@ TrackFrame KltTracker::Track(const ImageFrame& frame) {
   else
     gray = frame.image.clone();
 
-  const cv::Size win(options_.win_size, options_.win_size);
+  // Levels above the base: max_level, fewer when a level would get smaller than its LK window.
+  int levels = 0;
+  for (int l = 1, w = gray.cols, h = gray.rows; l <= options_.max_level; ++l) {
+    w = (w + 1) / 2;
+    h = (h + 1) / 2;
+    const int win = options_.coarse_win_size > 0 ? options_.coarse_win_size : options_.win_size;
+    if (w < win || h < win) break;
+    levels = l;
+  }
   std::vector<cv::Mat> pyramid;
-  // With derivatives: this pyramid is the "previous" one of the next frame, whose LK pass then reuses them.
-  const int levels = cv::buildOpticalFlowPyramid(gray, pyramid, win, options_.max_level, true);
+  // This pyramid is the "previous" one of the next frame.
+  // The base level is also needed when tracks may be re-anchored at their LK position (anchor_reanchor_residual).
+  const int build_from = options_.anchor_reanchor_residual > 0.0 ? 0 : std::min(finest_level_, levels);
+  BuildLkPyramid(gray, levels, build_from, pad_, &pyramid);
 
   const int64 t_pyramid = cv::getTickCount();
   if (gray.size() != size_) {
@@ -334,7 +547,7 @@ TrackFrame KltTracker::Track(const ImageFrame& frame) {
     }
     if (options_.anchor_refine) {
       const int64 t_refine = cv::getTickCount();
-      RefineToAnchors(gray, &next_pts, &keep);
+      RefineToAnchors(gray, prev_pts, pyramid, &next_pts, &keep);
       stats_.refine_ms = static_cast<double>(cv::getTickCount() - t_refine) * 1e3 / cv::getTickFrequency();
     }
     std::vector<LiveTrack> survivors;
@@ -434,39 +647,39 @@ void KltTracker::TrackAndCheck(const std::vector<cv::Mat>& from_pyramid, const s
 void KltTracker::TrackPoints(const std::vector<cv::Mat>& from, const std::vector<cv::Mat>& to,
                              const std::vector<cv::Point2f>& pts, const std::vector<cv::Point2f>* initial,
                              std::vector<cv::Point2f>* out, std::vector<uchar>* status, std::vector<float>* err) const {
-  const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, options_.max_iterations,
-                                  options_.epsilon);
-  const cv::Size win(options_.win_size, options_.win_size);
   const size_t n = pts.size();
-  if (options_.coarse_win_size <= 0 || levels_ < 1) {
-    *out = initial ? *initial : pts;
-    cv::calcOpticalFlowPyrLK(from, to, pts, *out, *status, *err, win, levels_, criteria, cv::OPTFLOW_USE_INITIAL_FLOW,
-                             options_.lk_min_eigenvalue);
-    return;
-  }
-  // Coarse to fine in two calls: levels levels_..1 with the small coarse window (the pyramids without their base,
-  // so coordinates are halved), then the base level alone with the full window from that initial flow. The big
-  // window makes the final position accurate; the coarse levels only have to get within its reach.
-  const std::vector<cv::Mat> from_coarse(from.begin() + 2, from.end());
-  const std::vector<cv::Mat> to_coarse(to.begin() + 2, to.end());
-  std::vector<cv::Point2f> half(n), half_out(n);
-  for (size_t i = 0; i < n; ++i) {
-    half[i] = pts[i] * 0.5f;
-    half_out[i] = (initial ? (*initial)[i] : pts[i]) * 0.5f;
-  }
-  std::vector<uchar> coarse_status;
-  const cv::Size coarse_win(options_.coarse_win_size, options_.coarse_win_size);
-  cv::calcOpticalFlowPyrLK(from_coarse, to_coarse, half, half_out, coarse_status, *err, coarse_win, levels_ - 1,
-                           criteria, cv::OPTFLOW_USE_INITIAL_FLOW, options_.lk_min_eigenvalue);
   out->resize(n);
-  for (size_t i = 0; i < n; ++i) (*out)[i] = coarse_status[i] ? half_out[i] * 2.0f : pts[i];
-  cv::calcOpticalFlowPyrLK(from, to, pts, *out, *status, *err, win, 0, criteria, cv::OPTFLOW_USE_INITIAL_FLOW,
-                           options_.lk_min_eigenvalue);
-  for (size_t i = 0; i < n; ++i) (*status)[i] = (*status)[i] && coarse_status[i];
+  status->assign(n, 0);
+  err->assign(n, 0.0f);
+  const int finest = std::min(finest_level_, levels_);
+  const float eps2 = static_cast<float>(options_.epsilon * options_.epsilon);
+  const float min_eig = static_cast<float>(options_.lk_min_eigenvalue);
+  const int coarse_win = options_.coarse_win_size > 0 ? options_.coarse_win_size : options_.win_size;
+  LkScratch scratch;
+  for (size_t i = 0; i < n; ++i) {
+    // Coarse to fine: the position found on level l + 1, doubled, starts the search on level l.
+    cv::Point2f q = (initial ? (*initial)[i] : pts[i]) * (1.0f / static_cast<float>(1 << levels_));
+    bool ok = true;
+    float e = 0.0f;
+    for (int l = levels_; l >= finest && ok; --l) {
+      if (l < levels_) q *= 2.0f;
+      const int half = (l == 0 ? options_.win_size : coarse_win) / 2;
+      ok = LkLevel(from[static_cast<size_t>(l)], to[static_cast<size_t>(l)], pad_, half,
+                   pts[i] * (1.0f / static_cast<float>(1 << l)), &q, options_.max_iterations, eps2, min_eig, &e,
+                   &scratch);
+    }
+    (*out)[i] = q * static_cast<float>(1 << finest);
+    (*status)[i] = ok ? 1 : 0;
+    (*err)[i] = e;
+  }
 }
 
-void KltTracker::RefineToAnchors(const cv::Mat& gray, std::vector<cv::Point2f>* pts, std::vector<uchar>* keep) {
-  std::vector<float> buffer;
+void KltTracker::RefineToAnchors(const cv::Mat& gray, const std::vector<cv::Point2f>& prev_pts,
+                                 const std::vector<cv::Mat>& pyramid, std::vector<cv::Point2f>* pts,
+                                 std::vector<uchar>* keep) {
+  AlignScratch buffer;
+  LkScratch lk_scratch;
+  const int finest = std::min(finest_level_, levels_);
   const double max_shift2 = options_.anchor_max_shift_px * options_.anchor_max_shift_px;
   const float lo = static_cast<float>(options_.border_margin_px);
   const float hi_u = static_cast<float>(size_.width - 1 - options_.border_margin_px);
@@ -484,8 +697,21 @@ void KltTracker::RefineToAnchors(const cv::Mat& gray, std::vector<cv::Point2f>* 
     if (r == AlignResult::kOk && residual > options_.anchor_max_residual &&
         residual <= options_.anchor_reanchor_residual) {
       // The template no longer matches well but not badly either: keep the LK position and start a new anchor.
-      std::shared_ptr<const Anchor> anchor = MakeAnchor(gray, (*pts)[i], options_.anchor_half_window);
+      // When LK stopped above the base level, its position is finished on the base level first (base window).
+      cv::Point2f q = (*pts)[i];
+      float lk_err = 0.0f;
+      bool ok = true;
+      if (finest > 0) {
+        ok = LkLevel(prev_pyramid_[0], pyramid[0], pad_, options_.win_size / 2, prev_pts[i], &q,
+                     options_.max_iterations, static_cast<float>(options_.epsilon * options_.epsilon),
+                     static_cast<float>(options_.lk_min_eigenvalue), &lk_err, &lk_scratch);
+        const cv::Point2f moved = q - (*pts)[i];
+        ok = ok && q.x >= lo && q.y >= lo && q.x <= hi_u && q.y <= hi_v &&
+             static_cast<double>(moved.x) * moved.x + static_cast<double>(moved.y) * moved.y <= max_shift2;
+      }
+      std::shared_ptr<const Anchor> anchor = ok ? MakeAnchor(gray, q, options_.anchor_half_window) : nullptr;
       if (anchor) {
+        (*pts)[i] = q;
         t.anchor = std::move(anchor);
         t.affine = cv::Matx22f::eye();
         ++stats_.reanchored;

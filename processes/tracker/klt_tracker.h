@@ -1,5 +1,9 @@
-// KLT feature tracker (LCM-free): Shi-Tomasi corners spread over a grid, pyramidal Lucas-Kanade with a
-// forward-backward check, replenishment in cells below quota, persistent never-reused int64 track ids.
+// KLT feature tracker (LCM-free): Shi-Tomasi corners spread over a grid, pyramidal Lucas-Kanade (own
+// implementation: translation, inverse compositional, float pyramid; motion prediction from the track's last
+// displacement) with an optional forward-backward check, replenishment in cells below quota, persistent never-reused
+// int64 track ids. With anchor_refine (default) LK only runs on the coarse pyramid levels (down to lk_stop_level) and
+// the anchor alignment below does the base-level search, which is where the time goes (about 5 ms per frame for
+// 1000 tracks at 640x480 on one core, see klt_tracker_benchmark).
 // Drift-free positions (anchor_refine): every track keeps the image patch around it in its anchor frame (its birth
 // frame, or the frame of its last re-anchoring). After frame-to-frame LK (which finds the large motion) the position
 // is refined by aligning that reference template to the current image with an affine warp and gain/bias
@@ -25,39 +29,45 @@
 namespace objscan {
 
 struct KltTrackerOptions {
-  int max_tracks = 1000;               // upper bound on live tracks in any frame
-  int grid_cols = 16;                  // spatial grid columns over the image (detection quotas are per cell)
-  int grid_rows = 12;                  // spatial grid rows
-  int max_per_cell = 0;                // live-track quota per grid cell; 0 = ceil(max_tracks / (cols * rows))
-  int border_margin_px = 8;            // px, tracks closer than this to the image border are dropped / not born
-  double min_distance_px = 8.0;        // px, a new corner must be at least this far from live tracks and new corners
-  double duplicate_distance_px = 1.0;  // px, of two tracks closer than this the younger is dropped (0 = never)
-  double quality_level = 0.01;         // Shi-Tomasi: response >= quality_level * strongest recent response (0, 1)
-  double min_eigenvalue = 1e-4;        // Shi-Tomasi absolute floor on the response (cv::cornerMinEigenVal units)
-  int corner_block_size = 3;           // px, Shi-Tomasi structure-tensor window (odd, >= 3)
-  int subpix_half_window = 3;          // px, cornerSubPix half window for new corners (0 = no refinement)
-  int detect_interval = 1;             // frames; detection runs every this many frames (always on the first)
-  double min_cell_fill = 1.0;          // detect when a cell holds < min_cell_fill * quota tracks; (0, 1]; then all
-                                       // cells below quota are topped up, emptiest first
-  int win_size = 21;                   // px, Lucas-Kanade window side (odd, >= 5)
-  int max_level = 3;                   // pyramid levels above the base image (0 = no pyramid)
-  bool predict_motion = true;          // start LK at the position predicted by the track's last displacement
-                                       // (new tracks: the median displacement of the previous frame); tracks
-                                       // that fail from there are retried from zero motion
-  int coarse_win_size = 9;             // px, window on pyramid levels >= 1 (odd, <= win_size; 0 = win_size there)
-  int max_iterations = 30;             // Lucas-Kanade iterations per level
-  double epsilon = 0.01;               // px, Lucas-Kanade convergence threshold
-  double lk_min_eigenvalue = 1e-4;     // Lucas-Kanade: drop a point when its normalised min eigenvalue is below
-  bool forward_backward_check = true;  // track back from the new frame and drop points that do not come home
-  double fb_threshold_px = 0.5;        // px, max forward-backward round trip error
-  double max_patch_error = 15.0;       // gray levels, max mean |difference| of the LK window after tracking (0 = off)
-  int threads = 1;                     // cv::setNumThreads value set on every Track() call (>= 1)
-  bool anchor_refine = true;           // refine every LK position by affine alignment of the track's anchor template
-  int anchor_half_window = 9;          // px, anchor template half side: the template has (2h+1)^2 px; [2, 25]
-  int anchor_max_iterations = 20;      // inverse-compositional iterations per track and frame (>= 1)
-  double anchor_epsilon = 0.005;       // px, iterations stop when the update moves no template corner further
-  double anchor_max_residual = 0.35;   // max RMS residual of the aligned template after gain/bias compensation,
-                                       // relative to the template's own RMS contrast; worse tracks are dropped (0, 2]
+  int max_tracks = 1000;                // upper bound on live tracks in any frame
+  int grid_cols = 16;                   // spatial grid columns over the image (detection quotas are per cell)
+  int grid_rows = 12;                   // spatial grid rows
+  int max_per_cell = 0;                 // live-track quota per grid cell; 0 = ceil(max_tracks / (cols * rows))
+  int border_margin_px = 8;             // px, tracks closer than this to the image border are dropped / not born
+  double min_distance_px = 8.0;         // px, a new corner must be at least this far from live tracks and new corners
+  double duplicate_distance_px = 1.0;   // px, of two tracks closer than this the younger is dropped (0 = never)
+  double quality_level = 0.01;          // Shi-Tomasi: response >= quality_level * strongest recent response (0, 1)
+  double min_eigenvalue = 1e-4;         // Shi-Tomasi absolute floor on the response (cv::cornerMinEigenVal units)
+  int corner_block_size = 3;            // px, Shi-Tomasi structure-tensor window (odd, >= 3)
+  int subpix_half_window = 3;           // px, cornerSubPix half window for new corners (0 = no refinement)
+  int detect_interval = 1;              // frames; detection runs every this many frames (always on the first)
+  double min_cell_fill = 1.0;           // detect when a cell holds < min_cell_fill * quota tracks; (0, 1]; then all
+                                        // cells below quota are topped up, emptiest first
+  int win_size = 21;                    // px, Lucas-Kanade window side (odd, >= 5)
+  int max_level = 2;                    // pyramid levels above the base image (0 = no pyramid)
+  bool predict_motion = true;           // start LK at the position predicted by the track's last displacement
+                                        // (new tracks: the median displacement of the previous frame); tracks
+                                        // that fail from there are retried from zero motion
+  int coarse_win_size = 7;              // px, window on pyramid levels >= 1 (odd, <= win_size; 0 = win_size there)
+  int lk_stop_level = 2;                // pyramid level on which LK stops (0 = base image); above 0 the anchor
+                                        // alignment does the base-level search from LK's estimate (the LK
+                                        // checks then apply on that level); [0, max_level]; 0 without anchor_refine
+  int max_iterations = 30;              // Lucas-Kanade iterations per level
+  double epsilon = 0.01;                // px, Lucas-Kanade convergence threshold
+  double lk_min_eigenvalue = 1e-4;      // (gray levels / px)^2, Lucas-Kanade: drop a point when the min eigenvalue
+                                        // of its window's gradient matrix divided by the window's pixels is below
+  bool forward_backward_check = false;  // track back from the new frame and drop points that do not come home
+                                        // (off by default: the anchor alignment check rejects the same tracks)
+  double fb_threshold_px = 0.5;         // px, max forward-backward round trip error
+  double max_patch_error = 15.0;        // gray levels, max mean |difference| of the LK window after tracking (0 = off)
+  int threads = 1;                      // cv::setNumThreads value set on every Track() call (>= 1)
+  bool anchor_refine = true;            // refine every LK position by affine alignment of the track's anchor template
+  int anchor_half_window = 7;           // px, anchor template half side: the template has (2h+1)^2 px; [2, 25]
+                                        // (7: as accurate on the simulator orbit as 9, at 60 % of the cost)
+  int anchor_max_iterations = 20;       // inverse-compositional iterations per track and frame (>= 1)
+  double anchor_epsilon = 0.03;         // px, iterations stop when the update moves no template corner further
+  double anchor_max_residual = 0.35;    // max RMS residual of the aligned template after gain/bias compensation,
+                                        // relative to the template's own RMS contrast; worse tracks are dropped (0, 2]
   double anchor_reanchor_residual = 0.0;  // tracks whose alignment residual exceeds anchor_max_residual but stays
                                           // below this (same units) are kept at their LK position and re-anchored
                                           // there instead of being dropped (appearance changed faster than the
@@ -137,7 +147,9 @@ class KltTracker {
                      std::vector<cv::Point2f>* out, std::vector<uchar>* keep) const;
   // Aligns every track with keep[i] set to its anchor template in gray, starting at (*pts)[i] with the track's last
   // affine map; updates (*pts)[i] and the tracks' affine maps / anchors, clears keep[i] of the tracks that fail.
-  void RefineToAnchors(const cv::Mat& gray, std::vector<cv::Point2f>* pts, std::vector<uchar>* keep);
+  // prev_pts / pyramid (this frame's LK pyramid): for base-level LK of tracks re-anchored at their LK position.
+  void RefineToAnchors(const cv::Mat& gray, const std::vector<cv::Point2f>& prev_pts,
+                       const std::vector<cv::Mat>& pyramid, std::vector<cv::Point2f>* pts, std::vector<uchar>* keep);
   void RemoveDuplicates(std::vector<LiveTrack>* tracks) const;
   void Detect(const cv::Mat& gray, std::vector<LiveTrack>* tracks);
 
@@ -150,8 +162,10 @@ class KltTracker {
   double response_reference_ = 0.0;  // strongest Shi-Tomasi response seen recently (see Detect)
   cv::Size size_;
   cv::Mat prev_gray_;
-  std::vector<cv::Mat> prev_pyramid_;  // image and derivative levels (cv::buildOpticalFlowPyramid layout)
+  std::vector<cv::Mat> prev_pyramid_;  // LK pyramid: float levels with a pad_ border (empty below finest_level_)
   int levels_ = 0;                     // levels above the base in prev_pyramid_ (and in the current pyramid)
+  int finest_level_ = 0;               // level on which LK stops (lk_stop_level; 0 without anchor_refine)
+  int pad_ = 0;                        // px, replicated border of every LK pyramid level
   std::vector<LiveTrack> tracks_;
   KltTrackStats stats_;
 };

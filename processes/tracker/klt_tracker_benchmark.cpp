@@ -1,10 +1,14 @@
 // Speed of KltTracker::Track on 640x480 textured frames with realistic motion (about 3 px/frame translation,
 // slow rotation and zoom, sensor noise sigma 2), one OpenCV thread, max_tracks 1000.
 // Counters: median_ms (thread CPU time per frame, so other load on the machine matters less), p90_ms, live (mean live
-// tracks), born (mean new tracks per frame), refine_ms (mean wall-clock ms of the anchor template alignment).
+// tracks), born (mean new tracks per frame), and per stage (KltTrackStats) the mean ms per frame: pyramid_ms (gray +
+// pyramid), lk_ms (Lucas-Kanade passes and culling, without the refinement), refine_ms (anchor template alignment),
+// detect_ms (corner detection and replenishment). The stats are wall clock; to make them comparable with median_ms
+// on a loaded machine each frame's stage times are scaled by that frame's CPU / wall-clock ratio.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <vector>
@@ -45,7 +49,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   const std::vector<cv::Mat>& frames = Frames();
   KltTracker tracker(options);
   std::vector<double> ms;
-  double live = 0, born = 0, refine = 0;
+  double live = 0, born = 0, refine = 0, lk = 0, detect = 0, pyramid = 0;
   int64_t seq = 0;
   // Warm up past the first (detection-only) frame.
   ImageFrame frame;
@@ -55,12 +59,19 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
     frame.seq = ++seq;
     frame.image = frames[static_cast<size_t>(seq) % frames.size()];
     const double t0 = ThreadCpuMs();
+    const auto w0 = std::chrono::steady_clock::now();
     const TrackFrame out = tracker.Track(frame);
+    const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
     ms.push_back(ThreadCpuMs() - t0);
     benchmark::DoNotOptimize(out.features.data());
     live += static_cast<double>(out.features.size());
-    born += tracker.last_stats().born;
-    refine += tracker.last_stats().refine_ms;
+    const KltTrackStats& s = tracker.last_stats();
+    born += s.born;
+    const double cpu_per_wall = wall > 0 ? std::min(1.0, ms.back() / wall) : 1.0;
+    refine += s.refine_ms * cpu_per_wall;
+    lk += (s.lk_ms - s.refine_ms) * cpu_per_wall;
+    detect += s.detect_ms * cpu_per_wall;
+    pyramid += s.pyramid_ms * cpu_per_wall;
   }
   std::sort(ms.begin(), ms.end());
   const double n = static_cast<double>(std::max<size_t>(ms.size(), 1));
@@ -69,22 +80,29 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   state.counters["live"] = live / n;
   state.counters["born"] = born / n;
   state.counters["refine_ms"] = refine / n;
+  state.counters["lk_ms"] = lk / n;
+  state.counters["detect_ms"] = detect / n;
+  state.counters["pyramid_ms"] = pyramid / n;
 }
 
 void BM_Default(benchmark::State& state) { Run(state, KltTrackerOptions()); }
 
-// Variants: (window, pyramid levels above the base, coarse window; 0 = the window on every level).
+// Variants: (window, pyramid levels above the base, coarse window (0 = the window on every level), level on which
+// LK stops, forward-backward check on/off).
 void BM_Config(benchmark::State& state) {
   KltTrackerOptions o;
   o.win_size = static_cast<int>(state.range(0));
   o.max_level = static_cast<int>(state.range(1));
   o.coarse_win_size = static_cast<int>(state.range(2));
+  o.lk_stop_level = static_cast<int>(state.range(3));
+  o.forward_backward_check = state.range(4) != 0;
   Run(state, o);
 }
 
-void BM_NoForwardBackward(benchmark::State& state) {
+// Without the anchor epsilon relaxation of the defaults (more alignment iterations).
+void BM_AnchorEpsilon005(benchmark::State& state) {
   KltTrackerOptions o;
-  o.forward_backward_check = false;
+  o.anchor_epsilon = 0.005;
   Run(state, o);
 }
 
@@ -136,21 +154,17 @@ void BM_ReferenceOpenCvLkForwardOnly(benchmark::State& state) {
 BENCHMARK(BM_ReferenceOpenCvLkForwardOnly)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_Default)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_Config)
-    ->ArgNames({"win", "levels", "coarse_win"})
-    ->Args({21, 3, 0})
-    ->Args({21, 3, 7})
-    ->Args({21, 3, 11})
-    ->Args({21, 2, 9})
-    ->Args({15, 3, 9})
-    ->Args({15, 3, 0})
-    ->Args({11, 3, 0})
-    ->Args({11, 2, 0})
-    ->Args({9, 3, 0})
+    ->ArgNames({"win", "levels", "coarse_win", "stop", "fb"})
+    ->Args({21, 3, 9, 0, 1})  // the former defaults (LK to the base level with a 21 px window, forward-backward)
+    ->Args({9, 2, 7, 0, 0})   // LK to the base level with a small window
+    ->Args({9, 2, 7, 1, 0})   // LK stops on level 1
+    ->Args({9, 3, 7, 2, 0})   // one more level above
+    ->Args({9, 2, 7, 2, 1})   // defaults with the forward-backward check
     ->Unit(benchmark::kMillisecond)
     ->Iterations(400);
-BENCHMARK(BM_NoForwardBackward)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK(BM_AnchorEpsilon005)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_NoAnchorRefine)->Unit(benchmark::kMillisecond)->Iterations(400);
-BENCHMARK(BM_AnchorHalfWindow)->ArgName("half")->Arg(5)->Arg(7)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK(BM_AnchorHalfWindow)->ArgName("half")->Arg(5)->Arg(9)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_DetectEvery3HalfFill)->Unit(benchmark::kMillisecond)->Iterations(400);
 
 }  // namespace

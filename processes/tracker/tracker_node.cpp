@@ -45,7 +45,9 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.Add("klt-coarse-win-size", &k->coarse_win_size, "px, LK window on pyramid levels >= 1 (odd; 0 = klt-win-size)");
   p.Add("klt-max-iterations", &k->max_iterations, "Lucas-Kanade iterations per level");
   p.Add("klt-epsilon", &k->epsilon, "px, Lucas-Kanade convergence threshold");
-  p.Add("klt-lk-min-eigenvalue", &k->lk_min_eigenvalue, "Lucas-Kanade min normalised eigenvalue");
+  p.Add("klt-lk-min-eigenvalue", &k->lk_min_eigenvalue,
+        "(gray levels / px)^2, Lucas-Kanade min eigenvalue of the window's gradient matrix (per pixel)");
+  p.Add("klt-lk-stop-level", &k->lk_stop_level, "pyramid level on which LK stops (0 = base; >0 needs anchor refine)");
   p.Add("klt-forward-backward-check", &k->forward_backward_check, "drop tracks failing the forward-backward check");
   p.Add("klt-fb-threshold", &k->fb_threshold_px, "px, max forward-backward round-trip error");
   p.Add("klt-max-patch-error", &k->max_patch_error, "gray levels, max mean LK window residual (0 = off)");
