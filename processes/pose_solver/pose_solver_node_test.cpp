@@ -59,6 +59,13 @@ TEST(PoseSolverNode, OrbitEndToEndWithOutputs) {
   Sink sink(*bus);
   PoseSolverNodeOptions o;
   o.output_dir = std::filesystem::temp_directory_path() / ("pose_solver_node_test_" + std::to_string(::getpid()));
+  struct RemoveOnExit {
+    std::string dir;
+    ~RemoveOnExit() {
+      std::error_code ec;
+      std::filesystem::remove_all(dir, ec);
+    }
+  } remove_on_exit{o.output_dir};
   PoseSolverNode node(*bus, o);
   // Tracks of the first 3 frames arrive before the camera info (buffered).
   for (int f = 0; f < 200; ++f) {
@@ -116,7 +123,6 @@ TEST(PoseSolverNode, OrbitEndToEndWithOutputs) {
   ASSERT_EQ(read.size(), 200u);
   EXPECT_EQ(read[30].utime, s.frames[30].utime);
   EXPECT_LT((read[30].world_from_camera.translation() - est[30].translation()).norm(), 1e-3);
-  std::filesystem::remove_all(o.output_dir);
 }
 
 TEST(PoseSolverNode, RejectsBadInputWithoutCorruptingState) {

@@ -13,6 +13,16 @@ namespace objscan {
 namespace {
 namespace fs = std::filesystem;
 
+// Removes this process's temporary folder after all tests (also when some failed).
+class RemoveTempFolder : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("objscan_colmap_convert_test_" + std::to_string(::getpid())), ec);
+  }
+};
+const ::testing::Environment* const kRemoveTempFolder = ::testing::AddGlobalTestEnvironment(new RemoveTempFolder);
+
 std::string TempPath(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("objscan_colmap_convert_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);

@@ -25,6 +25,16 @@ namespace objscan {
 namespace {
 namespace fs = std::filesystem;
 
+// Removes this process's temporary folder after all tests (also when some failed).
+class RemoveTempFolder : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(fs::temp_directory_path() / ("objscan_log_export_test_" + std::to_string(::getpid())), ec);
+  }
+};
+const ::testing::Environment* const kRemoveTempFolder = ::testing::AddGlobalTestEnvironment(new RemoveTempFolder);
+
 fs::path TempDir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("objscan_log_export_test_" + std::to_string(::getpid())) / name;
   fs::remove_all(dir);

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# Dense model accuracy on the other simulated targets (issue 4: "same figures reported for a box, a cylinder and a
+# mesh object"): for each of drivers/robot_sim/scenes/{box,cylinder,mesh}.scene, robot_sim renders the same orbit as
+# pipeline_accuracy_test.sh (200 frames, 360 deg, default 800 mm radius, camera aimed at the target's centre) into a
+# log (ground truth written aside, never fed to the pipeline), objscan_replay runs tracker, pose solver and dense
+# modeler over it, and objscan_evaluate scores trajectory and surface against the truth after Sim(3) alignment.
+# Pose bounds are issue 3's targets (as in pipeline_accuracy_test.sh); dense bounds are regression bounds above the
+# level measured today, and the issue's dense targets are printed with MET / NOT MET. The mesh p90 is dominated by
+# a few error regions (creases, the crevice at the floor) and moved by up to 50 % with the tracker rewrite alone
+# (box 8.47 -> 4.92 mm, blob 1.72 -> 2.48 mm), so its bounds keep ~1.5x margin.
+# 200 frames, not fewer: with 120 frames completeness drops by 0.07-0.08 on every scene and the automatic region of
+# interest cuts the cylinder's lowest 20 mm, so the figures would no longer describe the issue's orbit.
+set -euo pipefail
+BIN="$1"; SRC="$2"
+WORK=$(mktemp -d); trap 'rm -rf "$WORK"' EXIT
+FRAMES=200
+FAILED=0
+fail() { echo "FAIL: $*"; exit 1; }
+
+# value KEY FILE: the number after KEY in an objscan_evaluate output.
+value() { awk -v k="$1" '$1==k {print $2}' "$2"; }
+# check LABEL VALUE OP BOUND [target]: OP is <= or >=; "target" only reports.
+check() {
+  local label="$1" v="$2" op="$3" bound="$4" kind="${5:-bound}" ok
+  if [ "$op" = "<=" ]; then ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a<=b)?1:0}')
+  else ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a>=b)?1:0}'); fi
+  if [ "$kind" = "target" ]; then
+    printf '  %-52s %10s  issue target %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo MET || echo 'NOT MET')"
+  else
+    printf '  %-52s %10s  %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo ok || echo FAIL)"
+    [ "$ok" = 1 ] || FAILED=1
+  fi
+}
+
+# scene NAME MESH_P90 VOXEL_P90 MESH_COMPLETENESS VOXEL_COMPLETENESS: runs one scene and checks it against these
+# regression bounds (mm, mm, fraction, fraction).
+scene() {
+  local name="$1" mesh_p90="$2" voxel_p90="$3" mesh_c="$4" voxel_c="$5" d="$WORK/$1" f m
+  mkdir -p "$d"
+  "$BIN/robot_sim" --lcm-url "file://$d/sim.lcmlog?mode=w" --scene "$SRC/drivers/robot_sim/scenes/$name.scene" \
+    --frames $FRAMES --seed 1 --realtime=false --encoding jpeg --jpeg-quality 95 --ground-truth-dir "$d/gt" \
+    > "$d/sim.out" 2>&1 || { cat "$d/sim.out"; fail "robot_sim ($name)"; }
+  local gt="$d/gt/poses_gt.txt"
+  "$BIN/objscan_replay" --log "$d/sim.lcmlog" --out "$d/out" > "$d/replay.out" 2>&1 \
+    || { tail -30 "$d/replay.out"; fail "replay ($name)"; }
+  echo "$name: pose solver, 6-DOF:"
+  for f in online final; do
+    local file="$d/out/trajectory.txt"; [ $f = online ] && file="$d/out/trajectory_online.txt"
+    "$BIN/objscan_evaluate" trajectory "$file" "$gt" > "$d/$f.txt" || fail "evaluate $name $f"
+    local limit=0.3; [ $f = online ] && limit=2.0
+    check "$name $f ATE RMSE (mm)" "$(value ate_rmse "$d/$f.txt")" "<=" $limit
+    local scale; scale=$(value scale "$d/$f.txt")
+    check "$name $f scale error" "$(awk -v s="$scale" 'BEGIN{d=s-1; if(d<0)d=-d; printf "%.5f", d}')" "<=" 0.01
+    check "$name $f registered fraction" "$(value registered_fraction "$d/$f.txt")" ">=" 0.98
+  done
+  check "$name online rotation mean (deg)" "$(value rotation_mean_deg "$d/online.txt")" "<=" 0.2
+  echo "$name: dense model:"
+  for m in mesh voxels; do
+    "$BIN/objscan_evaluate" surface "$d/out/model_$m.ply" "$d/gt/target_surface.ply" \
+      --align "$d/out/trajectory.txt" "$gt" --visible-from "$gt" > "$d/$m.txt" || fail "evaluate $name $m"
+  done
+  check "$name mesh accuracy p90 (mm)" "$(value accuracy_p90 "$d/mesh.txt")" "<=" "$mesh_p90"
+  check "$name voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$d/voxels.txt")" "<=" "$voxel_p90"
+  check "$name mesh completeness (visible surface, 2 mm)" "$(value completeness "$d/mesh.txt")" ">=" "$mesh_c"
+  check "$name voxel completeness (visible surface, 2 mm)" "$(value completeness "$d/voxels.txt")" ">=" "$voxel_c"
+  check "$name mesh accuracy p90 (mm)" "$(value accuracy_p90 "$d/mesh.txt")" "<=" 1.0 target
+  check "$name mesh accuracy max (mm)" "$(value accuracy_max "$d/mesh.txt")" "<=" 3.0 target
+  check "$name voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$d/voxels.txt")" "<=" 1.5 target
+  check "$name mesh completeness" "$(value completeness "$d/mesh.txt")" ">=" 0.95 target
+}
+
+# Measured (seed 1, 200 frames, current tracker): box mesh p90 4.92, voxels 1.68, completeness 0.878 / 0.833;
+# cylinder 2.21, 1.52, 0.927 / 0.891; mesh (blob) 2.48, 1.44, 0.910 / 0.889. The box's and cylinder's largest errors
+# are points inside the object near its creases (box edges, cylinder rim: triangles spanning a crease put points on
+# the chord), the blob's are under its overhang next to the floor.
+scene box 7.5 2.2 0.83 0.79
+scene cylinder 3.5 2.0 0.88 0.85
+scene mesh 3.7 1.9 0.87 0.85
+
+[ "$FAILED" = 0 ] || fail "accuracy below the bounds above"
+echo "PASS: dense model accuracy on the box, cylinder and mesh scenes"
