@@ -1,9 +1,59 @@
 #include "common/camera_model.h"
 
 #include <cmath>
+#include <filesystem>
 #include <opencv2/core.hpp>
+#include <sstream>
+#include <vector>
 
 namespace objscan {
+namespace {
+
+bool Fail(std::string* error, const std::string& text) {
+  if (error) *error = text;
+  return false;
+}
+
+// Reads a 3x3 / 1xN matrix node: OpenCV "!!opencv-matrix" or a ROS-style map with a "data" list, or a plain list.
+bool ReadMatrixNode(const cv::FileNode& node, cv::Mat* out) {
+  try {
+    if (node.isMap() && !node["data"].empty() && node["dt"].empty()) {
+      std::vector<double> data;
+      node["data"] >> data;
+      int rows = 1, cols = static_cast<int>(data.size());
+      if (!node["rows"].empty() && !node["cols"].empty()) {
+        rows = static_cast<int>(node["rows"]);
+        cols = static_cast<int>(node["cols"]);
+      }
+      if (rows * cols != static_cast<int>(data.size())) return false;
+      *out = cv::Mat(data, true).reshape(1, rows);
+      return true;
+    }
+    if (node.isSeq()) {
+      std::vector<double> data;
+      node >> data;
+      *out = cv::Mat(data, true).reshape(1, 1);
+      return true;
+    }
+    cv::Mat m;
+    node >> m;
+    if (m.empty()) return false;
+    m.convertTo(*out, CV_64F);
+    return true;
+  } catch (const cv::Exception&) {
+    return false;
+  }
+}
+
+bool ReadIntNode(const cv::FileNode& node, int* out) {
+  if (node.empty() || !(node.isInt() || node.isReal())) return false;
+  const double v = static_cast<double>(node);
+  if (v != std::floor(v)) return false;
+  *out = static_cast<int>(v);
+  return true;
+}
+
+}  // namespace
 
 bool PinholeCamera::IsValid(std::string* why) const {
   auto fail = [why](const char* text) {
@@ -51,6 +101,65 @@ Eigen::Vector2d PinholeCamera::Unproject(const Eigen::Vector2d& pixel) const {
     if (err.squaredNorm() < 1e-24) break;
   }
   return n;
+}
+
+bool CheckMetricCamera(const PinholeCamera& c, std::string* why) {
+  if (!c.IsValid(why)) return false;
+  if (c.cx < -0.5 || c.cx > c.width - 0.5 || c.cy < -0.5 || c.cy > c.height - 0.5) {
+    std::ostringstream os;
+    os << "principal point (" << c.cx << ", " << c.cy << ") lies outside the " << c.width << "x" << c.height
+       << " image (not a metric calibration?)";
+    if (why) *why = os.str();
+    return false;
+  }
+  return true;
+}
+
+bool ReadCalibrationFile(const std::string& path, const std::string& camera_name, PinholeCamera* camera,
+                         std::string* error) {
+  if (!std::filesystem::is_regular_file(path)) return Fail(error, "calibration file " + path + " not found");
+  cv::FileStorage storage;
+  try {
+    if (!storage.open(path, cv::FileStorage::READ) || !storage.isOpened())
+      return Fail(error, "calibration file " + path + " cannot be parsed");
+  } catch (const cv::Exception& e) {
+    return Fail(error, "calibration file " + path + " cannot be parsed: " + e.what());
+  }
+  const std::string where = "calibration " + path;
+  cv::Mat k;
+  if (storage["camera_matrix"].empty()) return Fail(error, where + ": missing camera_matrix");
+  if (!ReadMatrixNode(storage["camera_matrix"], &k) || k.total() != 9)
+    return Fail(error, where + ": camera_matrix must be a 3x3 matrix");
+  k = k.reshape(1, 3);
+  if (k.at<double>(1, 0) != 0 || k.at<double>(2, 0) != 0 || k.at<double>(2, 1) != 0 || k.at<double>(2, 2) != 1)
+    return Fail(error, where + ": camera_matrix must look like [fx s cx; 0 fy cy; 0 0 1]");
+  PinholeCamera c;
+  c.name = camera_name;
+  if (!ReadIntNode(storage["image_width"], &c.width) || !ReadIntNode(storage["image_height"], &c.height))
+    return Fail(error, where + ": missing or non-integer image_width / image_height");
+  c.fx = k.at<double>(0, 0);
+  c.skew = k.at<double>(0, 1);
+  c.cx = k.at<double>(0, 2);
+  c.fy = k.at<double>(1, 1);
+  c.cy = k.at<double>(1, 2);
+  const cv::FileNode dist_node = storage["distortion_coefficients"];
+  if (!dist_node.empty()) {
+    cv::Mat d;
+    if (!ReadMatrixNode(dist_node, &d)) return Fail(error, where + ": distortion_coefficients is not a vector");
+    d = d.reshape(1, 1);
+    const int n = static_cast<int>(d.total());
+    if (n != 0 && n != 4 && n < 5) return Fail(error, where + ": distortion_coefficients needs 0, 4 or 5 values");
+    for (int i = 5; i < n; ++i)
+      if (d.at<double>(0, i) != 0)
+        return Fail(error, where + ": only plumb_bob distortion (k1 k2 p1 p2 k3) is supported, coefficient " +
+                               std::to_string(i + 1) + " is not zero");
+    double* coeffs[5] = {&c.k1, &c.k2, &c.p1, &c.p2, &c.k3};
+    for (int i = 0; i < n && i < 5; ++i) *coeffs[i] = d.at<double>(0, i);
+  }
+  std::string why;
+  if (!CheckMetricCamera(c, &why)) return Fail(error, where + ": " + why);
+  *camera = c;
+  return true;
 }
 
 bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error) {

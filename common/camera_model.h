@@ -34,9 +34,20 @@ struct PinholeCamera {
   }
 };
 
+// IsValid plus the principal point inside the image (a metric calibration). False with *why.
+bool CheckMetricCamera(const PinholeCamera& camera, std::string* why);
+
+// Reads an OpenCV FileStorage calibration (YAML/XML/JSON): camera_matrix (3x3; OpenCV matrix, ROS-style map with
+// "data", or a plain list), distortion_coefficients (0, 4 or 5 values, OpenCV order k1 k2 p1 p2 k3; more only when
+// the extra ones are zero), image_width, image_height. Checks that the numbers describe a camera (positive size and
+// focal lengths, K's last row 0 0 1, principal point inside the image). The camera gets camera_name. Returns false
+// with *error naming the file and the problem; never throws.
+bool ReadCalibrationFile(const std::string& path, const std::string& camera_name, PinholeCamera* camera,
+                         std::string* error);
+
 // Writes an OpenCV FileStorage calibration (YAML): image_width, image_height, camera_matrix (3x3) and
-// distortion_coefficients (k1 k2 p1 p2 k3) — the dataset folder's calib.yaml, read back by the camera driver
-// (drivers/camera ReadCalibrationFile). False with *error when the file cannot be written.
+// distortion_coefficients (k1 k2 p1 p2 k3) — the dataset folder's calib.yaml, read back by ReadCalibrationFile.
+// False with *error when the file cannot be written.
 bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, std::string* error);
 
 }  // namespace objscan

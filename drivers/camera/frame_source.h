@@ -83,13 +83,7 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options, 
 
 // ---- Building blocks (exposed for tests and tools) ----
 
-// Reads an OpenCV FileStorage calibration (YAML/XML/JSON): camera_matrix (3x3), distortion_coefficients
-// (0, 4 or 5 values, OpenCV order k1 k2 p1 p2 k3; more only when the extra ones are zero), image_width,
-// image_height. Checks that the numbers describe a camera (positive size and focal lengths, K's last row 0 0 1,
-// principal point inside the image). Returns false with *error naming the file and the problem.
-bool ReadCalibrationFile(const std::string& path, const std::string& camera_name, PinholeCamera* camera,
-                         std::string* error);
-// WriteCalibrationFile (common/camera_model.h) writes the format ReadCalibrationFile reads.
+// ReadCalibrationFile / WriteCalibrationFile (common/camera_model.h) read and write the calibration files.
 
 // One line of a TUM trajectory: t in s, world_from_camera with the position already converted to mm.
 struct TimedPose {

@@ -66,8 +66,8 @@ bool ReadColmapImagesTxt(const std::string& path, std::vector<ColmapImage>* imag
         double x = 0, y = 0;
         int64_t id = 0;
         if (!ParseDouble(tokens[i], &x) || !ParseDouble(tokens[i + 1], &y) || !ParseInt(tokens[i + 2], &id))
-          return Fail(error, where + ": bad observation '" + tokens[i] + " " + tokens[i + 1] + " " + tokens[i + 2] +
-                                 "'");
+          return Fail(error,
+                      where + ": bad observation '" + tokens[i] + " " + tokens[i + 1] + " " + tokens[i + 2] + "'");
         ++image.num_observations;
         if (id != -1) ++image.num_triangulated;
       }
@@ -153,8 +153,8 @@ bool ColmapCameraFromCalibration(const PinholeCamera& camera, std::string* model
                   camera.k1, camera.k2, camera.p1, camera.p2);
   } else {
     *model = "FULL_OPENCV";
-    std::snprintf(buf, sizeof(buf), "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0,0,0", camera.fx,
-                  camera.fy, cx, cy, camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+    std::snprintf(buf, sizeof(buf), "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0,0,0", camera.fx, camera.fy,
+                  cx, cy, camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
   }
   *params = buf;
   return true;

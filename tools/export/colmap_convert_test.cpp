@@ -36,8 +36,9 @@ void WriteText(const std::string& path, const std::string& text) {
 
 Eigen::Isometry3d MakePose(double yaw, double pitch, const Eigen::Vector3d& position) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
-                      .toRotationMatrix();
+  pose.linear() =
+      (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   pose.translation() = position;
   return pose;
 }
@@ -81,7 +82,7 @@ TEST(ColmapImagesToTum, InvertsCamFromWorldAndTimesByFrameNumber) {
   text += PoseLine(1, truth[0].second, "000010.png");
   text += "12.5 30.25 7 100.0 40.0 -1\n";  // two observations, one triangulated
   text += PoseLine(2, truth[1].second, "images/000000.png");
-  text += "\n";  // no observations
+  text += "\n";                                        // no observations
   text += PoseLine(3, truth[2].second, "000003.png");  // last image without an observation line
   const std::string path = TempPath("images.txt");
   WriteText(path, text);

@@ -23,21 +23,6 @@ bool SameCamera(const PinholeCamera& a, const PinholeCamera& b) {
          a.skew == b.skew && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 && a.p2 == b.p2 && a.k3 == b.k3;
 }
 
-// Reads an int scalar node (also accepts an integral real, as some writers store them).
-bool ReadInt(const cv::FileNode& node, int* value) {
-  if (node.empty()) return false;
-  if (node.isInt()) {
-    *value = static_cast<int>(node);
-    return true;
-  }
-  if (node.isReal()) {
-    const double d = static_cast<double>(node);
-    if (d != std::floor(d)) return false;
-    *value = static_cast<int>(d);
-    return true;
-  }
-  return false;
-}
 }  // namespace
 
 bool ValidateDatasetWriterOptions(const DatasetWriterOptions& options, std::string* why) {
@@ -141,8 +126,9 @@ bool DatasetWriter::Finish(std::string* error) {
       lines.push_back(p);
     }
     if (!WriteTumPoses((root / "poses_gt.txt").string(), lines,
-                       {"units: mm", "objscan true camera poses (world_from_camera), t = utime / 1e6 s, one per image "
-                                     "in images/ that has one, in file-name order",
+                       {"units: mm",
+                        "objscan true camera poses (world_from_camera), t = utime / 1e6 s, one per image "
+                        "in images/ that has one, in file-name order",
                         "t tx ty tz qx qy qz qw"},
                        error))
       return false;
@@ -166,47 +152,6 @@ bool DatasetWriter::Finish(std::string* error) {
     const bool ok = std::ferror(out) == 0;
     if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path.string());
     summary_.odometry_written = static_cast<int64_t>(odometry_.size());
-  }
-  return true;
-}
-
-bool ReadDatasetCalibration(const std::string& path, PinholeCamera* camera, std::string* error) {
-  cv::FileStorage storage;
-  try {
-    if (!fs::is_regular_file(path)) return Fail(error, "calibration " + path + " not found");
-    if (!storage.open(path, cv::FileStorage::READ) || !storage.isOpened())
-      return Fail(error, "calibration " + path + " cannot be parsed");
-    PinholeCamera c;
-    c.name = "camera";
-    if (!ReadInt(storage["image_width"], &c.width) || !ReadInt(storage["image_height"], &c.height))
-      return Fail(error, "calibration " + path + ": missing or non-integer image_width / image_height");
-    cv::Mat k;
-    storage["camera_matrix"] >> k;
-    if (k.empty() || k.total() != 9) return Fail(error, "calibration " + path + ": camera_matrix must be 3x3");
-    k.convertTo(k, CV_64F);
-    k = k.reshape(1, 3);
-    if (k.at<double>(1, 0) != 0 || k.at<double>(2, 0) != 0 || k.at<double>(2, 1) != 0 || k.at<double>(2, 2) != 1)
-      return Fail(error, "calibration " + path + ": camera_matrix must look like [fx s cx; 0 fy cy; 0 0 1]");
-    c.fx = k.at<double>(0, 0);
-    c.skew = k.at<double>(0, 1);
-    c.cx = k.at<double>(0, 2);
-    c.fy = k.at<double>(1, 1);
-    c.cy = k.at<double>(1, 2);
-    cv::Mat d;
-    if (!storage["distortion_coefficients"].empty()) storage["distortion_coefficients"] >> d;
-    if (!d.empty()) {
-      d.convertTo(d, CV_64F);
-      d = d.reshape(1, 1);
-      const int n = static_cast<int>(d.total());
-      if (n != 4 && n != 5) return Fail(error, "calibration " + path + ": distortion_coefficients needs 4 or 5 values");
-      double* coeffs[5] = {&c.k1, &c.k2, &c.p1, &c.p2, &c.k3};
-      for (int i = 0; i < n; ++i) *coeffs[i] = d.at<double>(0, i);
-    }
-    std::string why;
-    if (!c.IsValid(&why)) return Fail(error, "calibration " + path + ": " + why);
-    *camera = c;
-  } catch (const cv::Exception& e) {
-    return Fail(error, "calibration " + path + " cannot be parsed: " + e.what());
   }
   return true;
 }

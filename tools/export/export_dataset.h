@@ -34,17 +34,17 @@ struct DatasetWriterOptions {
 bool ValidateDatasetWriterOptions(const DatasetWriterOptions& options, std::string* why);
 
 struct DatasetExportSummary {
-  int64_t frames_offered = 0;        // decodable frames given to AddFrame
-  int64_t frames_written = 0;        // PNG files written
-  int64_t frames_not_selected = 0;   // skipped by --every or after --max-frames
-  int64_t frames_duplicate_seq = 0;  // skipped because a frame with that seq was already written
-  int64_t frames_undecodable = 0;    // counted by CountUndecodable (message did not decode to an image)
-  int64_t frames_size_mismatch = 0;  // written frames whose size differs from the calibration
-  int64_t calibration_changes = 0;   // calibrations that differ from the first one (calib.yaml keeps the first)
-  int64_t true_poses_written = 0;    // lines in poses_gt.txt
+  int64_t frames_offered = 0;            // decodable frames given to AddFrame
+  int64_t frames_written = 0;            // PNG files written
+  int64_t frames_not_selected = 0;       // skipped by --every or after --max-frames
+  int64_t frames_duplicate_seq = 0;      // skipped because a frame with that seq was already written
+  int64_t frames_undecodable = 0;        // counted by CountUndecodable (message did not decode to an image)
+  int64_t frames_size_mismatch = 0;      // written frames whose size differs from the calibration
+  int64_t calibration_changes = 0;       // calibrations that differ from the first one (calib.yaml keeps the first)
+  int64_t true_poses_written = 0;        // lines in poses_gt.txt
   int64_t frames_without_true_pose = 0;  // written frames without a true pose (only when some true pose was given)
-  int64_t odometry_written = 0;      // lines in odometry.txt
-  bool has_calibration = false;      // calib.yaml written
+  int64_t odometry_written = 0;          // lines in odometry.txt
+  bool has_calibration = false;          // calib.yaml written
 };
 
 // Collects frames, calibration, true poses and odometry and writes the dataset folder. Frames are written as they
@@ -92,15 +92,10 @@ class DatasetWriter {
 // Image file name of frame seq: 6 digits zero padded ("000042.png"); negative seqs are rejected by AddFrame.
 std::string DatasetImageName(int64_t seq);
 
-// Reads calib.yaml in the format above (written by WriteCalibrationFile, common/camera_model.h). Needs
-// camera_matrix, image_width, image_height; distortion_coefficients may be absent (zero) or have 4 or 5 values.
-// It checks the camera is valid.
-bool ReadDatasetCalibration(const std::string& path, PinholeCamera* camera, std::string* error);
-
 // One line of a TUM file.
 struct TumPose {
-  double t = 0;                                            // s
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();      // world_from_camera translation (file unit)
+  double t = 0;                                                     // s
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();               // world_from_camera translation (file unit)
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // world_from_camera rotation
 };
 // Writes "t tx ty tz qx qy qz qw" lines (t with 6 decimals, the rest with 17 significant digits) after the header

@@ -42,8 +42,10 @@ int ColmapToTum(int argc, char** argv) {
   if (!ReadColmapImagesTxt(parser.positional()[0], &images, &error)) return Fail(error);
   if (!ColmapImagesToTum(images, rate, &poses, &error)) return Fail(error);
   if (!WriteTumPoses(parser.positional()[1], poses,
-                     {"COLMAP reconstruction " + parser.positional()[0] + ": world_from_camera in model units "
-                      "(arbitrary scale), t = frame number / " + std::to_string(rate) + " Hz",
+                     {"COLMAP reconstruction " + parser.positional()[0] +
+                          ": world_from_camera in model units "
+                          "(arbitrary scale), t = frame number / " +
+                          std::to_string(rate) + " Hz",
                       "t tx ty tz qx qy qz qw"},
                      &error))
     return Fail(error);
@@ -62,7 +64,7 @@ int ColmapCamera(int argc, char** argv) {
   }
   PinholeCamera camera;
   std::string model, params, error;
-  if (!ReadDatasetCalibration(parser.positional()[0], &camera, &error)) return Fail(error);
+  if (!ReadCalibrationFile(parser.positional()[0], "camera", &camera, &error)) return Fail(error);
   if (!ColmapCameraFromCalibration(camera, &model, &params, &error)) return Fail(error);
   std::printf("%s %s\n", model.c_str(), params.c_str());
   return 0;
@@ -88,15 +90,16 @@ int ExportLog(int argc, char** argv) {
   LogExportResult result;
   if (!ExportLogToDataset(options, &result, &error)) return Fail(error);
   const DatasetExportSummary& s = result.dataset;
-  std::printf("events_read %lld\nframes_written %lld\nframes_not_selected %lld\nframes_undecodable %lld\n"
-              "frames_duplicate_seq %lld\nframes_size_mismatch %lld\ncalibration %s\ncalibration_changes %lld\n"
-              "true_poses_written %lld\nframes_without_true_pose %lld\nodometry_written %lld\n",
-              static_cast<long long>(result.events_read), static_cast<long long>(s.frames_written),
-              static_cast<long long>(s.frames_not_selected), static_cast<long long>(s.frames_undecodable),
-              static_cast<long long>(s.frames_duplicate_seq), static_cast<long long>(s.frames_size_mismatch),
-              s.has_calibration ? "yes" : "no", static_cast<long long>(s.calibration_changes),
-              static_cast<long long>(s.true_poses_written), static_cast<long long>(s.frames_without_true_pose),
-              static_cast<long long>(s.odometry_written));
+  std::printf(
+      "events_read %lld\nframes_written %lld\nframes_not_selected %lld\nframes_undecodable %lld\n"
+      "frames_duplicate_seq %lld\nframes_size_mismatch %lld\ncalibration %s\ncalibration_changes %lld\n"
+      "true_poses_written %lld\nframes_without_true_pose %lld\nodometry_written %lld\n",
+      static_cast<long long>(result.events_read), static_cast<long long>(s.frames_written),
+      static_cast<long long>(s.frames_not_selected), static_cast<long long>(s.frames_undecodable),
+      static_cast<long long>(s.frames_duplicate_seq), static_cast<long long>(s.frames_size_mismatch),
+      s.has_calibration ? "yes" : "no", static_cast<long long>(s.calibration_changes),
+      static_cast<long long>(s.true_poses_written), static_cast<long long>(s.frames_without_true_pose),
+      static_cast<long long>(s.odometry_written));
   for (const auto& [reason, count] : result.rejected)
     std::printf("rejected \"%s\" %lld\n", reason.c_str(), static_cast<long long>(count));
   if (!s.has_calibration) LogWarning("no camera_info_t on " + options.info_channel + ": calib.yaml not written");

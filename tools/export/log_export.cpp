@@ -95,23 +95,32 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
       camera_info_t msg;
       PinholeCamera camera;
       std::string reason;
-      if (!Decode(*event, &msg)) reject("camera_info: not a camera_info_t", where);
-      else if (!CameraFromMessage(msg, &camera, &reason)) reject(reason, where);
-      else writer.AddCamera(camera);
+      if (!Decode(*event, &msg))
+        reject("camera_info: not a camera_info_t", where);
+      else if (!CameraFromMessage(msg, &camera, &reason))
+        reject(reason, where);
+      else
+        writer.AddCamera(camera);
     } else if (channel == options.ground_truth_channel) {
       pose_t msg;
       CameraPoseEstimate pose;
       std::string reason;
-      if (!Decode(*event, &msg)) reject("ground truth: not a pose_t", where);
-      else if (!PoseFromMessage(msg, &pose, &reason)) reject(reason, where);
-      else writer.AddTruePose(pose);
+      if (!Decode(*event, &msg))
+        reject("ground truth: not a pose_t", where);
+      else if (!PoseFromMessage(msg, &pose, &reason))
+        reject(reason, where);
+      else
+        writer.AddTruePose(pose);
     } else if (channel == options.odometry_channel) {
       odometry_t msg;
       OdometryReading reading;
       std::string reason;
-      if (!Decode(*event, &msg)) reject("odometry: not an odometry_t", where);
-      else if (!OdometryFromMessage(msg, &reading, &reason)) reject(reason, where);
-      else writer.AddOdometry(reading);
+      if (!Decode(*event, &msg))
+        reject("odometry: not an odometry_t", where);
+      else if (!OdometryFromMessage(msg, &reading, &reason))
+        reject(reason, where);
+      else
+        writer.AddOdometry(reading);
     }
     lcm_eventlog_free_event(event);
     if (!ok) break;

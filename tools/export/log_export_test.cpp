@@ -183,7 +183,7 @@ TEST(LogExport, WritesAFolderThatReadsBackExactly) {
   const double expected_d[5] = {camera.k1, camera.k2, camera.p1, camera.p2, camera.k3};
   for (int i = 0; i < 5; ++i) EXPECT_EQ(d.at<double>(0, i), expected_d[i]) << i;
   PinholeCamera read_back;
-  ASSERT_TRUE(ReadDatasetCalibration((dir / "dataset" / "calib.yaml").string(), &read_back, &error)) << error;
+  ASSERT_TRUE(ReadCalibrationFile((dir / "dataset" / "calib.yaml").string(), "camera", &read_back, &error)) << error;
   EXPECT_EQ(read_back.fx, camera.fx);
   EXPECT_EQ(read_back.k3, camera.k3);
 
