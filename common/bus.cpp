@@ -12,6 +12,12 @@
 namespace objscan {
 namespace {
 
+int64_t ReadBigEndian64(const uint8_t* p) {
+  uint64_t value = 0;
+  for (int i = 0; i < 8; ++i) value = (value << 8) | p[i];
+  return static_cast<int64_t>(value);
+}
+
 class LcmBus final : public Bus {
  public:
   explicit LcmBus(const std::string& url) : url_(url) {
@@ -109,10 +115,8 @@ class DataLogBus final : public Bus {
 
   bool Publish(const std::string& channel, const void* data, int size) override {
     if (exclude_.count(channel)) return true;
-    if (size < 16) return false;
-    const auto* bytes = static_cast<const uint8_t*>(data);
-    uint64_t utime = 0;
-    for (int i = 8; i < 16; ++i) utime = (utime << 8) | bytes[i];
+    int64_t utime = 0;
+    if (!RawMessageUtime(data, size, &utime)) return false;
     // Keep event times non-decreasing (lcm-logplayer sleeps on the differences), and do not let one message with a
     // far-off utime (garbage, wall clock) push every later event into the future.
     constexpr int64_t kMaxJumpUs = 3600LL * 1000000LL;
@@ -147,6 +151,18 @@ class DataLogBus final : public Bus {
 };
 
 }  // namespace
+
+bool RawMessageUtime(const void* data, int size, int64_t* utime) {
+  if (data == nullptr || size < 16) return false;
+  *utime = ReadBigEndian64(static_cast<const uint8_t*>(data) + 8);
+  return true;
+}
+
+bool RawMessageSeq(const void* data, int size, int64_t* seq) {
+  if (data == nullptr || size < 24) return false;
+  *seq = ReadBigEndian64(static_cast<const uint8_t*>(data) + 16);
+  return true;
+}
 
 void BurstPacer::After() {
   if (!active_ || ++count_ % every_ != 0) return;

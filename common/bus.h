@@ -26,6 +26,12 @@ struct RawMessage {
 
 using RawHandler = std::function<void(const RawMessage&)>;
 
+// Every objscan message type starts with int64 utime (µs, data time) and most continue with int64 seq: after LCM's
+// 8-byte type fingerprint they are big-endian at bytes 8..15 and 16..23. These read them without decoding the type
+// (logs, monitors, drivers' lockstep). False when the message is too short.
+bool RawMessageUtime(const void* data, int size, int64_t* utime);
+bool RawMessageSeq(const void* data, int size, int64_t* seq);
+
 class Bus {
  public:
   virtual ~Bus() = default;

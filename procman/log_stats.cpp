@@ -3,25 +3,6 @@
 #include <lcm/eventlog.h>
 
 namespace objscan {
-namespace {
-int64_t ReadBigEndian64(const uint8_t* p) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
-  return static_cast<int64_t>(v);
-}
-}  // namespace
-
-bool RawMessageUtime(const void* data, int size, int64_t* utime) {
-  if (size < 16) return false;
-  *utime = ReadBigEndian64(static_cast<const uint8_t*>(data) + 8);
-  return true;
-}
-
-bool RawMessageSeq(const void* data, int size, int64_t* seq) {
-  if (size < 24) return false;
-  *seq = ReadBigEndian64(static_cast<const uint8_t*>(data) + 16);
-  return true;
-}
 
 bool ReadLogStats(const std::string& path, std::map<std::string, ChannelStats>* stats, std::string* error) {
   lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");

@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 
+#include "common/bus.h"
+
 namespace objscan {
 
 struct ChannelStats {
@@ -16,10 +18,7 @@ struct ChannelStats {
   int64_t last_utime = 0;   // µs, data time of the last message
 };
 
-// Decodes the utime of any objscan message from raw bytes (big-endian int64 at offset 8); false if too short.
-bool RawMessageUtime(const void* data, int size, int64_t* utime);
-// Decodes the seq field that follows utime in most objscan types (offset 16); false if too short.
-bool RawMessageSeq(const void* data, int size, int64_t* seq);
+// RawMessageUtime / RawMessageSeq (common/bus.h) read a raw message's utime and seq.
 
 // Counts every event of the log. Returns false with *error when the file cannot be opened.
 bool ReadLogStats(const std::string& path, std::map<std::string, ChannelStats>* stats, std::string* error);

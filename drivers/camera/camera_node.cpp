@@ -31,17 +31,6 @@ bool EncodingFromName(const std::string& name, int8_t* encoding) {
   return true;
 }
 
-// seq of a raw LCM message whose type starts with int64 utime, int64 seq: bytes 16..23 (after the 8-byte
-// fingerprint and utime), big-endian.
-bool ReadRawSeq(const RawMessage& raw, int64_t* seq) {
-  if (raw.size < 24) return false;
-  const auto* bytes = static_cast<const uint8_t*>(raw.data);
-  uint64_t value = 0;
-  for (int i = 16; i < 24; ++i) value = (value << 8) | bytes[i];
-  *seq = static_cast<int64_t>(value);
-  return true;
-}
-
 }  // namespace
 
 void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
@@ -129,7 +118,7 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
   if (!options_.lockstep_channel.empty()) {
     bus_.Subscribe(options_.lockstep_channel, [this](const RawMessage& raw) {
       int64_t seq = 0;
-      if (!ReadRawSeq(raw, &seq)) {
+      if (!RawMessageSeq(raw.data, raw.size, &seq)) {
         status_.Reject("lockstep: message too short", raw.channel);
         return;
       }

@@ -57,15 +57,6 @@ bool ParseList(const std::string& text, size_t count, double* values) {
   return n == count;
 }
 
-bool ReadRawSeq(const RawMessage& raw, int64_t* seq) {
-  if (raw.size < 24) return false;
-  const auto* bytes = static_cast<const uint8_t*>(raw.data);
-  uint64_t value = 0;
-  for (int i = 16; i < 24; ++i) value = (value << 8) | bytes[i];
-  *seq = static_cast<int64_t>(value);
-  return true;
-}
-
 }  // namespace
 
 void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
@@ -328,7 +319,7 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   if (!options_.lockstep_channel.empty()) {
     bus_.Subscribe(options_.lockstep_channel, [this](const RawMessage& raw) {
       int64_t seq = 0;
-      if (!ReadRawSeq(raw, &seq)) {
+      if (!RawMessageSeq(raw.data, raw.size, &seq)) {
         status_.Reject("lockstep: message too short", raw.channel);
         return;
       }
