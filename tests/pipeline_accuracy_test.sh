@@ -15,20 +15,7 @@ fail() { echo "FAIL: $*"; exit 1; }
   > "$WORK/sim.out" 2>&1 || { cat "$WORK/sim.out"; fail "robot_sim"; }
 GT="$WORK/gt/poses_gt.txt"
 
-# value KEY FILE: the number after KEY in an objscan_evaluate output.
-value() { awk -v k="$1" '$1==k {print $2}' "$2"; }
-# check LABEL VALUE OP BOUND [target]: OP is <= or >=; "target" only reports.
-check() {
-  local label="$1" v="$2" op="$3" bound="$4" kind="${5:-bound}" ok
-  if [ "$op" = "<=" ]; then ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a<=b)?1:0}')
-  else ok=$(awk -v a="$v" -v b="$bound" 'BEGIN{print (a>=b)?1:0}'); fi
-  if [ "$kind" = "target" ]; then
-    printf '  %-44s %10s  issue target %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo MET || echo 'NOT MET')"
-  else
-    printf '  %-44s %10s  %s %-8s %s\n' "$label" "$v" "$op" "$bound" "$([ "$ok" = 1 ] && echo ok || echo FAIL)"
-    [ "$ok" = 1 ] || FAILED=1
-  fi
-}
+source "$SRC/tests/accuracy_lib.sh"
 trajectory_checks() {  # NAME OUTDIR
   local name="$1" out="$2" f
   for f in online final; do
