@@ -357,6 +357,10 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
             scores[s + n_steps] = WarpedNcc(gray_a, p, gray_b, q0 + (s * o.refine_step_px) * dir, jac, h);
             if (best < 0 || scores[s + n_steps] > scores[best]) best = s + n_steps;
           }
+          if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
+            ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here
+            continue;
+          }
           double offset = 0;
           if (best > 0 && best < 2 * n_steps) {
             const double l0 = scores[best - 1], c0 = scores[best], r0 = scores[best + 1];

@@ -66,6 +66,9 @@ struct AffineDenseOptions {
   bool refine_along_epipolar = true;     // refine Q by a 1-D NCC search along the epipolar line
   double refine_search_px = 1.5;         // px, half length of the refinement search (> 0)
   double refine_step_px = 0.25;          // px, refinement search step (> 0)
+  bool reject_refine_at_border = true;   // drop P when the refinement's best NCC is at either end of the search:
+                                         // the true match lies farther than refine_search_px from the affine
+                                         // prediction (a triangle across a crease or a depth change)
   double min_triangle_area_px2 = 4.0;    // px², smaller triangles are skipped
   double max_triangle_edge_px = 80.0;    // px, triangles with a longer edge in A or B are skipped
   double min_triangle_angle_deg = 10.0;  // deg, thinner triangles (smallest angle in A) are skipped
@@ -101,6 +104,7 @@ struct DensePairStats {
   int64_t rejected_epipolar = 0;
   int64_t rejected_color = 0;
   int64_t rejected_ncc = 0;
+  int64_t rejected_refine_border = 0;  // refinement's best score at the end of its search
   int64_t rejected_triangulation = 0;  // small angle, behind a camera or reprojection error
   int64_t rejected_box = 0;            // outside the world box or the region
   int triangles_skipped_region = 0;    // vertices surely outside the region

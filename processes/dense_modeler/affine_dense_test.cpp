@@ -190,6 +190,37 @@ TEST(AffineDense, EpipolarRefinementFixesAlongLineErrors) {
   EXPECT_LT(refined.mean_plane_mm, 0.5 * plain.mean_plane_mm);
 }
 
+TEST(AffineDense, MatchesBeyondTheRefinementSearchAreRejected) {
+  // Every vertex 4 px off along the epipolar line (as for a triangle whose plane is far from the surface, e.g. across
+  // a crease): the true match of every pixel lies beyond the 1.5 px search, so the refinement's best score sits at
+  // the end of its range. With the check those pixels are dropped; without it they become wrong points.
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(150, 0, 0);
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  auto matches = scene.Matches(pa, pb, 40);
+  for (auto& m : matches) m.b.x() += 4.0;
+  AffineDenseOptions o;
+  o.min_ncc = -1;  // the photometric checks alone would not see it: compare the search check only
+  o.max_color_difference = -1;
+  o.reject_refine_at_border = false;
+  DensePairStats off;
+  const auto kept_off = ComputeDensePair(a, b, matches, o, &off);
+  o.reject_refine_at_border = true;
+  DensePairStats on;
+  const auto kept_on = ComputeDensePair(a, b, matches, o, &on);
+  std::printf("vertices 4 px off along the line: %zu points without the check, %zu with (%lld at the border)\n",
+              kept_off.size(), kept_on.size(), static_cast<long long>(on.rejected_refine_border));
+  EXPECT_GT(kept_off.size(), 100000u);
+  EXPECT_LT(kept_on.size(), 0.05 * kept_off.size());
+  EXPECT_GT(on.rejected_refine_border, 0.9 * static_cast<double>(kept_off.size()));
+  // Exact tracks: the check costs almost nothing.
+  DensePairStats exact;
+  const auto kept_exact = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &exact);
+  EXPECT_LT(exact.rejected_refine_border, 0.02 * static_cast<double>(kept_exact.size()));
+}
+
 TEST(AffineDense, TriangulateMidpointAndDegenerateInput) {
   Eigen::Vector3d x;
   ASSERT_TRUE(TriangulateMidpoint(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(100, 0, 0),

@@ -86,6 +86,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-refine", &d->refine_along_epipolar, "refine Q by a 1-D NCC search along the epipolar line");
   p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
   p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
+  p.Add("dense-reject-refine-at-border", &d->reject_refine_at_border,
+        "drop pixels whose best refined match is at the end of the search");
   p.Add("dense-min-triangle-area", &d->min_triangle_area_px2, "px^2, smaller triangles are skipped");
   p.Add("dense-max-triangle-edge", &d->max_triangle_edge_px, "px, triangles with longer edges are skipped");
   p.Add("dense-min-triangle-angle", &d->min_triangle_angle_deg, "deg, thinner triangles are skipped");
