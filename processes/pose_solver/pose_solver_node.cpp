@@ -75,6 +75,10 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("local-fixed-keyframes", &e->local_fixed_keyframes, "older keyframes held fixed in the windowed BA");
   p.Add("global-ba-all-frames", &e->global_ba_all_frames, "final BA over all frames instead of keyframes");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
+  p.Add("two-view-min-matches", &e->two_view_min_matches,
+        "wide baseline (6dof): pose a frame PnP cannot pose from the essential matrix with the last posed frame when "
+        "they share this many tracks (0 = off)");
+  p.Add("two-view-min-landmarks", &e->two_view_min_landmarks, "landmarks that frame must see to fix the step length");
   p.Add("seed", &e->seed, "RANSAC seed");
 }
 
