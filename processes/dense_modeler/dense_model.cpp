@@ -112,15 +112,10 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     // Mesh through the surface points of the voxels that survived carving, coloured as carved.
     std::unordered_map<uint64_t, const CarvedVoxel*> alive;
     alive.reserve(model.voxels.size() * 2);
-    auto key = [](const Eigen::Vector3i& v) {
-      return (static_cast<uint64_t>(static_cast<uint32_t>(v.x()) & 0x1FFFFF) << 42) |
-             (static_cast<uint64_t>(static_cast<uint32_t>(v.y()) & 0x1FFFFF) << 21) |
-             (static_cast<uint64_t>(static_cast<uint32_t>(v.z()) & 0x1FFFFF));
-    };
-    for (const CarvedVoxel& v : model.voxels) alive.emplace(key(v.ijk), &v);
+    for (const CarvedVoxel& v : model.voxels) alive.emplace(VoxelKey(v.ijk), &v);
     std::vector<SurfaceVoxel> kept;
     for (SurfaceVoxel& s : surface) {
-      auto it = alive.find(key(s.voxel.ijk));
+      auto it = alive.find(VoxelKey(s.voxel.ijk));
       if (it == alive.end()) continue;
       s.voxel.bgr = it->second->bgr;
       kept.push_back(s);

@@ -9,13 +9,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
-#include <sstream>
 
+#include "drivers/camera/frame_source.h"
 #include "processes/dense_modeler/dense_model.h"
 
 namespace objscan {
@@ -41,33 +40,24 @@ struct RingResult {
 RingResult RunRing(const RingSet& set) {
   RingResult result;
   const std::string dir = DataDir(set.folder);
-  std::ifstream par(dir + "/" + set.par_file);
-  if (!par) return result;
+  std::vector<MiddleburyView> par;
+  std::string error;
+  if (!std::filesystem::exists(dir + "/" + set.par_file)) return result;
   result.ran = true;
-  int n = 0;
-  par >> n;
+  EXPECT_TRUE(ReadMiddleburyPar(dir + "/" + set.par_file, &par, &error)) << error;
+  const int n = static_cast<int>(par.size());
   std::vector<DenseView> views;
   for (int i = 0; i < n; ++i) {
-    std::string name;
-    double k[9], r[9], t[3];
-    par >> name;
-    for (double& x : k) par >> x;
-    for (double& x : r) par >> x;
-    for (double& x : t) par >> x;
     DenseView v;
     v.seq = i;
-    v.image = cv::imread(dir + "/" + name, cv::IMREAD_COLOR);
-    EXPECT_FALSE(v.image.empty()) << name;
+    v.image = cv::imread(dir + "/" + par[i].image_name, cv::IMREAD_COLOR);
+    EXPECT_FALSE(v.image.empty()) << par[i].image_name;
     if (v.image.empty()) return result;
+    const Eigen::Matrix3d& k = par[i].K;
     v.camera.width = v.image.cols;
     v.camera.height = v.image.rows;
-    v.camera.fx = k[0], v.camera.skew = k[1], v.camera.cx = k[2], v.camera.fy = k[4], v.camera.cy = k[5];
-    Eigen::Matrix3d rot;
-    rot << r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8];
-    Eigen::Isometry3d camera_from_world = Eigen::Isometry3d::Identity();
-    camera_from_world.linear() = rot;
-    camera_from_world.translation() = 1000.0 * Eigen::Vector3d(t[0], t[1], t[2]);
-    v.world_from_camera = camera_from_world.inverse();
+    v.camera.fx = k(0, 0), v.camera.skew = k(0, 1), v.camera.cx = k(0, 2), v.camera.fy = k(1, 1), v.camera.cy = k(1, 2);
+    v.world_from_camera = par[i].WorldFromCamera(1000.0);  // metres -> mm
     v.gray = GrayFloat(v.image);
     views.push_back(v);
   }

@@ -9,12 +9,6 @@
 namespace objscan {
 namespace {
 
-uint64_t Key(const Eigen::Vector3i& v) {
-  const uint64_t off = 1u << 20;
-  return ((static_cast<uint64_t>(v.x()) + off) & 0x1FFFFF) | (((static_cast<uint64_t>(v.y()) + off) & 0x1FFFFF) << 21) |
-         (((static_cast<uint64_t>(v.z()) + off) & 0x1FFFFF) << 42);
-}
-
 const Eigen::Vector3i kFaces[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
 struct Projection {
@@ -49,12 +43,12 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
   index.reserve(seeds.size() * 2);
   for (size_t si = 0; si < seeds.size(); ++si) {
     const VoxelRecord& s = seeds[si];
-    auto it = index.find(Key(s.ijk));
+    auto it = index.find(VoxelKey(s.ijk));
     if (it != index.end()) {
       voxels[it->second].votes += s.votes;
       continue;
     }
-    index.emplace(Key(s.ijk), static_cast<int>(voxels.size()));
+    index.emplace(VoxelKey(s.ijk), static_cast<int>(voxels.size()));
     CarvedVoxel c;
     c.ijk = s.ijk;
     c.votes = s.votes;
@@ -76,7 +70,7 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
       views.push_back(&v);
   std::vector<char> alive(voxels.size(), 1);
   auto is_alive = [&](const Eigen::Vector3i& ijk) {
-    auto it = index.find(Key(ijk));
+    auto it = index.find(VoxelKey(ijk));
     return it != index.end() && alive[it->second];
   };
 

@@ -12,12 +12,6 @@
 namespace objscan {
 namespace {
 
-uint64_t Key(const Eigen::Vector3i& v) {
-  constexpr int64_t kOffset = int64_t{1} << 20;
-  return (static_cast<uint64_t>(v.x() + kOffset) << 42) | (static_cast<uint64_t>(v.y() + kOffset) << 21) |
-         static_cast<uint64_t>(v.z() + kOffset);
-}
-
 // Votes around the seeds: a dense copy of the grid over the seeds' bounding box when it is small enough (the
 // normal and ridge tests read each voxel many times), grid lookups otherwise.
 class VoteField {
@@ -140,7 +134,7 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
   if (o.min_component_voxels > 1) {
     std::unordered_map<uint64_t, size_t> index;
     index.reserve(ridge.size() * 2);
-    for (size_t i = 0; i < ridge.size(); ++i) index.emplace(Key(ridge[i].voxel.ijk), i);
+    for (size_t i = 0; i < ridge.size(); ++i) index.emplace(VoxelKey(ridge[i].voxel.ijk), i);
     std::vector<int> component(ridge.size(), -1);
     std::vector<size_t> stack, members;
     for (size_t i = 0; i < ridge.size(); ++i) {
@@ -155,7 +149,7 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
         for (int dz = -1; dz <= 1; ++dz)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
-              auto it = index.find(Key(ridge[k].voxel.ijk + Eigen::Vector3i(dx, dy, dz)));
+              auto it = index.find(VoxelKey(ridge[k].voxel.ijk + Eigen::Vector3i(dx, dy, dz)));
               if (it == index.end() || component[it->second] >= 0) continue;
               component[it->second] = static_cast<int>(i);
               stack.push_back(it->second);

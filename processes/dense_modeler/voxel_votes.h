@@ -30,6 +30,14 @@ struct VoxelVoteOptions {
 
 bool ValidateVoxelVoteOptions(const VoxelVoteOptions& options, std::string* why);
 
+// Hash key of a voxel index, unique for indices in [-2^20, 2^20) on each axis (2 km at 2 mm voxels).
+inline uint64_t VoxelKey(const Eigen::Vector3i& ijk) {
+  constexpr uint64_t kOffset = uint64_t{1} << 20, kMask = 0x1FFFFF;
+  return ((static_cast<uint64_t>(ijk.x()) + kOffset) & kMask) |
+         (((static_cast<uint64_t>(ijk.y()) + kOffset) & kMask) << 21) |
+         (((static_cast<uint64_t>(ijk.z()) + kOffset) & kMask) << 42);
+}
+
 // One voxel with its votes and mean colour.
 struct VoxelRecord {
   Eigen::Vector3i ijk = Eigen::Vector3i::Zero();            // voxel index

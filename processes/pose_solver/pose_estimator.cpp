@@ -482,6 +482,28 @@ bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vec
 bool PoseEstimator::Track(int f, FrameResult* result) {
   (void)result;
   Frame& fr = frames_[f];
+  // Prior: constant-velocity extrapolation from the two previous frames when both are posed, else the last pose.
+  Eigen::Isometry3d prior = last_good_ >= 0 ? frames_[last_good_].world_from_camera : Eigen::Isometry3d::Identity();
+  if (last_good_ == f - 1 && f >= 2 && frames_[f - 2].posed) {
+    const Eigen::Isometry3d& a = frames_[f - 2].world_from_camera;
+    const Eigen::Isometry3d& b = frames_[f - 1].world_from_camera;
+    prior = b * (a.inverse() * b);
+  }
+  if (!PoseFromMap(f, last_good_ >= 0 ? &prior : nullptr, &last_message_)) {
+    if (TwoViewPose(f)) return true;
+    fr.status = PoseStatus::kLost;
+    if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
+    phase_ = Phase::kLost;
+    return false;
+  }
+  fr.status = phase_ == Phase::kLost ? PoseStatus::kRelocalized : PoseStatus::kTracking;
+  phase_ = Phase::kTracking;
+  last_good_ = f;
+  return true;
+}
+
+bool PoseEstimator::PoseFromMap(int f, const Eigen::Isometry3d* prior, std::string* why) {
+  Frame& fr = frames_[f];
   std::vector<Eigen::Vector3d> pts;
   std::vector<Eigen::Vector2d> px;
   std::vector<int> feature_index;
@@ -495,21 +517,8 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
   PnpOptions po = options_.pnp;
   po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
   PnpResult r;
-  // Prior: constant-velocity extrapolation from the two previous frames when both are posed, else the last pose.
-  Eigen::Isometry3d prior = last_good_ >= 0 ? frames_[last_good_].world_from_camera : Eigen::Isometry3d::Identity();
-  if (last_good_ == f - 1 && f >= 2 && frames_[f - 2].posed) {
-    const Eigen::Isometry3d& a = frames_[f - 2].world_from_camera;
-    const Eigen::Isometry3d& b = frames_[f - 1].world_from_camera;
-    prior = b * (a.inverse() * b);
-  }
-  if (static_cast<int>(pts.size()) < po.min_inliers ||
-      !SolvePnp(camera_, options_.robot, pts, px, last_good_ >= 0 ? &prior : nullptr, po, &r, &last_message_)) {
-    if (TwoViewPose(f)) return true;
-    fr.status = PoseStatus::kLost;
-    if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
-    phase_ = Phase::kLost;
+  if (static_cast<int>(pts.size()) < po.min_inliers || !SolvePnp(camera_, options_.robot, pts, px, prior, po, &r, why))
     return false;
-  }
   std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
   std::vector<uint8_t> is_inlier(pts.size(), 0);
   for (int i : r.inliers) is_inlier[i] = 1;
@@ -519,9 +528,6 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
   fr.world_from_camera = r.world_from_camera;
   fr.inliers = static_cast<int>(r.inliers.size());
   fr.rms = r.rms_px;
-  fr.status = phase_ == Phase::kLost ? PoseStatus::kRelocalized : PoseStatus::kTracking;
-  phase_ = Phase::kTracking;
-  last_good_ = f;
   return true;
 }
 
@@ -931,32 +937,8 @@ bool PoseEstimator::TwoViewPose(int f) {
 }
 
 bool PoseEstimator::RegisterAgainstMap(int f, const Eigen::Isometry3d& prior) {
-  Frame& fr = frames_[f];
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<Eigen::Vector2d> px;
-  std::vector<int> feature_index;
-  for (size_t i = 0; i < fr.ids.size(); ++i) {
-    auto it = points_.find(fr.ids[i]);
-    if (it == points_.end()) continue;
-    pts.push_back(it->second.x);
-    px.push_back(fr.pixels[i]);
-    feature_index.push_back(static_cast<int>(i));
-  }
-  PnpOptions po = options_.pnp;
-  po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
-  PnpResult r;
-  if (static_cast<int>(pts.size()) < po.min_inliers || !SolvePnp(camera_, options_.robot, pts, px, &prior, po, &r))
-    return false;
-  std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
-  std::vector<uint8_t> is_inlier(pts.size(), 0);
-  for (int i : r.inliers) is_inlier[i] = 1;
-  for (size_t c = 0; c < pts.size(); ++c)
-    if (!is_inlier[c]) fr.outlier[feature_index[c]] = 1;
-  fr.posed = true;
-  fr.world_from_camera = r.world_from_camera;
-  fr.inliers = static_cast<int>(r.inliers.size());
-  fr.rms = r.rms_px;
-  fr.status = PoseStatus::kTracking;
+  if (!PoseFromMap(f, &prior, nullptr)) return false;
+  frames_[f].status = PoseStatus::kTracking;
   return true;
 }
 

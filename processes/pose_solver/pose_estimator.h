@@ -188,6 +188,9 @@ class PoseEstimator {
   bool TryInitialize(int newest);
   bool InitializeSpan(int first, int last, const std::vector<int64_t>& common);
   bool Track(int f, FrameResult* result);
+  // PnP (RANSAC + refinement from prior, may be null) of frame f against the current landmarks; on success f is
+  // posed with its inlier count, RMS and outlier flags set (status untouched). False with *why (frame untouched).
+  bool PoseFromMap(int f, const Eigen::Isometry3d* prior, std::string* why);
   void AddKeyframe(int f);
   int TriangulateNew(int f);
   void LocalBundleAdjustment(int f);
