@@ -61,14 +61,20 @@ struct Candidate {
 // Everything the alignment needs from the template alone is computed here once per anchor (inverse-compositional
 // formulation), so that an alignment iteration only samples the image and accumulates nine sums.
 struct KltTracker::Anchor {
-  int side = 0;                             // 2h + 1
-  cv::Point2f origin;                       // px, template pixel (0, 0) relative to the anchor position
-  float mean = 0.0f;                        // gray levels, mean of the template pixels
-  std::vector<float> yx, yy;                // side * side template pixel positions relative to the anchor position
-  std::vector<float> value;                 // side * side gray levels minus their mean
-  std::vector<float> sd;                    // 6 planes of side * side: steepest-descent images grad(T) * dW/dp
-  double sd_sum[6] = {0, 0, 0, 0, 0, 0};    // per plane: sum of the steepest-descent image
-  double sd_value[6] = {0, 0, 0, 0, 0, 0};  // per plane: sum of steepest-descent image times value
+  int side = 0;        // 2h + 1
+  cv::Point2f origin;  // px, template pixel (0, 0) relative to the anchor position
+  cv::Point2f centre;  // px, template pixel (h, h) relative to the anchor position (|.| <= 0.5)
+  float mean = 0.0f;   // gray levels, mean of the template pixels
+  // Three planes of side * side floats in one block (about 2.7 kB for h = 7: a frame's 1000 templates are read from
+  // memory once per frame, so their size matters as much as the arithmetic): the gray levels minus their mean, and
+  // the template's x and y gradients. The steepest-descent images grad(T) * dW/dp are products of these with the
+  // pixel positions, formed in the sums of the alignment.
+  std::vector<float> planes;
+  const float* value() const { return planes.data(); }
+  const float* gx() const { return planes.data() + side * side; }
+  const float* gy() const { return planes.data() + 2 * side * side; }
+  double sd_sum[6] = {0, 0, 0, 0, 0, 0};    // per steepest-descent image (see AlignToAnchor): sum of its pixels
+  double sd_value[6] = {0, 0, 0, 0, 0, 0};  // per steepest-descent image: sum of its pixels times value
   double value_ss = 0.0;                    // sum of value^2
   Eigen::Matrix<double, 6, 6> inv_hessian;  // inverse of sum sd^T sd
   double rms = 0.0;                         // gray levels, RMS of value (the template's contrast)
@@ -83,29 +89,31 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
   a->side = 2 * h + 1;
   const int c0 = static_cast<int>(std::lround(p.x)) - h, r0 = static_cast<int>(std::lround(p.y)) - h;
   a->origin = cv::Point2f(static_cast<float>(c0) - p.x, static_cast<float>(r0) - p.y);
+  a->centre = a->origin + cv::Point2f(static_cast<float>(h), static_cast<float>(h));
   const int s = a->side, n = s * s;
   auto at = [&gray](int r, int c) {
     return static_cast<float>(gray.at<uchar>(std::clamp(r, 0, gray.rows - 1), std::clamp(c, 0, gray.cols - 1)));
   };
-  a->value.resize(static_cast<size_t>(n));
-  a->yx.resize(static_cast<size_t>(n));
-  a->yy.resize(static_cast<size_t>(n));
-  a->sd.resize(static_cast<size_t>(6 * n));
+  a->planes.resize(static_cast<size_t>(3 * n));
+  float* value = a->planes.data();
+  float* gxs = value + n;
+  float* gys = value + 2 * n;
+  std::vector<float> sd(static_cast<size_t>(6 * n));
   double sum = 0.0;
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
   for (int r = 0; r < s; ++r) {
     for (int c = 0; c < s; ++c) {
       const int k = r * s + c;
       const float v = at(r0 + r, c0 + c);
-      a->value[static_cast<size_t>(k)] = v;
+      value[k] = v;
       sum += v;
       const float gx = 0.5f * (at(r0 + r, c0 + c + 1) - at(r0 + r, c0 + c - 1));
       const float gy = 0.5f * (at(r0 + r + 1, c0 + c) - at(r0 + r - 1, c0 + c));
+      gxs[k] = gx;
+      gys[k] = gy;
       const float yx = a->origin.x + static_cast<float>(c), yy = a->origin.y + static_cast<float>(r);
-      a->yx[static_cast<size_t>(k)] = yx;
-      a->yy[static_cast<size_t>(k)] = yy;
       const float d[6] = {gx * yx, gx * yy, gy * yx, gy * yy, gx, gy};
-      for (int j = 0; j < 6; ++j) a->sd[static_cast<size_t>(j * n + k)] = d[j];
+      for (int j = 0; j < 6; ++j) sd[static_cast<size_t>(j * n + k)] = d[j];
       Eigen::Matrix<double, 6, 1> dv;
       dv << d[0], d[1], d[2], d[3], d[4], d[5];
       hessian.selfadjointView<Eigen::Lower>().rankUpdate(dv);
@@ -116,11 +124,11 @@ std::shared_ptr<const KltTracker::Anchor> MakeAnchor(const cv::Mat& gray, const 
   a->mean = mean;
   double ss = 0.0;
   for (int k = 0; k < n; ++k) {
-    float& v = a->value[static_cast<size_t>(k)];
+    float& v = value[k];
     v -= mean;
     ss += static_cast<double>(v) * v;
     for (int j = 0; j < 6; ++j) {
-      const double d = a->sd[static_cast<size_t>(j * n + k)];
+      const double d = sd[static_cast<size_t>(j * n + k)];
       a->sd_sum[j] += d;
       a->sd_value[j] += d * v;
     }
@@ -143,12 +151,24 @@ enum class AlignResult { kOk, kOutside, kFlat, kNoConvergence };
 
 // Scratch space of AlignToAnchor (per template pixel).
 struct AlignScratch {
+  int side = 0;                  // template side the grid below is for
+  std::vector<float> cc, rr;     // template pixel column and row relative to the centre pixel (-h..h)
   std::vector<float> fx, fy;     // bilinear fractions
   std::vector<int> offset;       // byte offset of the top-left neighbour in the image
   std::vector<int> top, bottom;  // neighbour pairs: left + 256 * right, in the top and bottom row
-  void Resize(size_t n) {
-    for (std::vector<float>* v : {&fx, &fy}) v->resize(n);
+  void Resize(int s) {
+    if (s == side) return;
+    side = s;
+    const size_t n = static_cast<size_t>(s) * static_cast<size_t>(s);
+    for (std::vector<float>* v : {&cc, &rr, &fx, &fy}) v->resize(n);
     for (std::vector<int>* v : {&offset, &top, &bottom}) v->resize(n);
+    const int h = s / 2;
+    for (int r = 0; r < s; ++r) {
+      for (int c = 0; c < s; ++c) {
+        cc[static_cast<size_t>(r * s + c)] = static_cast<float>(c - h);
+        rr[static_cast<size_t>(r * s + c)] = static_cast<float>(r - h);
+      }
+    }
   }
 };
 
@@ -156,21 +176,113 @@ struct AlignScratch {
 // order, so the result is deterministic) so that the compiler can vectorise them without reassociating.
 constexpr int kLanes = 8;
 
-// Inverse-compositional Lucas-Kanade (Baker and Matthews, 2004) of the anchor template to `gray` with the warp
-// W(y) = *p + *affine * y (y relative to the anchor position) and a gain/bias compensation (the warped patch is
-// normalised to the template's mean and RMS contrast). *p and *affine are the start and the result; *rel_residual is
-// the RMS residual (at the last iterate before the final update) divided by the template's RMS contrast.
-AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int max_iterations, double epsilon,
-                          cv::Point2f* p, cv::Matx22f* affine, double* rel_residual, AlignScratch* scratch) {
-  const int s = a.side, n = s * s;
-  scratch->Resize(static_cast<size_t>(n));
+// Inputs of one alignment iteration's sums (see AlignSums).
+struct AlignSumsInput {
+  const uchar* image;        // gray image, 8 bit
+  int step;                  // bytes per image row
+  const float* value;        // template gray levels minus their mean
+  const float* gx;           // template x gradient
+  const float* gy;           // template y gradient
+  float mean;                // template mean
+  float bx, by;              // px, warped position of the template's centre pixel
+  float a00, a01, a10, a11;  // linear part of the warp
+  int n;                     // template pixels
+};
+
+// Samples the warped template (bilinear; every pixel's 2x2 neighbourhood must lie inside the image) and returns in
+// t[] the sums of w, w^2, w * value, g = w * gx, g * cc, g * rr, h = w * gy, h * cc, h * rr, with w the warped
+// patch minus the template's mean and (cc, rr) the pixel's position relative to the centre pixel. Inlined into a
+// portable and an AVX2 variant: the sums are split over kLanes fixed lanes and no operation is fused or reordered,
+// so both variants give bit-identical results.
+inline __attribute__((always_inline)) void AlignSumsBody(const AlignSumsInput& in, AlignScratch* scratch, double t[9]) {
+  const int n = in.n;
   float* fx = scratch->fx.data();
   float* fy = scratch->fy.data();
   int* offset = scratch->offset.data();
   int* pair0 = scratch->top.data();
   int* pair1 = scratch->bottom.data();
-  const float* yx = a.yx.data();
-  const float* yy = a.yy.data();
+  const float* cc = scratch->cc.data();
+  const float* rr = scratch->rr.data();
+  const float* value = in.value;
+  const float* tgx = in.gx;
+  const float* tgy = in.gy;
+  const float bx = in.bx, by = in.by, a00 = in.a00, a01 = in.a01, a10 = in.a10, a11 = in.a11;
+  const int istep = in.step;
+  // Three passes so that all but the gathering of the neighbours vectorise.
+  for (int k = 0; k < n; ++k) {
+    const float zx = bx + a00 * cc[k] + a01 * rr[k], zy = by + a10 * cc[k] + a11 * rr[k];
+    const int x0 = static_cast<int>(zx), y0 = static_cast<int>(zy);  // zx, zy >= 0: truncation is floor
+    fx[k] = zx - static_cast<float>(x0);
+    fy[k] = zy - static_cast<float>(y0);
+    offset[k] = y0 * istep + x0;
+  }
+  for (int k = 0; k < n; ++k) {
+    const uchar* q = in.image + offset[k];
+    pair0[k] = q[0] | (q[1] << 8);  // compilers merge each pair into one 16-bit load
+    pair1[k] = q[istep] | (q[istep + 1] << 8);
+  }
+  const float mean = in.mean;
+  auto sample = [&](int k) {
+    const float v00 = static_cast<float>(pair0[k] & 255), v01 = static_cast<float>(pair0[k] >> 8);
+    const float v10 = static_cast<float>(pair1[k] & 255), v11 = static_cast<float>(pair1[k] >> 8);
+    const float top = v00 + fx[k] * (v01 - v00);
+    const float bottom = v10 + fx[k] * (v11 - v10);
+    return top + fy[k] * (bottom - top) - mean;
+  };
+  float acc[9][kLanes] = {};
+  auto accumulate = [&](int k, int l) {
+    const float x = sample(k);
+    const float g = x * tgx[k], h = x * tgy[k];
+    acc[0][l] += x;
+    acc[1][l] += x * x;
+    acc[2][l] += x * value[k];
+    acc[3][l] += g;
+    acc[4][l] += g * cc[k];
+    acc[5][l] += g * rr[k];
+    acc[6][l] += h;
+    acc[7][l] += h * cc[k];
+    acc[8][l] += h * rr[k];
+  };
+  const int n_main = n - n % kLanes;
+  for (int k0 = 0; k0 < n_main; k0 += kLanes) {
+    for (int l = 0; l < kLanes; ++l) accumulate(k0 + l, l);
+  }
+  for (int k = n_main; k < n; ++k) accumulate(k, 0);
+  for (int q = 0; q < 9; ++q) {
+    double u = 0.0;
+    for (int l = 0; l < kLanes; ++l) u += acc[q][l];
+    t[q] = u;
+  }
+}
+
+void AlignSumsPortable(const AlignSumsInput& in, AlignScratch* scratch, double t[9]) { AlignSumsBody(in, scratch, t); }
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same code compiled for AVX2 (8-float vectors; FMA is not enabled, so nothing is contracted or reordered and
+// the results are bit-identical). Explicit AVX2 gathers of the neighbours were measured slower here (AMD EPYC) than
+// the scalar 16-bit loads of the second pass.
+__attribute__((target("avx2"))) void AlignSumsAvx2(const AlignSumsInput& in, AlignScratch* scratch, double t[9]) {
+  AlignSumsBody(in, scratch, t);
+}
+bool CpuHasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#else
+void AlignSumsAvx2(const AlignSumsInput& in, AlignScratch* scratch, double t[9]) { AlignSumsBody(in, scratch, t); }
+bool CpuHasAvx2() { return false; }
+#endif
+
+// Inverse-compositional Lucas-Kanade (Baker and Matthews, 2004) of the anchor template to `gray` with the warp
+// W(y) = *p + *affine * y (y relative to the anchor position) and a gain/bias compensation (the warped patch is
+// normalised to the template's mean and RMS contrast). *p and *affine are the start and the result; *rel_residual is
+// the RMS residual (at the last iterate before the final update) divided by the template's RMS contrast;
+// *iterations is incremented once per iteration.
+AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int max_iterations, double epsilon,
+                          bool use_avx2, cv::Point2f* p, cv::Matx22f* affine, double* rel_residual, int* iterations,
+                          AlignScratch* scratch) {
+  const int s = a.side, n = s * s;
+  scratch->Resize(s);
   // A margin keeps every template pixel's left/top neighbour strictly inside despite rounding.
   const float max_x = static_cast<float>(gray.cols - 1) - 0.01f, max_y = static_cast<float>(gray.rows - 1) - 0.01f;
   const size_t step = gray.step[0];
@@ -178,67 +290,45 @@ AlignResult AlignToAnchor(const KltTracker::Anchor& a, const cv::Mat& gray, int 
   const cv::Point2f corners[4] = {a.origin, a.origin + cv::Point2f(static_cast<float>(s - 1), 0.0f),
                                   a.origin + cv::Point2f(0.0f, static_cast<float>(s - 1)),
                                   a.origin + cv::Point2f(static_cast<float>(s - 1), static_cast<float>(s - 1))};
-  const float* value = a.value.data();
-  const float* sd = a.sd.data();
-  const int n_main = n - n % kLanes;
+  const float* value = a.value();
+  const float* tgx = a.gx();
+  const float* tgy = a.gy();
+  const float dx = a.centre.x, dy = a.centre.y;
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    ++*iterations;
     const cv::Matx22f& A = *affine;
     // The warp is affine, so the template lies inside the image when its corners do.
     for (const cv::Point2f& y : corners) {
       const float zx = p->x + A(0, 0) * y.x + A(0, 1) * y.y, zy = p->y + A(1, 0) * y.x + A(1, 1) * y.y;
       if (!(zx >= 0.0f && zy >= 0.0f && zx < max_x && zy < max_y)) return AlignResult::kOutside;
     }
-    // Warped patch (bilinear) in three passes so that all but the gathering of the neighbours vectorise.
-    const float a00 = A(0, 0), a01 = A(0, 1), a10 = A(1, 0), a11 = A(1, 1), px = p->x, py = p->y;
-    const int istep = static_cast<int>(step);
-    for (int k = 0; k < n; ++k) {
-      const float zx = px + a00 * yx[k] + a01 * yy[k], zy = py + a10 * yx[k] + a11 * yy[k];
-      const int x0 = static_cast<int>(zx), y0 = static_cast<int>(zy);  // zx, zy >= 0: truncation is floor
-      fx[k] = zx - static_cast<float>(x0);
-      fy[k] = zy - static_cast<float>(y0);
-      offset[k] = y0 * istep + x0;
+    // Warped patch and its sums. Pixel positions relative to the centre pixel: W(y) = b + A (cc, rr) with
+    // b = p + A * centre.
+    const float a00 = A(0, 0), a01 = A(0, 1), a10 = A(1, 0), a11 = A(1, 1);
+    const AlignSumsInput in{gray.data,
+                            static_cast<int>(step),
+                            value,
+                            tgx,
+                            tgy,
+                            a.mean,
+                            p->x + a00 * dx + a01 * dy,
+                            p->y + a10 * dx + a11 * dy,
+                            a00,
+                            a01,
+                            a10,
+                            a11,
+                            n};
+    double t[9];
+    if (use_avx2) {
+      AlignSumsAvx2(in, scratch, t);
+    } else {
+      AlignSumsPortable(in, scratch, t);
     }
-    for (int k = 0; k < n; ++k) {
-      const uchar* q = gray.data + offset[k];
-      pair0[k] = q[0] | (q[1] << 8);  // compilers merge each pair into one 16-bit load
-      pair1[k] = q[step] | (q[step + 1] << 8);
-    }
-    // Interpolation and, in the same pass, sum w, sum w^2, sum w * value and, per steepest-descent plane j,
-    // sum sd_j * w, with w the warped patch minus the template's mean (keeps the sums of squares well
-    // conditioned). The residual e = gain * (w - m) - value then follows in closed form from these and the anchor's
-    // precomputed sums.
-    const float mean = a.mean;
-    auto sample = [&](int k) {
-      const float v00 = static_cast<float>(pair0[k] & 255), v01 = static_cast<float>(pair0[k] >> 8);
-      const float v10 = static_cast<float>(pair1[k] & 255), v11 = static_cast<float>(pair1[k] >> 8);
-      const float top = v00 + fx[k] * (v01 - v00);
-      const float bottom = v10 + fx[k] * (v11 - v10);
-      return top + fy[k] * (bottom - top) - mean;
-    };
-    float acc[9][kLanes] = {};
-    for (int k0 = 0; k0 < n_main; k0 += kLanes) {
-      for (int l = 0; l < kLanes; ++l) {
-        const int k = k0 + l;
-        const float x = sample(k);
-        acc[0][l] += x;
-        acc[1][l] += x * x;
-        acc[2][l] += x * value[k];
-        for (int j = 0; j < 6; ++j) acc[3 + j][l] += x * sd[j * n + k];
-      }
-    }
-    for (int k = n_main; k < n; ++k) {
-      const float x = sample(k);
-      acc[0][0] += x;
-      acc[1][0] += x * x;
-      acc[2][0] += x * value[k];
-      for (int j = 0; j < 6; ++j) acc[3 + j][0] += x * sd[j * n + k];
-    }
-    double sums[9];
-    for (int q = 0; q < 9; ++q) {
-      double t = 0.0;
-      for (int l = 0; l < kLanes; ++l) t += acc[q][l];
-      sums[q] = t;
-    }
+    // The six steepest-descent images are gx * yx, gx * yy, gy * yx, gy * yy, gx, gy with y = centre + (cc, rr),
+    // so their sums with w follow from t[]. The residual e = gain * (w - m) - value then follows in closed form from
+    // these and the anchor's precomputed sums.
+    const double sums[9] = {t[0], t[1], t[2], t[4] + dx * t[3], t[5] + dy * t[3], t[7] + dx * t[6], t[8] + dy * t[6],
+                            t[3], t[6]};
     const double m = sums[0] / n;
     const double ss = std::max(0.0, sums[1] - n * m * m);
     const double rms = std::sqrt(ss / n);
@@ -691,8 +781,10 @@ void KltTracker::RefineToAnchors(const cv::Mat& gray, const std::vector<cv::Poin
     cv::Point2f p = (*pts)[i];
     cv::Matx22f affine = t.affine;
     double residual = 0.0;
-    const AlignResult r = AlignToAnchor(*t.anchor, gray, options_.anchor_max_iterations, options_.anchor_epsilon, &p,
-                                        &affine, &residual, &buffer);
+    ++stats_.anchor_aligned;
+    const AlignResult r =
+        AlignToAnchor(*t.anchor, gray, options_.anchor_max_iterations, options_.anchor_epsilon,
+                      options_.use_avx2 && CpuHasAvx2(), &p, &affine, &residual, &stats_.anchor_iterations, &buffer);
     const cv::Point2f d = p - (*pts)[i];
     if (r == AlignResult::kOk && residual > options_.anchor_max_residual &&
         residual <= options_.anchor_reanchor_residual) {

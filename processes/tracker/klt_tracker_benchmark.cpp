@@ -1,10 +1,11 @@
 // Speed of KltTracker::Track on 640x480 textured frames with realistic motion (about 3 px/frame translation,
 // slow rotation and zoom, sensor noise sigma 2), one OpenCV thread, max_tracks 1000.
 // Counters: median_ms (thread CPU time per frame, so other load on the machine matters less), p90_ms, live (mean live
-// tracks), born (mean new tracks per frame), and per stage (KltTrackStats) the mean ms per frame: pyramid_ms (gray +
-// pyramid), lk_ms (Lucas-Kanade passes and culling, without the refinement), refine_ms (anchor template alignment),
-// detect_ms (corner detection and replenishment). The stats are wall clock; to make them comparable with median_ms
-// on a loaded machine each frame's stage times are scaled by that frame's CPU / wall-clock ratio.
+// tracks), born (mean new tracks per frame), align_iter (mean anchor alignment iterations per aligned track), and per
+// stage (KltTrackStats) the mean ms per frame: pyramid_ms (gray + pyramid), lk_ms (Lucas-Kanade passes and culling,
+// without the refinement), refine_ms (anchor template alignment), detect_ms (corner detection and replenishment). The
+// stats are wall clock; to make them comparable with median_ms on a loaded machine each frame's stage times are scaled
+// by that frame's CPU / wall-clock ratio.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -49,7 +50,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   const std::vector<cv::Mat>& frames = Frames();
   KltTracker tracker(options);
   std::vector<double> ms;
-  double live = 0, born = 0, refine = 0, lk = 0, detect = 0, pyramid = 0;
+  double live = 0, born = 0, aligned = 0, align_iterations = 0, refine = 0, lk = 0, detect = 0, pyramid = 0;
   int64_t seq = 0;
   // Warm up past the first (detection-only) frame.
   ImageFrame frame;
@@ -67,6 +68,8 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
     live += static_cast<double>(out.features.size());
     const KltTrackStats& s = tracker.last_stats();
     born += s.born;
+    aligned += s.anchor_aligned;
+    align_iterations += s.anchor_iterations;
     const double cpu_per_wall = wall > 0 ? std::min(1.0, ms.back() / wall) : 1.0;
     refine += s.refine_ms * cpu_per_wall;
     lk += (s.lk_ms - s.refine_ms) * cpu_per_wall;
@@ -80,6 +83,7 @@ void Run(benchmark::State& state, const KltTrackerOptions& options) {
   state.counters["live"] = live / n;
   state.counters["born"] = born / n;
   state.counters["refine_ms"] = refine / n;
+  state.counters["align_iter"] = aligned > 0 ? align_iterations / aligned : 0;
   state.counters["lk_ms"] = lk / n;
   state.counters["detect_ms"] = detect / n;
   state.counters["pyramid_ms"] = pyramid / n;
@@ -103,6 +107,13 @@ void BM_Config(benchmark::State& state) {
 void BM_AnchorEpsilon005(benchmark::State& state) {
   KltTrackerOptions o;
   o.anchor_epsilon = 0.005;
+  Run(state, o);
+}
+
+// The alignment's portable code path (what a CPU without AVX2 runs; identical results).
+void BM_NoAvx2(benchmark::State& state) {
+  KltTrackerOptions o;
+  o.use_avx2 = false;
   Run(state, o);
 }
 
@@ -163,6 +174,7 @@ BENCHMARK(BM_Config)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(400);
 BENCHMARK(BM_AnchorEpsilon005)->Unit(benchmark::kMillisecond)->Iterations(400);
+BENCHMARK(BM_NoAvx2)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_NoAnchorRefine)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_AnchorHalfWindow)->ArgName("half")->Arg(5)->Arg(9)->Unit(benchmark::kMillisecond)->Iterations(400);
 BENCHMARK(BM_DetectEvery3HalfFill)->Unit(benchmark::kMillisecond)->Iterations(400);
