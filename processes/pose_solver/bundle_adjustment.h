@@ -43,9 +43,9 @@ bool ProjectIdeal(const PinholeCamera& camera, const Eigen::Vector3d& point_in_c
 Eigen::Vector2d UndistortPixel(const PinholeCamera& camera, const Eigen::Vector2d& pixel);
 
 struct BaObservation {
-  int frame = 0;              // index into BaProblem::world_from_camera
-  int point = 0;              // index into BaProblem::points
-  Eigen::Vector2d pixel;      // px, undistorted
+  int frame = 0;          // index into BaProblem::world_from_camera
+  int point = 0;          // index into BaProblem::points
+  Eigen::Vector2d pixel;  // px, undistorted
 };
 
 enum class FrameFix : uint8_t {
@@ -58,13 +58,13 @@ struct BaProblem {
   std::vector<Eigen::Isometry3d> world_from_camera;  // in/out, mm
   std::vector<Eigen::Vector3d> points;               // in/out, mm, world
   std::vector<BaObservation> observations;
-  std::vector<FrameFix> frame_fix;       // per frame (empty = all free)
-  std::vector<uint8_t> point_fixed;      // per point, 1 = held constant (empty = all free)
-  std::vector<uint8_t> point_on_floor;   // per point, 1 = z held at 0 (floor landmarks; empty = none)
+  std::vector<FrameFix> frame_fix;      // per frame (empty = all free)
+  std::vector<uint8_t> point_fixed;     // per point, 1 = held constant (empty = all free)
+  std::vector<uint8_t> point_on_floor;  // per point, 1 = z held at 0 (floor landmarks; empty = none)
   // Optional scale gauge: ||c_a - c_b|| held near distance_mm (weight: residual = weight * (d - distance)).
   int distance_frame_a = -1, distance_frame_b = -1;
   double distance_mm = 0;
-  double distance_weight = 100.0;        // 1/mm
+  double distance_weight = 100.0;  // 1/mm
 };
 
 struct BaOptions {
@@ -79,13 +79,14 @@ struct BaOptions {
 struct BaSummary {
   bool ok = false;
   int iterations = 0;
-  double initial_rms_px = 0;  // Pose-only refinement (points held fixed, given as data): the correspondences listed in `use`, the camera model,
-// loss and iteration count of options. Returns false (pose untouched) on failure.
-bool RefinePose(const PinholeCamera& camera, const RobotGeometry& robot, const BaOptions& options,
-                const std::vector<Eigen::Vector3d>& points_in_world, const std::vector<Eigen::Vector2d>& pixels,
-                const std::vector<int>& use, Eigen::Isometry3d* world_from_camera);
+  double initial_rms_px = 0;  // Pose-only refinement (points held fixed, given as data): the correspondences listed in
+                              // `use`, the camera model,
+  // loss and iteration count of options. Returns false (pose untouched) on failure.
+  bool RefinePose(const PinholeCamera& camera, const RobotGeometry& robot, const BaOptions& options,
+                  const std::vector<Eigen::Vector3d>& points_in_world, const std::vector<Eigen::Vector2d>& pixels,
+                  const std::vector<int>& use, Eigen::Isometry3d* world_from_camera);
 
-// RMS reprojection error over all observations before / after
+  // RMS reprojection error over all observations before / after
   double final_rms_px = 0;
   std::string message;
 };

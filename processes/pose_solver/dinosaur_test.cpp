@@ -86,10 +86,11 @@ TEST(Dinosaur, FactorizationAndBundleAdjustmentOnRealTracks) {
   }
   const BaSummary s = RunBundleAdjustment(camera, RobotGeometry(), bo, &all);
   ASSERT_TRUE(s.ok) << s.message;
-  std::printf("dinosaur frames %d..%d: %zu common tracks, affine factorization RMS %.3f px, perspective span BA RMS "
-              "%.3f px; with %zu/%d more triangulated tracks: %zu observations, BA RMS %.3f px (before %.3f)\n",
-              first, first + num - 1, common.size(), fr.residual_rms_px, span_rms, all.points.size() - common.size(),
-              tried, all.observations.size(), s.final_rms_px, s.initial_rms_px);
+  std::printf(
+      "dinosaur frames %d..%d: %zu common tracks, affine factorization RMS %.3f px, perspective span BA RMS "
+      "%.3f px; with %zu/%d more triangulated tracks: %zu observations, BA RMS %.3f px (before %.3f)\n",
+      first, first + num - 1, common.size(), fr.residual_rms_px, span_rms, all.points.size() - common.size(), tried,
+      all.observations.size(), s.final_rms_px, s.initial_rms_px);
   EXPECT_LE(span_rms, 1.0);  // 94 common tracks only, non-robust RMS (measured 0.62 px)
   EXPECT_LE(s.final_rms_px, 0.5);
   EXPECT_GE(all.points.size(), common.size() + 100);

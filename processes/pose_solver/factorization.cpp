@@ -65,7 +65,7 @@ bool FactorizeWeakPerspective(const std::vector<std::vector<Eigen::Vector2d>>& m
   const Eigen::VectorXd& sv = svd.singularValues();
   if (sv.size() < 3 || sv(2) <= 1e-9 * std::max(1.0, sv(0))) return Fail(why, "factorization: rank < 3");
   const Eigen::Vector3d sqrt_sv = sv.head<3>().cwiseSqrt();
-  Eigen::MatrixXd motion = svd.matrixU().leftCols<3>() * sqrt_sv.asDiagonal();         // 2F x 3
+  Eigen::MatrixXd motion = svd.matrixU().leftCols<3>() * sqrt_sv.asDiagonal();             // 2F x 3
   Eigen::MatrixXd shape = sqrt_sv.asDiagonal() * svd.matrixV().leftCols<3>().transpose();  // 3 x P
   // Metric upgrade: L = Q Q^T with m^T L m - n^T L n = 0, m^T L n = 0 for every frame, m_0^T L m_0 = 1.
   Eigen::MatrixXd a(2 * num_frames + 1, 6);
@@ -111,10 +111,8 @@ bool FactorizeWeakPerspective(const std::vector<std::vector<Eigen::Vector2d>>& m
   r.shape = s0 * (r0 * shape);
   double sum_sq = 0;
   for (int f = 0; f < num_frames; ++f) {
-    const Eigen::Matrix<double, 2, Eigen::Dynamic> proj =
-        r.scale[f] * r.camera_from_model[f].topRows<2>() * r.shape;
-    for (int p = 0; p < num_points; ++p)
-      sum_sq += (proj.col(p) + centroid[f] - measurements[f][p]).squaredNorm();
+    const Eigen::Matrix<double, 2, Eigen::Dynamic> proj = r.scale[f] * r.camera_from_model[f].topRows<2>() * r.shape;
+    for (int p = 0; p < num_points; ++p) sum_sq += (proj.col(p) + centroid[f] - measurements[f][p]).squaredNorm();
   }
   r.residual_rms_px = std::sqrt(sum_sq / (num_frames * num_points));
   *result = std::move(r);

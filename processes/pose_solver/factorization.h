@@ -35,10 +35,10 @@ bool FactorizeWeakPerspective(const std::vector<std::vector<Eigen::Vector2d>>& m
 double MaxRotationAngle(const FactorizationResult& result);
 
 struct StartSpanOptions {
-  int min_common_tracks = 30;       // points tracked through every frame of the span
-  int min_frames = 4;               // frames in the span (>= 3)
-  int max_frames = 60;              // the span is not extended beyond this many frames
-  double min_rotation_deg = 8.0;    // deg, parallax: rotation of the last vs the first frame (factorization)
+  int min_common_tracks = 30;     // points tracked through every frame of the span
+  int min_frames = 4;             // frames in the span (>= 3)
+  int max_frames = 60;            // the span is not extended beyond this many frames
+  double min_rotation_deg = 8.0;  // deg, parallax: rotation of the last vs the first frame (factorization)
 };
 
 // The span chooser over a sequence of frames given as id -> pixel lists: finds the first window [first, last]

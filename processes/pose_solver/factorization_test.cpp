@@ -19,9 +19,9 @@ TEST(Factorization, RecoversShapeAndRotationsUpToSimilarity) {
   std::vector<Eigen::Matrix3d> rotations;
   std::vector<std::vector<Eigen::Vector2d>> meas;
   for (int f = 0; f < 12; ++f) {
-    const Eigen::Matrix3d r = (Eigen::AngleAxisd(0.05 * f, Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(0.02 * f, Eigen::Vector3d::UnitX()))
-                                  .toRotationMatrix();
+    const Eigen::Matrix3d r =
+        (Eigen::AngleAxisd(0.05 * f, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.02 * f, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
     rotations.push_back(r);
     const double s = 2.0 * (1 + 0.01 * f);
     std::vector<Eigen::Vector2d> row;

@@ -74,8 +74,8 @@ TEST(Triangulation, MultiViewPointAndRejections) {
   EXPECT_LT(tp.rms_px, 0.6);
   // Low parallax: two adjacent frames (1.6 deg apart < 5 deg required).
   o.min_parallax_deg = 5;
-  EXPECT_FALSE(TriangulatePoint(s.camera, {s.world_from_camera[0], s.world_from_camera[1]},
-                                {px[0], px[0]}, o, &tp, &why));
+  EXPECT_FALSE(
+      TriangulatePoint(s.camera, {s.world_from_camera[0], s.world_from_camera[1]}, {px[0], px[0]}, o, &tp, &why));
   EXPECT_EQ(why, "low parallax");
   // An outlier view breaks the every-view threshold.
   o.min_parallax_deg = 2;
@@ -139,8 +139,8 @@ TEST(BundleAdjustment, ReducesErrorSixAndFourDof) {
       for (size_t i = 0; i < s.points.size(); ++i) {
         Eigen::Vector2d uv;
         if (!s.camera.Project(cw * s.points[i], &uv) || !s.camera.InImage(uv)) continue;
-        p.observations.push_back({static_cast<int>(k), static_cast<int>(i),
-                                  uv + 0.3 * Eigen::Vector2d(g(rng), g(rng))});
+        p.observations.push_back(
+            {static_cast<int>(k), static_cast<int>(i), uv + 0.3 * Eigen::Vector2d(g(rng), g(rng))});
       }
     }
     p.frame_fix.assign(frames.size(), FrameFix::kFree);

@@ -28,8 +28,8 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEst
     if (!include_all_statuses && !Good(p.status)) continue;
     const Eigen::Quaterniond q(p.world_from_camera.linear());
     const Eigen::Vector3d t = p.world_from_camera.translation();
-    out << std::setprecision(6) << p.utime / 1e6 << ' ' << std::setprecision(4) << t.x() << ' ' << t.y() << ' '
-        << t.z() << ' ' << std::setprecision(9) << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+    out << std::setprecision(6) << p.utime / 1e6 << ' ' << std::setprecision(4) << t.x() << ' ' << t.y() << ' ' << t.z()
+        << ' ' << std::setprecision(9) << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
   }
   out.flush();
   if (!out) return Fail(error, "write error on " + path);
@@ -74,6 +74,20 @@ bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& lan
 
 bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const std::vector<ColmapImage>& images,
                      const std::vector<Landmark>& landmarks, std::string* error) {
+  size_t next = 0;
+  return WriteColmapText(
+      dir, camera,
+      [&](ColmapImage* image) {
+        if (next >= images.size()) return false;
+        *image = images[next++];
+        return true;
+      },
+      landmarks, error);
+}
+
+bool WriteColmapText(const std::string& dir, const PinholeCamera& camera,
+                     const std::function<bool(ColmapImage*)>& next_image, const std::vector<Landmark>& landmarks,
+                     std::string* error) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return Fail(error, "cannot create " + dir + ": " + ec.message());
@@ -103,14 +117,15 @@ bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const 
            "#   POINTS2D[] as (X, Y, POINT3D_ID)\n# Units: mm; pose is cam_from_world\n";
     out << std::setprecision(12);
     int image_id = 0;
-    for (const auto& im : images) {
+    ColmapImage im;
+    while (next_image(&im)) {
       if (!Good(im.pose.status)) continue;
       ++image_id;
       const Eigen::Isometry3d cw = im.pose.world_from_camera.inverse();
       const Eigen::Quaterniond q(cw.linear());
       const Eigen::Vector3d t = cw.translation();
-      out << image_id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x() << ' '
-          << t.y() << ' ' << t.z() << " 1 " << im.name << '\n';
+      out << image_id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x() << ' ' << t.y()
+          << ' ' << t.z() << " 1 " << im.name << '\n';
       int idx = 0;
       for (const auto& f : im.features) {
         auto it = landmark_index.find(f.id);
@@ -132,12 +147,75 @@ bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const 
     out << std::setprecision(10);
     for (size_t i = 0; i < landmarks.size(); ++i) {
       const Landmark& l = landmarks[i];
-      out << l.id << ' ' << l.position_mm.x() << ' ' << l.position_mm.y() << ' ' << l.position_mm.z()
-          << " 200 200 200 " << l.reprojection_rms_px;
+      out << l.id << ' ' << l.position_mm.x() << ' ' << l.position_mm.y() << ' ' << l.position_mm.z() << " 200 200 200 "
+          << l.reprojection_rms_px;
       for (const auto& [im, idx] : tracks[i]) out << ' ' << im << ' ' << idx;
       out << '\n';
     }
     if (!out) return Fail(error, "write error on points3D.txt");
+  }
+  return true;
+}
+
+ObservationSpool::ObservationSpool(const std::string& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "w+b");
+  ok_ = file_ != nullptr;
+  if (!ok_) error_ = "cannot create " + path;
+}
+
+ObservationSpool::~ObservationSpool() {
+  if (file_) std::fclose(file_);
+  if (!path_.empty()) std::remove(path_.c_str());
+}
+
+// Record: int64 seq, int64 count, then count x (int64 id, float u, float v), native byte order (the file never
+// leaves the process that wrote it).
+bool ObservationSpool::Append(const TrackFrame& frame) {
+  if (!ok_) return false;
+  const int64_t head[2] = {frame.seq, static_cast<int64_t>(frame.features.size())};
+  bool good = std::fwrite(head, sizeof(head), 1, file_) == 1;
+  for (const TrackedFeature& f : frame.features) {
+    if (!good) break;
+    good = std::fwrite(&f.id, sizeof(f.id), 1, file_) == 1 && std::fwrite(&f.u, sizeof(f.u), 1, file_) == 1 &&
+           std::fwrite(&f.v, sizeof(f.v), 1, file_) == 1;
+  }
+  if (!good) {
+    ok_ = false;
+    error_ = "write error on " + path_;
+    return false;
+  }
+  ++frames_;
+  return true;
+}
+
+bool ObservationSpool::Rewind() {
+  if (!ok_) return false;
+  if (std::fflush(file_) != 0 || std::fseek(file_, 0, SEEK_SET) != 0) {
+    ok_ = false;
+    error_ = "cannot rewind " + path_;
+    return false;
+  }
+  return true;
+}
+
+bool ObservationSpool::Next(int64_t* seq, std::vector<TrackedFeature>* features) {
+  if (!ok_) return false;
+  int64_t head[2];
+  if (std::fread(head, sizeof(head), 1, file_) != 1) return false;  // end of the file
+  if (head[1] < 0 || head[1] > (int64_t{1} << 24)) {
+    ok_ = false;
+    error_ = "corrupt record in " + path_;
+    return false;
+  }
+  *seq = head[0];
+  features->assign(static_cast<size_t>(head[1]), TrackedFeature());
+  for (TrackedFeature& f : *features) {
+    if (std::fread(&f.id, sizeof(f.id), 1, file_) != 1 || std::fread(&f.u, sizeof(f.u), 1, file_) != 1 ||
+        std::fread(&f.v, sizeof(f.v), 1, file_) != 1) {
+      ok_ = false;
+      error_ = "truncated record in " + path_;
+      return false;
+    }
   }
   return true;
 }

@@ -8,6 +8,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,13 +27,46 @@ bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& lan
 // One image of the COLMAP model: its pose and its 2-D observations (undistorted or raw pixels as measured).
 struct ColmapImage {
   CameraPoseEstimate pose;
-  std::string name;                       // image file name, e.g. "000012.png"
-  std::vector<TrackedFeature> features;   // observations (track id = POINT3D_ID when a landmark has that id)
+  std::string name;                      // image file name, e.g. "000012.png"
+  std::vector<TrackedFeature> features;  // observations (track id = POINT3D_ID when a landmark has that id)
 };
 // Writes dir/cameras.txt, dir/images.txt, dir/points3D.txt (dir is created). Only images with a tracking or
 // relocalized pose are written; point tracks list (IMAGE_ID, POINT2D_IDX) of those images.
 bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const std::vector<ColmapImage>& images,
                      const std::vector<Landmark>& landmarks, std::string* error);
+// The same with the images supplied one at a time (so that a long stream's observations need not be in memory):
+// next_image(&image) fills the next image and returns true, false after the last one.
+bool WriteColmapText(const std::string& dir, const PinholeCamera& camera,
+                     const std::function<bool(ColmapImage*)>& next_image, const std::vector<Landmark>& landmarks,
+                     std::string* error);
+
+// Append-only binary file of frames' 2-D observations (track id, u, v), read back in the same order: keeps the
+// observations of a long stream on disk until the COLMAP model is written at its end. Not thread-safe.
+class ObservationSpool {
+ public:
+  // Creates (truncates) the file; ok() is false with error() set when it cannot.
+  explicit ObservationSpool(const std::string& path);
+  // Closes and removes the file.
+  ~ObservationSpool();
+  ObservationSpool(const ObservationSpool&) = delete;
+  ObservationSpool& operator=(const ObservationSpool&) = delete;
+  bool ok() const { return ok_; }
+  const std::string& error() const { return error_; }
+  // Appends one frame (seq and features; ages are not kept). False (and ok() false) on a write error.
+  bool Append(const TrackFrame& frame);
+  // Reads the frames back from the first; Next() then returns them in Append order and false after the last (or
+  // on a read error, with ok() false).
+  bool Rewind();
+  bool Next(int64_t* seq, std::vector<TrackedFeature>* features);
+  int64_t frames() const { return frames_; }
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  bool ok_ = false;
+  std::string error_;
+  int64_t frames_ = 0;
+};
 
 // Reads a TUM file written by WriteTumTrajectory back (for tests/tools): utime (rounded from t) and pose.
 bool ReadTumTrajectory(const std::string& path, std::vector<CameraPoseEstimate>* poses, std::string* error);

@@ -42,9 +42,9 @@ bool Refine(const PinholeCamera& camera, const RobotGeometry& robot, const std::
   return RefinePose(camera, robot, bo, points, pixels, use, pose);
 }
 
-bool RefineAndSelect(const PinholeCamera& camera, const RobotGeometry& robot, const std::vector<Eigen::Vector3d>& points,
-                     const std::vector<Eigen::Vector2d>& pixels, std::vector<int> use, const PnpOptions& options,
-                     Eigen::Isometry3d pose, PnpResult* result) {
+bool RefineAndSelect(const PinholeCamera& camera, const RobotGeometry& robot,
+                     const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector2d>& pixels,
+                     std::vector<int> use, const PnpOptions& options, Eigen::Isometry3d pose, PnpResult* result) {
   for (int round = 0; round < 2; ++round) {
     if (static_cast<int>(use.size()) < options.min_inliers) return false;
     if (!Refine(camera, robot, points, pixels, use, options, &pose)) return false;
@@ -91,9 +91,9 @@ bool SolvePnp(const PinholeCamera& camera, const RobotGeometry& robot, const std
   std::vector<int> ransac_inliers;
   try {
     cv::theRNG().state = options.seed;
-    const bool ok = cv::solvePnPRansac(object, image, k, cv::noArray(), rvec, tvec, false, options.ransac_iterations,
-                                       static_cast<float>(options.ransac_threshold_px), 0.999, ransac_inliers,
-                                       cv::SOLVEPNP_AP3P);
+    const bool ok =
+        cv::solvePnPRansac(object, image, k, cv::noArray(), rvec, tvec, false, options.ransac_iterations,
+                           static_cast<float>(options.ransac_threshold_px), 0.999, ransac_inliers, cv::SOLVEPNP_AP3P);
     if (!ok) return Fail(why, "pnp: ransac failed");
   } catch (const cv::Exception& e) {
     return Fail(why, std::string("pnp: opencv: ") + e.what());

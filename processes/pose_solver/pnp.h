@@ -30,15 +30,15 @@ struct PnpOptions {
 
 struct PnpResult {
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
-  std::vector<int> inliers;  // indices into the correspondences
-  double rms_px = 0;         // RMS over the inliers
-  bool used_ransac = false;  // false when the prior-pose fast path succeeded
+  std::vector<int> inliers;                                             // indices into the correspondences
+  double rms_px = 0;                                                    // RMS over the inliers
+  bool used_ransac = false;                                             // false when the prior-pose fast path succeeded
 };
 
 // points_in_world[i] <-> pixels[i]. prior (may be null): a pose close to the answer (e.g. the previous frame's);
 // with use_prior_first, it is refined directly and RANSAC runs only when that leaves too few inliers.
-bool SolvePnp(const PinholeCamera& camera, const RobotGeometry& robot, const std::vector<Eigen::Vector3d>& points_in_world,
-              const std::vector<Eigen::Vector2d>& pixels, const Eigen::Isometry3d* prior, const PnpOptions& options,
-              PnpResult* result, std::string* why = nullptr);
+bool SolvePnp(const PinholeCamera& camera, const RobotGeometry& robot,
+              const std::vector<Eigen::Vector3d>& points_in_world, const std::vector<Eigen::Vector2d>& pixels,
+              const Eigen::Isometry3d* prior, const PnpOptions& options, PnpResult* result, std::string* why = nullptr);
 
 }  // namespace objscan

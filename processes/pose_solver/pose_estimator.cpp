@@ -54,6 +54,9 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.min_floor_points < 3) e << "min floor points must be >= 3; ";
   if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
   if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
+  if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
+  if (o.global_ba_all_frames && o.observations_kept_frames != 0)
+    e << "global BA over all frames needs observations kept frames = 0 (every frame's observations); ";
   if (o.two_view_min_matches != 0 && o.two_view_min_matches < 8) e << "two view min matches must be 0 or >= 8; ";
   if (o.two_view_min_landmarks < 2) e << "two view min landmarks must be >= 2; ";
   const std::string msg = e.str();
@@ -121,6 +124,18 @@ int PoseEstimator::num_keyframes() const {
   int n = 0;
   for (const auto& f : frames_) n += f.keyframe ? 1 : 0;
   return n;
+}
+
+size_t PoseEstimator::ApproxMemoryBytes() const {
+  constexpr size_t kNodeOverhead = 32;  // bytes per map / hash node beyond its value (pointers, hash, colour)
+  size_t bytes = frames_.capacity() * sizeof(Frame);
+  for (const Frame& fr : frames_)
+    bytes +=
+        fr.ids.capacity() * sizeof(int64_t) + fr.pixels.capacity() * sizeof(Eigen::Vector2d) + fr.outlier.capacity();
+  bytes += points_.size() * (sizeof(std::pair<const int64_t, Point>) + kNodeOverhead);
+  for (const auto& [id, list] : track_frames_)
+    bytes += sizeof(id) + sizeof(list) + kNodeOverhead + list.capacity() * sizeof(int);
+  return bytes;
 }
 
 BaOptions PoseEstimator::MakeBaOptions(int iterations) const {
@@ -215,7 +230,59 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
     }
   }
   result.pose = Estimate(f);
+  if (options_.observations_kept_frames > 0 && f >= options_.observations_kept_frames)
+    CompactFrame(f - options_.observations_kept_frames);
   return result;
+}
+
+void PoseEstimator::CompactFrame(int f) {
+  Frame& fr = frames_[f];
+  if (!fr.posed || fr.keyframe || fr.compacted || f == gauge_frame_ || f == gauge_frame_b_) return;
+  // Its pose against the map as the windowed adjustments left it around the frame: from now on the frame only
+  // follows its keyframes (FollowKeyframes), so its pose relative to them should be the best one available now.
+  RefitPose(f);
+  for (int64_t id : fr.ids) {
+    auto it = track_frames_.find(id);
+    if (it == track_frames_.end()) continue;
+    std::vector<int>& list = it->second;  // ascending frame indices
+    const auto pos = std::lower_bound(list.begin(), list.end(), f);
+    if (pos != list.end() && *pos == f) list.erase(pos);
+    if (list.empty()) track_frames_.erase(it);
+  }
+  std::vector<int64_t>().swap(fr.ids);
+  std::vector<Eigen::Vector2d>().swap(fr.pixels);
+  std::vector<uint8_t>().swap(fr.outlier);
+  fr.compacted = true;
+}
+
+void PoseEstimator::FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_world_from_camera) {
+  const int n = static_cast<int>(frames_.size());
+  int previous = -1;  // last keyframe before the frame being visited
+  for (int g = 0; g < n; ++g) {
+    if (frames_[g].keyframe && frames_[g].posed) {
+      previous = g;
+      continue;
+    }
+    if (!frames_[g].compacted) continue;
+    int next = g + 1;
+    while (next < n && !(frames_[next].keyframe && frames_[next].posed)) ++next;
+    // The frame carried rigidly by keyframe k: new_k * old_k^-1 * old_g.
+    auto carried = [&](int k) {
+      return Eigen::Isometry3d(frames_[k].world_from_camera * old_world_from_camera[static_cast<size_t>(k)].inverse() *
+                               old_world_from_camera[static_cast<size_t>(g)]);
+    };
+    if (previous < 0 && next >= n) continue;  // no keyframe at all: nothing moved it
+    if (previous < 0 || next >= n) {
+      frames_[g].world_from_camera = carried(previous < 0 ? next : previous);
+      continue;
+    }
+    const Eigen::Isometry3d a = carried(previous), b = carried(next);
+    const double t = static_cast<double>(g - previous) / static_cast<double>(next - previous);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Quaterniond(a.linear()).slerp(t, Eigen::Quaterniond(b.linear())).toRotationMatrix();
+    pose.translation() = (1.0 - t) * a.translation() + t * b.translation();
+    frames_[g].world_from_camera = pose;
+  }
 }
 
 bool PoseEstimator::TryInitialize(int newest) {
@@ -742,29 +809,35 @@ void PoseEstimator::GlobalBundleAdjustment() {
   const BaSummary s = RunBundleAdjustment(camera_, options_.robot, global_options, &bp);
   last_message_ = "global BA: " + s.message;
   if (!s.ok) return;
+  std::vector<Eigen::Isometry3d> before;
+  before.reserve(frames_.size());
+  for (const Frame& fr : frames_) before.push_back(fr.world_from_camera);
   for (size_t k = 0; k < frame_list.size(); ++k) frames_[frame_list[k]].world_from_camera = bp.world_from_camera[k];
+  FollowKeyframes(before);
   for (size_t i = 0; i < point_list.size(); ++i) points_[point_list[i]].x = bp.points[i];
   PruneLandmarks(point_list, frame_list);
   if (options_.global_ba_all_frames) return;
   // The other frames: pose-only refit against the adjusted map (inliers of their PnP kept).
-  BaOptions bo = MakeBaOptions(options_.pnp.refine_iterations);
-  for (int g = 0; g < static_cast<int>(frames_.size()); ++g) {
-    Frame& fr = frames_[g];
-    if (!fr.posed || std::binary_search(frame_list.begin(), frame_list.end(), g)) continue;
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<Eigen::Vector2d> px;
-    std::vector<int> use;
-    for (size_t i = 0; i < fr.ids.size(); ++i) {
-      if (fr.outlier[i]) continue;
-      auto it = points_.find(fr.ids[i]);
-      if (it == points_.end()) continue;
-      use.push_back(static_cast<int>(pts.size()));
-      pts.push_back(it->second.x);
-      px.push_back(fr.pixels[i]);
-    }
-    if (static_cast<int>(use.size()) >= options_.pnp.min_inliers)
-      RefinePose(camera_, options_.robot, bo, pts, px, use, &fr.world_from_camera);
+  for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
+    if (frames_[g].posed && !std::binary_search(frame_list.begin(), frame_list.end(), g)) RefitPose(g);
+}
+
+void PoseEstimator::RefitPose(int f) {
+  Frame& fr = frames_[f];
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Eigen::Vector2d> px;
+  std::vector<int> use;
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    if (fr.outlier[i]) continue;
+    auto it = points_.find(fr.ids[i]);
+    if (it == points_.end()) continue;
+    use.push_back(static_cast<int>(pts.size()));
+    pts.push_back(it->second.x);
+    px.push_back(fr.pixels[i]);
   }
+  if (static_cast<int>(use.size()) >= options_.pnp.min_inliers)
+    RefinePose(camera_, options_.robot, MakeBaOptions(options_.pnp.refine_iterations), pts, px, use,
+               &fr.world_from_camera);
 }
 
 void PoseEstimator::RescaleSixDof(int first_frame) {
@@ -960,9 +1033,9 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
     }
     GlobalBundleAdjustment();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
-    // Final per-frame statistics.
+    // Final per-frame statistics (compacted frames keep their online figures).
     for (auto& fr : frames_)
-      if (fr.posed) UpdateFrameStatistics(&fr);
+      if (fr.posed && !fr.compacted) UpdateFrameStatistics(&fr);
   }
   final_ba_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   std::vector<CameraPoseEstimate> out;

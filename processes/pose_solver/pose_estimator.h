@@ -36,7 +36,8 @@
 //     frames) and landmarks (observations beyond the PnP inlier threshold left out), pose refits of the other
 //     frames, scale refinement (kSixDof), final poses for every frame.
 // Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
-// Memory grows with the stream (all frames' observations are kept for the final adjustment).
+// Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for keyframes, unposed
+// frames and the last observations_kept_frames frames only (set it to 0 to keep all for the final adjustment).
 #pragma once
 
 #include <Eigen/Core>
@@ -72,6 +73,12 @@ struct PoseEstimatorOptions {
   int local_ba_iterations = 5;                 // Ceres iterations of the windowed BA
   int local_fixed_keyframes = 4;               // older keyframes (nearest first) held fixed in the windowed BA
   bool global_ba_all_frames = false;           // final BA over every frame (slow) instead of keyframes + pose refits
+                                               // (needs observations_kept_frames = 0)
+  int observations_kept_frames = 30;           // frames: a posed non-keyframe drops its observations once it is
+                                               // this many frames old (memory then grows with the keyframes only;
+                                               // its final pose follows its neighbouring keyframes' final-BA
+                                               // correction instead of a pose refit); 0 = keep every frame's
+                                               // observations until Finish (memory ~40 kB per frame)
   int global_ba_iterations = 40;               // Ceres iterations of the final BA
   double global_ba_function_tolerance = 1e-5;  // final BA stops when a step changes the cost by less than this
                                                // fraction (the Huber loss' IRLS tail creeps at ~1e-6 per step)
@@ -154,6 +161,9 @@ class PoseEstimator {
   bool initialized() const { return map_initialized_; }
   int num_frames() const { return static_cast<int>(frames_.size()); }
   int num_keyframes() const;
+  // Approximate heap bytes held by the estimator's frames, observations and map (container payloads plus a fixed
+  // per-node allowance for the hash/tree maps), for status and memory benchmarks.
+  size_t ApproxMemoryBytes() const;
   // Timing figures (CPU time of the calling thread, ms) for benchmarks.
   double init_ms() const { return init_ms_; }
   double final_ba_ms() const { return final_ba_ms_; }
@@ -173,6 +183,7 @@ class PoseEstimator {
     Eigen::Isometry3d odometry_world_from_camera = Eigen::Isometry3d::Identity();
     bool posed = false;
     bool keyframe = false;
+    bool compacted = false;  // observations dropped (see observations_kept_frames)
     Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
     PoseStatus status = PoseStatus::kInitializing;
     int inliers = 0;
@@ -196,6 +207,17 @@ class PoseEstimator {
   void LocalBundleAdjustment(int f);
   // Sets frame->inliers and frame->rms (px) from its observations of the current points (pose solver inlier threshold).
   void UpdateFrameStatistics(Frame* frame) const;
+  // Drops the observations of frame f when it is posed, not a keyframe nor a gauge frame (see
+  // observations_kept_frames).
+  // First refits its pose against the current map (RefitPose).
+  void CompactFrame(int f);
+  // Pose-only refinement of posed frame f against the current landmarks (its PnP inliers); unchanged when it sees
+  // fewer than pnp.min_inliers of them.
+  void RefitPose(int f);
+  // Poses of compacted frames after the keyframes moved from old_world_from_camera (indexed like frames_; only
+  // keyframes are read) to their current poses: each compacted frame keeps its pose relative to the keyframes before
+  // and after it, interpolated between the two by frame index.
+  void FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_world_from_camera);
   void GlobalBundleAdjustment();
   // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
   // its outlier flags set. False (frame untouched) otherwise.

@@ -1,7 +1,8 @@
 // Speed of the pose estimator on one core: a 200-frame synthetic orbit with about 1000 live tracks per frame.
 // Counters: seq_ms_per_frame (sequential phase: AddFrame after initialization, keyframe work included; mean),
 // seq_median_ms (its median: a plain frame), seq_max_ms (all thread CPU time), init_ms (the span factorization +
-// BA), final_ms (Finish: registration + global BA + scale), tracks.
+// BA), final_ms (Finish: registration + global BA + scale), tracks, estimator_kb (PoseEstimator::ApproxMemoryBytes
+// before Finish) and kb_per_frame (its growth per frame over the second half of the stream).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -32,7 +33,7 @@ const SyntheticOrbit& Scene() {
   return s;
 }
 
-void RunEstimator(benchmark::State& state, MotionModel model) {
+void RunEstimator(benchmark::State& state, MotionModel model, int observations_kept_frames = -1) {
   const SyntheticOrbit& s = Scene();
   double tracks = 0;
   for (const auto& f : s.frames) tracks += f.features.size();
@@ -40,7 +41,10 @@ void RunEstimator(benchmark::State& state, MotionModel model) {
   for (auto _ : state) {
     PoseEstimatorOptions o;
     o.model = model;
+    if (observations_kept_frames >= 0) o.observations_kept_frames = observations_kept_frames;
     PoseEstimator est(s.camera, o);
+    const size_t half = s.frames.size() / 2;
+    size_t bytes_half = 0;
     double seq_ms = 0, seq_max = 0;
     int seq_frames = 0;
     std::vector<double> seq_each;
@@ -55,7 +59,12 @@ void RunEstimator(benchmark::State& state, MotionModel model) {
         seq_each.push_back(ms);
         ++seq_frames;
       }
+      if (f == half) bytes_half = est.ApproxMemoryBytes();
     }
+    const size_t bytes_end = est.ApproxMemoryBytes();
+    state.counters["estimator_kb"] = bytes_end / 1024.0;
+    state.counters["kb_per_frame"] =
+        (static_cast<double>(bytes_end) - static_cast<double>(bytes_half)) / 1024.0 / (s.frames.size() - 1 - half);
     est.Finish();
     state.counters["seq_ms_per_frame"] = seq_frames > 0 ? seq_ms / seq_frames : 0;
     state.counters["seq_max_ms"] = seq_max;
@@ -75,8 +84,11 @@ void RunEstimator(benchmark::State& state, MotionModel model) {
 
 void BM_SixDof(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof); }
 void BM_FourDof(benchmark::State& state) { RunEstimator(state, MotionModel::kFourDof); }
+// Every frame's observations kept until Finish (observations_kept_frames = 0): the memory it costs.
+void BM_SixDofKeepAllObservations(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, 0); }
 BENCHMARK(BM_SixDof)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FourDof)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SixDofKeepAllObservations)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace objscan

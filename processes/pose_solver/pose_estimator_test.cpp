@@ -16,6 +16,7 @@ struct RunFigures {
   double scale_error_final = 1;  // |scale of the SE(3)-free alignment - 1|
   ScaleSource scale_source = ScaleSource::kNone;
   int landmarks = 0;
+  size_t memory_bytes = 0;  // PoseEstimator::ApproxMemoryBytes before Finish
 };
 
 RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options) {
@@ -29,6 +30,7 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
     }
   }
   RunFigures fig;
+  fig.memory_bytes = estimator.ApproxMemoryBytes();
   fig.online_tracked = static_cast<int>(online_est.size());
   EvaluateTrajectory(online_est, online_true, true, &fig.online);
   const std::vector<CameraPoseEstimate> final_poses = estimator.Finish();
@@ -43,12 +45,12 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
   fig.scale_error_final = std::abs(fig.final_error.scale - 1.0);
   fig.scale_source = estimator.scale_source();
   fig.landmarks = static_cast<int>(estimator.Landmarks().size());
-  std::printf("tracked %d online ATE %.3f mm (max %.3f, scale %.4f) | final posed %d ATE %.3f mm (rot %.4f deg, "
-              "scale %.4f) | landmarks %d, keyframes %d, init %.1f ms, final %.1f ms\n  %s\n",
-              fig.online_tracked, fig.online.ate_rmse, fig.online.ate_max, fig.online.scale, fig.final_posed,
-              fig.final_error.ate_rmse, fig.final_error.rotation_mean_rad * 180 / M_PI, fig.final_error.scale,
-              fig.landmarks, estimator.num_keyframes(), estimator.init_ms(), estimator.final_ba_ms(),
-              estimator.last_message().c_str());
+  std::printf(
+      "tracked %d online ATE %.3f mm (max %.3f, scale %.4f) | final posed %d ATE %.3f mm (rot %.4f deg, "
+      "scale %.4f) | landmarks %d, keyframes %d, init %.1f ms, final %.1f ms\n  %s\n",
+      fig.online_tracked, fig.online.ate_rmse, fig.online.ate_max, fig.online.scale, fig.final_posed,
+      fig.final_error.ate_rmse, fig.final_error.rotation_mean_rad * 180 / M_PI, fig.final_error.scale, fig.landmarks,
+      estimator.num_keyframes(), estimator.init_ms(), estimator.final_ba_ms(), estimator.last_message().c_str());
   return fig;
 }
 
@@ -157,6 +159,35 @@ TEST(PoseEstimator, LostTrackingRecoversThroughOdometry) {
   std::printf("after loss: %zu posed, ATE %.2f mm, scale %.4f\n", e.size(), err.ate_rmse, err.scale);
   // The two maps are joined only through odometry (no shared landmarks): a few mm, not sub-mm.
   EXPECT_LT(err.ate_rmse, 20.0);
+}
+
+// Non-keyframes drop their observations 30 frames after they were posed (the default): the estimator then holds
+// about a third of the memory, and the final poses (which follow the keyframes for those frames) are as accurate as
+// with every frame's observations kept for a pose refit after the final BA.
+TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
+  SyntheticOrbitOptions so;
+  so.odometry_scale_error = 0.02;
+  so.pan_bias_rad = 0.5 * M_PI / 180;
+  so.tilt_bias_rad = 0.5 * M_PI / 180;
+  so.odometry_heading_drift_rad_per_frame = 0.001;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  PoseEstimatorOptions o;
+  ASSERT_GT(o.observations_kept_frames, 0);
+  const RunFigures dropped = RunOrbit(s, o);
+  o.observations_kept_frames = 0;
+  const RunFigures kept = RunOrbit(s, o);
+  EXPECT_EQ(dropped.final_posed, 200);
+  EXPECT_LE(dropped.final_error.ate_rmse, 1.1 * kept.final_error.ate_rmse + 0.02);  // mm
+  EXPECT_LE(dropped.final_error.rotation_mean_rad, 1.1 * kept.final_error.rotation_mean_rad + 0.002 * M_PI / 180);
+  EXPECT_LT(dropped.memory_bytes, kept.memory_bytes / 2);
+  std::printf("estimator memory: %.0f kB with old observations dropped, %.0f kB with all kept\n",
+              dropped.memory_bytes / 1024.0, kept.memory_bytes / 1024.0);
+  PoseEstimatorOptions bad;
+  bad.global_ba_all_frames = true;  // needs every frame's observations
+  std::string why;
+  EXPECT_FALSE(ValidatePoseEstimatorOptions(bad, &why));
+  bad.observations_kept_frames = 0;
+  EXPECT_TRUE(ValidatePoseEstimatorOptions(bad, &why)) << why;
 }
 
 TEST(PoseEstimator, DeterministicOutput) {

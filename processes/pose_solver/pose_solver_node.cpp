@@ -74,6 +74,8 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("online-scale-frames", &e->online_scale_frames, "6dof: rescale by odometry path at keyframes this long");
   p.Add("local-fixed-keyframes", &e->local_fixed_keyframes, "older keyframes held fixed in the windowed BA");
   p.Add("global-ba-all-frames", &e->global_ba_all_frames, "final BA over all frames instead of keyframes");
+  p.Add("observations-kept-frames", &e->observations_kept_frames,
+        "frames a posed non-keyframe keeps its observations (0 = all, for the final BA)");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
   p.Add("two-view-min-matches", &e->two_view_min_matches,
         "wide baseline (6dof): pose a frame PnP cannot pose from the essential matrix with the last posed frame when "
@@ -269,12 +271,22 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   }
   if (bus_.PublishMessage(options_.pose_channel, PoseToMessage(r.pose))) status_.CountOut();
   online_poses_.push_back(r.pose);
-  if (!options_.output_dir.empty()) kept_frames_.push_back(frame);
+  if (!options_.output_dir.empty()) {
+    if (!spool_) {
+      std::error_code ec;
+      std::filesystem::create_directories(options_.output_dir, ec);
+      spool_ = std::make_unique<ObservationSpool>(options_.output_dir + "/.observations.spool");
+      if (!spool_->ok()) LogError(spool_->error() + ": the COLMAP model will have no 2-D points");
+    }
+    if (spool_->ok() && !spool_->Append(frame)) LogError(spool_->error());
+  }
   if (r.keyframe) PublishLandmarks(frame.utime, frame.seq);
   if (r.pose.status == PoseStatus::kLost) ++lost_frames_;
   last_seq_ = frame.seq;
   last_utime_ = frame.utime;
   status_.SetValue("frames", estimator_->num_frames());
+  if (estimator_->num_frames() % 30 == 1)  // O(frames + tracks): not on every frame
+    status_.SetValue("estimator_kb", static_cast<double>(estimator_->ApproxMemoryBytes() / 1024));
   status_.SetValue("inliers", r.pose.num_inliers);
   status_.SetValue("rms_px", r.pose.reprojection_rms_px);
   status_.SetValue("lost_frames", static_cast<double>(lost_frames_));
@@ -338,17 +350,24 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
                 WriteTumTrajectory(options_.output_dir + "/trajectory_online.txt", online_poses_, &error) &&
                 WriteLandmarksPly(options_.output_dir + "/landmarks.ply", lms, &error);
       if (ok) {
-        std::vector<ColmapImage> images;
-        for (size_t i = 0; i < final_poses.size() && i < kept_frames_.size(); ++i) {
-          ColmapImage im;
-          im.pose = final_poses[i];
+        // Images in frame order; their observations come back from the spool in the same order.
+        const bool have_spool = spool_ && spool_->Rewind();
+        size_t next = 0;
+        auto next_image = [&](ColmapImage* im) {
+          if (next >= final_poses.size()) return false;
+          const CameraPoseEstimate& pose = final_poses[next++];
+          im->pose = pose;
           char name[64];
-          std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(final_poses[i].seq));
-          im.name = name;
-          im.features = kept_frames_[i].features;
-          images.push_back(std::move(im));
-        }
-        ok = WriteColmapText(options_.output_dir + "/colmap", camera_, images, lms, &error);
+          std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(pose.seq));
+          im->name = name;
+          im->features.clear();
+          int64_t seq = -1;
+          if (have_spool && spool_->Next(&seq, &im->features) && seq != pose.seq) im->features.clear();
+          return true;
+        };
+        ok = WriteColmapText(options_.output_dir + "/colmap", camera_, next_image, lms, &error);
+        if (spool_ && !spool_->ok()) LogError(spool_->error() + ": COLMAP 2-D points incomplete");
+        spool_.reset();  // removes the file
       }
       if (!ok)
         LogError("writing results: " + error);

@@ -48,24 +48,24 @@ class Bus;
 class OptionParser;
 
 struct PoseSolverNodeOptions {
-  std::string name = "pose_solver";                 // process name (status name, control sender)
-  std::string tracks_channel = "FEATURE_TRACKS";    // input tracks (feature_tracks_t)
-  std::string info_channel = "CAMERA_INFO";         // input calibration (camera_info_t)
-  std::string odometry_channel = "ROBOT_ODOMETRY";  // input odometry (odometry_t); "" = none
-  std::string pose_channel = "CAMERA_POSE";         // output per-frame poses (pose_t)
+  std::string name = "pose_solver";                      // process name (status name, control sender)
+  std::string tracks_channel = "FEATURE_TRACKS";         // input tracks (feature_tracks_t)
+  std::string info_channel = "CAMERA_INFO";              // input calibration (camera_info_t)
+  std::string odometry_channel = "ROBOT_ODOMETRY";       // input odometry (odometry_t); "" = none
+  std::string pose_channel = "CAMERA_POSE";              // output per-frame poses (pose_t)
   std::string final_pose_channel = "CAMERA_POSE_FINAL";  // output final poses after global BA (pose_t)
-  std::string landmarks_channel = "LANDMARKS";      // output landmarks (landmarks_t)
-  std::string control_channel = "OBJSCAN_CONTROL";  // control_t in/out
-  std::string status_channel = "PROCESS_STATUS";    // process status (process_status_t)
-  std::string finish_on_sender = "tracker";         // COMMAND_FINISHED from this sender starts the final phase
-  std::string model = "6dof";                       // camera model: "6dof" or "4dof" (robot floor model)
-  int pending_tracks_capacity = 30;                 // track frames buffered before the first camera_info (>= 0)
-  int tracks_queue_capacity = 200;                  // messages the tracks subscription buffers (>= 1)
-  double max_odometry_gap_s = 0.5;                  // s, odometry further than this from a frame is not used
-  double status_period_s = 1.0;                     // s, status publication period (> 0)
-  bool exit_when_finished = true;                   // Finished() turns true after the final phase
-  std::string output_dir;                           // write trajectory/landmarks/COLMAP files here ("" = none)
-  PoseEstimatorOptions estimator;                   // the estimator's options (model set from `model`)
+  std::string landmarks_channel = "LANDMARKS";           // output landmarks (landmarks_t)
+  std::string control_channel = "OBJSCAN_CONTROL";       // control_t in/out
+  std::string status_channel = "PROCESS_STATUS";         // process status (process_status_t)
+  std::string finish_on_sender = "tracker";              // COMMAND_FINISHED from this sender starts the final phase
+  std::string model = "6dof";                            // camera model: "6dof" or "4dof" (robot floor model)
+  int pending_tracks_capacity = 30;                      // track frames buffered before the first camera_info (>= 0)
+  int tracks_queue_capacity = 200;                       // messages the tracks subscription buffers (>= 1)
+  double max_odometry_gap_s = 0.5;                       // s, odometry further than this from a frame is not used
+  double status_period_s = 1.0;                          // s, status publication period (> 0)
+  bool exit_when_finished = true;                        // Finished() turns true after the final phase
+  std::string output_dir;                                // write trajectory/landmarks/COLMAP files here ("" = none)
+  PoseEstimatorOptions estimator;                        // the estimator's options (model set from `model`)
 };
 
 void AddPoseSolverNodeOptions(OptionParser& parser, PoseSolverNodeOptions* options);
@@ -102,7 +102,8 @@ class PoseSolverNode : public Node {
   OdometryBuffer odometry_;
   std::deque<TrackFrame> pending_;
   std::vector<CameraPoseEstimate> online_poses_;
-  std::vector<TrackFrame> kept_frames_;  // only with output_dir (COLMAP observations)
+  std::unique_ptr<ObservationSpool> spool_;  // with output_dir: every frame's observations, on disk, for the COLMAP
+                                             // model written at the end (memory stays flat over a long stream)
   int64_t last_seq_ = -1, last_utime_ = 0;
   int64_t lost_frames_ = 0;
   bool finished_ = false;

@@ -21,15 +21,15 @@ namespace objscan {
 struct SyntheticOrbitOptions {
   int num_frames = 200;
   double orbit_radius_mm = 800;
-  double orbit_fraction = 1.0;       // fraction of a full circle covered
+  double orbit_fraction = 1.0;  // fraction of a full circle covered
   double sphere_radius_mm = 100;
   int num_sphere_points = 450;
   int num_floor_points = 350;
   double floor_min_radius_mm = 130, floor_max_radius_mm = 450;
   double noise_px = 0.3;
-  double dropout_per_frame = 0.005;  // probability that a track breaks (new id) per frame
-  double outlier_fraction = 0.0;     // observations displaced by 5..20 px
-  double odometry_scale_error = 0.0; // e.g. 0.02 = odometry distances 2 % too long
+  double dropout_per_frame = 0.005;   // probability that a track breaks (new id) per frame
+  double outlier_fraction = 0.0;      // observations displaced by 5..20 px
+  double odometry_scale_error = 0.0;  // e.g. 0.02 = odometry distances 2 % too long
   double odometry_heading_drift_rad_per_frame = 0.0;
   double pan_bias_rad = 0.0, tilt_bias_rad = 0.0;
   int lost_begin = -1, lost_end = -1;  // frames [begin, end) see no features (tracking loss test)
@@ -39,10 +39,10 @@ struct SyntheticOrbitOptions {
 struct SyntheticOrbit {
   PinholeCamera camera;
   RobotGeometry robot;
-  std::vector<Eigen::Vector3d> points;                   // truth, world
-  std::vector<Eigen::Isometry3d> world_from_camera;      // truth per frame
+  std::vector<Eigen::Vector3d> points;               // truth, world
+  std::vector<Eigen::Isometry3d> world_from_camera;  // truth per frame
   std::vector<TrackFrame> frames;
-  std::vector<OdometryReading> odometry;                 // one per frame, at the frame time
+  std::vector<OdometryReading> odometry;  // one per frame, at the frame time
 };
 
 inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
@@ -62,9 +62,9 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
     s.points.push_back(centre + o.sphere_radius_mm * d.normalized());
   }
   for (int i = 0; i < o.num_floor_points; ++i) {
-    const double r = std::sqrt(o.floor_min_radius_mm * o.floor_min_radius_mm +
-                               uni(rng) * (o.floor_max_radius_mm * o.floor_max_radius_mm -
-                                           o.floor_min_radius_mm * o.floor_min_radius_mm));
+    const double r = std::sqrt(
+        o.floor_min_radius_mm * o.floor_min_radius_mm +
+        uni(rng) * (o.floor_max_radius_mm * o.floor_max_radius_mm - o.floor_min_radius_mm * o.floor_min_radius_mm));
     const double a = 2 * M_PI * uni(rng);
     s.points.push_back(Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0));
   }
@@ -94,9 +94,8 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
       const double dtheta = std::remainder(theta - last_theta, 2 * M_PI);
       const Eigen::Vector3d step_base =
           Eigen::AngleAxisd(-last_theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step_world;
-      const Eigen::Vector3d step_odo =
-          Eigen::AngleAxisd(odo_theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step_base *
-          (1.0 + o.odometry_scale_error);
+      const Eigen::Vector3d step_odo = Eigen::AngleAxisd(odo_theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                       step_base * (1.0 + o.odometry_scale_error);
       odo_x += step_odo.x();
       odo_y += step_odo.y();
       odo_theta += dtheta + o.odometry_heading_drift_rad_per_frame;
@@ -125,7 +124,8 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
     for (int i = 0; i < np; ++i) {
       bool visible = !blind;
       const Eigen::Vector3d& p = s.points[i];
-      if (visible && i < o.num_sphere_points) visible = (p - centre).dot(c - p) > 0.05 * (c - p).norm() * o.sphere_radius_mm;
+      if (visible && i < o.num_sphere_points)
+        visible = (p - centre).dot(c - p) > 0.05 * (c - p).norm() * o.sphere_radius_mm;
       if (visible && i >= o.num_sphere_points) {  // floor point hidden behind the sphere?
         const Eigen::Vector3d d = (p - c).normalized();
         const double b = d.dot(c - centre);

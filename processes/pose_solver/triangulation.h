@@ -21,9 +21,9 @@ struct TriangulationOptions {
 
 struct TriangulatedPoint {
   Eigen::Vector3d point_in_world = Eigen::Vector3d::Zero();  // mm
-  double rms_px = 0;            // RMS reprojection error over the views
-  double max_error_px = 0;      // worst view
-  double parallax_deg = 0;      // largest ray angle
+  double rms_px = 0;                                         // RMS reprojection error over the views
+  double max_error_px = 0;                                   // worst view
+  double parallax_deg = 0;                                   // largest ray angle
 };
 
 // Returns false with *why ("too few views", "low parallax", "behind camera", "reprojection") when rejected.
