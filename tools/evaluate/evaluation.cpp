@@ -308,12 +308,19 @@ double Percentile(std::vector<double> v, double q) {
 
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& truth,
                                   double completeness_threshold) {
+  return EvaluateSurface(model, truth, truth, completeness_threshold);
+}
+
+SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
+                                  const std::vector<Eigen::Vector3d>& accuracy_truth,
+                                  const std::vector<Eigen::Vector3d>& completeness_truth,
+                                  double completeness_threshold) {
   SurfaceEvaluation r;
   r.num_model = static_cast<int>(model.size());
-  r.num_truth = static_cast<int>(truth.size());
-  if (model.empty() || truth.empty()) return r;
+  r.num_truth = static_cast<int>(completeness_truth.size());
+  if (model.empty() || accuracy_truth.empty() || completeness_truth.empty()) return r;
   const double cell = std::max(completeness_threshold, 1e-9);
-  const PointGrid truth_grid(truth, cell);
+  const PointGrid truth_grid(accuracy_truth, cell);
   std::vector<double> d;
   d.reserve(model.size());
   for (const auto& p : model) d.push_back(truth_grid.NearestExact(p));
@@ -322,9 +329,9 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, con
   r.accuracy_max = *std::max_element(d.begin(), d.end());
   const PointGrid model_grid(model, cell);
   int covered = 0;
-  for (const auto& p : truth)
+  for (const auto& p : completeness_truth)
     if (model_grid.Nearest(p, 1) <= completeness_threshold) ++covered;
-  r.completeness = double(covered) / double(truth.size());
+  r.completeness = double(covered) / double(completeness_truth.size());
   return r;
 }
 

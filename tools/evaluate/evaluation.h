@@ -67,5 +67,11 @@ struct SurfaceEvaluation {
 // point-to-point: the truth sample must be much denser than the accuracy measured (spacing adds to distances).
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& truth,
                                   double completeness_threshold);
+// The same with separate truth sets: accuracy against accuracy_truth (the whole true surface: a model point on a
+// part no camera saw is still on the surface), completeness over completeness_truth (the part that could be seen).
+SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
+                                  const std::vector<Eigen::Vector3d>& accuracy_truth,
+                                  const std::vector<Eigen::Vector3d>& completeness_truth,
+                                  double completeness_threshold);
 
 }  // namespace objscan

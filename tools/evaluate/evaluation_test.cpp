@@ -68,6 +68,26 @@ TEST(EvaluationTest, SurfaceAccuracyAndCompleteness) {
   EXPECT_NEAR(s.completeness, 0.5, 0.03);
 }
 
+// Accuracy against the whole true surface, completeness over the part that could be seen: a model point on an
+// unseen part of the surface is accurate, and the unseen part does not count as missing.
+TEST(EvaluationTest, AccuracyUsesTheWholeSurfaceCompletenessTheVisiblePart) {
+  const auto truth = SpherePoints(100, 250000, Eigen::Vector3d(0, 0, 100));
+  std::vector<Eigen::Vector3d> visible;
+  for (const auto& p : truth)
+    if (p.z() > 30) visible.push_back(p);  // the lowest 30 mm were never seen
+  std::vector<Eigen::Vector3d> model;      // the exact sphere, down to z = 10 mm
+  for (const auto& p : SpherePoints(100, 20000, Eigen::Vector3d(0, 0, 100)))
+    if (p.z() > 10) model.push_back(p);
+  const SurfaceEvaluation whole = EvaluateSurface(model, truth, visible, 2.0);
+  EXPECT_LT(whole.accuracy_max, 0.6);  // point-to-point: the truth sample spacing
+  EXPECT_GT(whole.completeness, 0.99);
+  EXPECT_EQ(whole.num_truth, static_cast<int>(visible.size()));
+  // Against the visible part only, the correct points below z = 30 score as errors (up to ~14 mm here).
+  const SurfaceEvaluation visible_only = EvaluateSurface(model, visible, 2.0);
+  EXPECT_GT(visible_only.accuracy_max, 10.0);
+  EXPECT_NEAR(visible_only.completeness, whole.completeness, 1e-12);
+}
+
 // A model far from the truth (not aligned) gets its exact distance, quickly, not a search over millions of cells.
 TEST(EvaluationTest, FarModelPointsGetTheirExactDistance) {
   const auto truth = SpherePoints(100, 20000, Eigen::Vector3d::Zero());
