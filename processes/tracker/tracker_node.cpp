@@ -67,6 +67,7 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
         "max scale change since the anchor in any direction before re-anchoring (> 1)");
   p.Add("klt-anchor-reanchor", &k->anchor_reanchor,
         "re-take templates whose distortion exceeds klt-anchor-max-distortion (false = drop the track)");
+  p.Add("klt-use-avx2", &k->use_avx2, "AVX2 code for the anchor alignment when the CPU has it (identical output)");
   p.Add("descriptor-tracking", &o->descriptor_tracking,
         "off (KLT) | on (descriptor matching only, wide-baseline image sets) | auto (KLT, switch to descriptors "
         "when KLT continues < descriptor-auto-keep-fraction of the tracks)");
