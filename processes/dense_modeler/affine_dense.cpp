@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 namespace objscan {
@@ -51,7 +55,323 @@ double SmallestAngleDeg(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, co
   return best;
 }
 
+// SmallestAngleDeg(p0, p1, p2) < min_deg, with acos evaluated only within 1e-9 of the limit's cosine (the same
+// decision: that margin is far beyond acos' rounding).
+bool SmallestAngleBelow(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, const Eigen::Vector2d& p2,
+                        double min_deg) {
+  if (!(min_deg > 0.01 && min_deg < 170.0)) return SmallestAngleDeg(p0, p1, p2) < min_deg;
+  const double cos_min = std::cos(min_deg * kDegToRad);
+  const Eigen::Vector2d pts[3] = {p0, p1, p2};
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector2d e1 = pts[(i + 1) % 3] - pts[i];
+    const Eigen::Vector2d e2 = pts[(i + 2) % 3] - pts[i];
+    const double n = e1.norm() * e2.norm();
+    if (n <= 0) return true;  // SmallestAngleDeg gives 0
+    const double c = std::clamp(e1.dot(e2) / n, -1.0, 1.0);
+    if (c < cos_min - 1e-9) continue;
+    if (c > cos_min + 1e-9 || std::acos(c) / kDegToRad < min_deg) return true;
+  }
+  return false;
+}
+
 double Cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// PinholeCamera's Unproject / Project written out for a camera without distortion (the same operations in the same
+// order, so bit-identical results), inlined into the pixel loop; with distortion they call the camera.
+class PixelCamera {
+ public:
+  explicit PixelCamera(const PinholeCamera& camera) : camera_(camera), distorted_(camera.HasDistortion()) {}
+  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const {
+    if (distorted_) return camera_.Unproject(pixel);
+    const double yd = (pixel.y() - camera_.cy) / camera_.fy;
+    const double xd = (pixel.x() - camera_.cx - camera_.skew * yd) / camera_.fx;
+    return Eigen::Vector2d(xd, yd);
+  }
+  bool Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) const {
+    if (distorted_) return camera_.Project(p, pixel);
+    if (!(p.z() > 0)) return false;
+    const double x = p.x() / p.z(), y = p.y() / p.z();
+    *pixel = Eigen::Vector2d(camera_.fx * x + camera_.skew * y + camera_.cx, camera_.fy * y + camera_.cy);
+    return true;
+  }
+
+ private:
+  const PinholeCamera& camera_;
+  const bool distorted_;
+};
+
+// TriangulateMidpoint with the cosine of the ray angle instead of the angle (no acos per pixel).
+inline bool MidpointCos(const Eigen::Vector3d& oa, const Eigen::Vector3d& da, const Eigen::Vector3d& ob,
+                        const Eigen::Vector3d& db, Eigen::Vector3d* point, double* cos_angle) {
+  const double b = da.dot(db);
+  *cos_angle = b;
+  const double denom = 1.0 - b * b;
+  if (denom < 1e-12) return false;
+  const Eigen::Vector3d w = oa - ob;
+  const double d = da.dot(w), e = db.dot(w);
+  const double s = (b * e - d) / denom;
+  const double t = (e - b * d) / denom;
+  if (s <= 0 || t <= 0) return false;
+  *point = 0.5 * ((oa + s * da) + (ob + t * db));
+  return true;
+}
+
+// acos(clamp(cos_angle, -1, 1)) < min_angle, the same decision as comparing TriangulateMidpoint's angle; acos is
+// evaluated only within 1e-9 of the limit's cosine (far beyond acos' rounding), or for limits near or above pi.
+class AngleLimit {
+ public:
+  explicit AngleLimit(double min_angle)
+      : min_angle_(min_angle), cos_min_(std::cos(min_angle)), exact_(!(min_angle <= 3.0)) {}
+  bool Below(double cos_angle) const {
+    const double c = std::clamp(cos_angle, -1.0, 1.0);
+    if (!exact_) {
+      if (c < cos_min_ - 1e-9) return false;
+      if (c > cos_min_ + 1e-9) return true;
+    }
+    return std::acos(c) < min_angle_;
+  }
+
+ private:
+  double min_angle_, cos_min_;
+  bool exact_;
+};
+
+// Epipolar test of EpipolarDistancePx: |l·nb| / hypot(l.x, l.y) · fx > threshold. hypot (slow in libm) is replaced by
+// sqrt(x² + y²), which agrees with it to a few ulps in the range checked; hypot decides within 1e-9 of the limit.
+inline bool EpipolarFar(const Eigen::Vector3d& line, double dot_abs, double fx, double threshold) {
+  const double s2 = line.x() * line.x() + line.y() * line.y();
+  if (s2 > 1e-200 && s2 < 1e200) {
+    const double d = dot_abs / std::sqrt(s2) * fx;
+    if (d < threshold * (1 - 1e-9)) return false;
+    if (d > threshold * (1 + 1e-9)) return true;
+  }
+  const double line_norm = std::hypot(line.x(), line.y());
+  return !(line_norm > 0) || dot_abs / line_norm * fx > threshold;
+}
+
+constexpr int kMaxHalfWindow = 10;  // ValidateAffineDenseOptions' limit of ncc_half_window
+constexpr int kMaxSide = 2 * kMaxHalfWindow + 1;
+
+// The NCC window offsets J·d of one affine map, hoisted out of the pixel loop: a window sample of B at q + J·d is
+// (q.x + J00·dx + J01·dy, q.y + J10·dx + J11·dy), summed in that order as in the reference expression.
+struct WindowWarp {
+  int h = 0;
+  double reach = 0;                                                       // px, h·(|J00| + |J01| + |J10| + |J11|)
+  double x_dx[kMaxSide], y_dx[kMaxSide], x_dy[kMaxSide], y_dy[kMaxSide];  // index d + h
+
+  WindowWarp(const Eigen::Matrix2d& j, int half_window) : h(half_window) {
+    reach = h * (std::abs(j(0, 0)) + std::abs(j(0, 1)) + std::abs(j(1, 0)) + std::abs(j(1, 1)));
+    for (int d = -h; d <= h; ++d) {
+      x_dx[d + h] = j(0, 0) * d;
+      y_dx[d + h] = j(1, 0) * d;
+      x_dy[d + h] = j(0, 1) * d;
+      y_dy[d + h] = j(1, 1) * d;
+    }
+  }
+};
+
+// The window of gray image A around p (its values and sums, accumulated in raster order like the NCC's).
+struct WindowA {
+  bool inside = false;
+  double sum = 0, sum_sq = 0;
+  float value[kMaxSide * kMaxSide];  // raster order
+
+  WindowA() = default;
+  WindowA(const cv::Mat& gray_a, const Eigen::Vector2d& p, int h) { Set(gray_a, p, h); }
+  // h in [0, kMaxHalfWindow].
+  void Set(const cv::Mat& gray_a, const Eigen::Vector2d& p, int h) {
+    inside = false;
+    sum = sum_sq = 0;
+    if (!Inside(gray_a, p, h + 1)) return;
+    inside = true;
+    const bool integral = p.x() == std::floor(p.x()) && p.y() == std::floor(p.y());
+    const int pu = static_cast<int>(p.x()), pv = static_cast<int>(p.y());
+    float* out = value;
+    for (int dy = -h; dy <= h; ++dy) {
+      if (integral) {
+        const float* row_a = gray_a.ptr<float>(pv + dy) + pu;
+        for (int dx = -h; dx <= h; ++dx) *out++ = row_a[dx];
+      } else {
+        for (int dx = -h; dx <= h; ++dx) *out++ = SampleBilinear(gray_a, p.x() + dx, p.y() + dy);
+      }
+    }
+    double s = 0, ss = 0;  // locals: the compiler keeps them in registers
+    for (const float* v = value; v < out; ++v) {
+      const double va = *v;
+      s += va;
+      ss += va * va;
+    }
+    sum = s;
+    sum_sq = ss;
+  }
+};
+
+// Bilinear sample of gray B at (x, y) >= 0 (truncation = floor), the same float expression as SampleBilinear.
+inline float SampleAt(const uchar* data, size_t step, double x, double y) {
+  const int u0 = static_cast<int>(x), v0 = static_cast<int>(y);
+  const float fu = static_cast<float>(x - u0), fv = static_cast<float>(y - v0);
+  const float* r0 = reinterpret_cast<const float*>(data + v0 * step) + u0;
+  const float* r1 = reinterpret_cast<const float*>(data + (v0 + 1) * step) + u0;
+  return (1 - fv) * ((1 - fu) * r0[0] + fu * r0[1]) + fv * ((1 - fu) * r1[0] + fu * r1[1]);
+}
+
+// The window samples of B at q + J·d in raster order (q passed the reach test: every sample lies inside B).
+void SampleWindowPortable(const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q, float* vb) {
+  const int side = 2 * w.h + 1;
+  for (int iy = 0; iy < side; ++iy) {
+    const double ox = w.x_dy[iy], oy = w.y_dy[iy];
+    for (int ix = 0; ix < side; ++ix)
+      *vb++ = SampleAt(gray_b.data, gray_b.step[0], q.x() + w.x_dx[ix] + ox, q.y() + w.y_dx[ix] + oy);
+  }
+}
+
+#if defined(__SSE2__)
+// The same samples, four at a time with SSE2: the same operations per lane (truncation, double subtraction,
+// rounding to float, float bilinear expression), so bit-identical to the portable path.
+void SampleWindowSse2(const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q, float* vb) {
+  const int side = 2 * w.h + 1, n = side * side;
+  alignas(16) double xs[kMaxSide * kMaxSide + 3], ys[kMaxSide * kMaxSide + 3];
+  for (int iy = 0, i = 0; iy < side; ++iy) {
+    const double ox = w.x_dy[iy], oy = w.y_dy[iy];
+    for (int ix = 0; ix < side; ++ix, ++i) {
+      xs[i] = q.x() + w.x_dx[ix] + ox;
+      ys[i] = q.y() + w.y_dx[ix] + oy;
+    }
+  }
+  const uchar* data = gray_b.data;
+  const size_t step = gray_b.step[0];
+  const __m128 one = _mm_set1_ps(1.0f);
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const __m128d x01 = _mm_load_pd(xs + i), x23 = _mm_load_pd(xs + i + 2);
+    const __m128d y01 = _mm_load_pd(ys + i), y23 = _mm_load_pd(ys + i + 2);
+    const __m128i u01 = _mm_cvttpd_epi32(x01), u23 = _mm_cvttpd_epi32(x23);
+    const __m128i v01 = _mm_cvttpd_epi32(y01), v23 = _mm_cvttpd_epi32(y23);
+    const __m128 fu = _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(x01, _mm_cvtepi32_pd(u01))),
+                                    _mm_cvtpd_ps(_mm_sub_pd(x23, _mm_cvtepi32_pd(u23))));
+    const __m128 fv = _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(y01, _mm_cvtepi32_pd(v01))),
+                                    _mm_cvtpd_ps(_mm_sub_pd(y23, _mm_cvtepi32_pd(v23))));
+    alignas(16) int32_t u[4], v[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(u), _mm_unpacklo_epi64(u01, u23));
+    _mm_store_si128(reinterpret_cast<__m128i*>(v), _mm_unpacklo_epi64(v01, v23));
+    // The pixel pairs (r0[0], r0[1]) and (r1[0], r1[1]) of each sample, 8 bytes each, then transposed.
+    __m128 top_pairs[4], bottom_pairs[4];
+    for (int k = 0; k < 4; ++k) {
+      const uchar* r0 = data + v[k] * step + u[k] * sizeof(float);
+      top_pairs[k] = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(r0));
+      bottom_pairs[k] = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(r0 + step));
+    }
+    const __m128 t01 = _mm_movelh_ps(top_pairs[0], top_pairs[1]), t23 = _mm_movelh_ps(top_pairs[2], top_pairs[3]);
+    const __m128 b01 = _mm_movelh_ps(bottom_pairs[0], bottom_pairs[1]);
+    const __m128 b23 = _mm_movelh_ps(bottom_pairs[2], bottom_pairs[3]);
+    const __m128 p00 = _mm_shuffle_ps(t01, t23, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128 p01 = _mm_shuffle_ps(t01, t23, _MM_SHUFFLE(3, 1, 3, 1));
+    const __m128 p10 = _mm_shuffle_ps(b01, b23, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128 p11 = _mm_shuffle_ps(b01, b23, _MM_SHUFFLE(3, 1, 3, 1));
+    const __m128 gu = _mm_sub_ps(one, fu), gv = _mm_sub_ps(one, fv);
+    const __m128 top = _mm_add_ps(_mm_mul_ps(gu, p00), _mm_mul_ps(fu, p01));
+    const __m128 bottom = _mm_add_ps(_mm_mul_ps(gu, p10), _mm_mul_ps(fu, p11));
+    _mm_storeu_ps(vb + i, _mm_add_ps(_mm_mul_ps(gv, top), _mm_mul_ps(fv, bottom)));
+  }
+  for (; i < n; ++i) vb[i] = SampleAt(data, step, xs[i], ys[i]);
+}
+#endif
+
+// NCC of window A and gray B at q + J·d (bilinear); -2 when a window leaves an image. Bit-identical to the plain
+// interleaved loop (each sum is accumulated in the same order). Samples lie at x, y >= 0 once q passed the reach
+// test, so truncation is floor. portable = the scalar sampling path (for the test of the SIMD one).
+double WindowNcc(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q,
+                 double* stddev_a, double* stddev_b, bool portable = false) {
+  if (!wa.inside || !Inside(gray_b, q, w.reach + 1)) return -2.0;
+  const int side = 2 * w.h + 1;
+  float vb[kMaxSide * kMaxSide];
+#if defined(__SSE2__)
+  if (!portable)
+    SampleWindowSse2(w, gray_b, q, vb);
+  else
+#endif
+    SampleWindowPortable(w, gray_b, q, vb);
+  const int n = side * side;
+  double sb = 0, sbb = 0, sab = 0;
+  for (int i = 0; i < n; ++i) {
+    const double b = vb[i];
+    sb += b, sbb += b * b, sab += static_cast<double>(wa.value[i]) * b;
+  }
+  const double ma = wa.sum / n, mb = sb / n;
+  const double va = std::max(0.0, wa.sum_sq / n - ma * ma), vbv = std::max(0.0, sbb / n - mb * mb);
+  if (stddev_a) *stddev_a = std::sqrt(va);
+  if (stddev_b) *stddev_b = std::sqrt(vbv);
+  if (va <= 1e-9 || vbv <= 1e-9) return 0.0;
+  return (sab / n - ma * mb) / std::sqrt(va * vbv);
+}
+
+// Points of one image in a uniform grid of cells at least `radius` wide, for "is an earlier point closer than
+// radius" queries (the candidates of the 3x3 cells around a point include every point within radius).
+class PointGrid {
+ public:
+  PointGrid(int width, int height, double radius) {
+    cell_ = std::max(std::abs(radius), 4.0);
+    nx_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((width + 1) / cell_))));
+    ny_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((height + 1) / cell_))));
+    head_.assign(static_cast<size_t>(nx_) * ny_, -1);
+  }
+  // Cell of a pixel in [-0.5, size - 0.5] (clamped).
+  int Cell(const Eigen::Vector2d& px) const {
+    const int cx = std::clamp(static_cast<int>(std::floor((px.x() + 0.5) / cell_)), 0, nx_ - 1);
+    const int cy = std::clamp(static_cast<int>(std::floor((px.y() + 0.5) / cell_)), 0, ny_ - 1);
+    return cy * nx_ + cx;
+  }
+  void Insert(const Eigen::Vector2d& px, int index) {
+    const int c = Cell(px);
+    if (static_cast<size_t>(index) >= next_.size()) next_.resize(index + 1, -1);
+    next_[index] = head_[c];
+    head_[c] = index;
+  }
+  // Calls visit(index) for the points of the 3x3 cells around px until it returns true; true if it did.
+  template <typename Visit>
+  bool AnyNear(const Eigen::Vector2d& px, Visit visit) const {
+    const int c = Cell(px), cx = c % nx_, cy = c / nx_;
+    for (int y = std::max(0, cy - 1); y <= std::min(ny_ - 1, cy + 1); ++y)
+      for (int x = std::max(0, cx - 1); x <= std::min(nx_ - 1, cx + 1); ++x)
+        for (int i = head_[y * nx_ + x]; i >= 0; i = next_[i])
+          if (visit(i)) return true;
+    return false;
+  }
+
+ private:
+  double cell_ = 1;
+  int nx_ = 1, ny_ = 1;
+  std::vector<int> head_, next_;
+};
+
+// Exact key of a float pixel position (+0.0f folds -0 into +0, as float comparison does).
+inline uint64_t FloatPairKey(float x, float y) {
+  x += 0.0f;
+  y += 0.0f;
+  uint32_t bx, by;
+  std::memcpy(&bx, &x, 4);
+  std::memcpy(&by, &y, 4);
+  return (static_cast<uint64_t>(bx) << 32) | by;
+}
+
+// Per-thread buffers reused from pair to pair (gray images, visited mask, points): no page faults per pair.
+struct PairScratch {
+  cv::Mat gray8, gray_a, gray_b;
+  cv::Mat1b visited;
+  std::vector<DensePoint> points;
+  std::vector<double> scores;
+};
+
+// GrayFloat into a reused buffer (the same conversion).
+const cv::Mat& GrayFloatInto(const cv::Mat& image, cv::Mat* gray8, cv::Mat* out) {
+  if (image.channels() == 3) {
+    cv::cvtColor(image, *gray8, cv::COLOR_BGR2GRAY);
+    gray8->convertTo(*out, CV_32F);
+  } else {
+    image.convertTo(*out, CV_32F);
+  }
+  return *out;
+}
 
 }  // namespace
 
@@ -110,44 +430,25 @@ double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera&
 
 bool TriangulateMidpoint(const Eigen::Vector3d& oa, const Eigen::Vector3d& da, const Eigen::Vector3d& ob,
                          const Eigen::Vector3d& db, Eigen::Vector3d* point, double* angle_rad) {
-  const double b = da.dot(db);
-  const double denom = 1.0 - b * b;
-  if (angle_rad) *angle_rad = std::acos(std::clamp(b, -1.0, 1.0));
-  if (denom < 1e-12) return false;
-  const Eigen::Vector3d w = oa - ob;
-  const double d = da.dot(w), e = db.dot(w);
-  const double s = (b * e - d) / denom;
-  const double t = (e - b * d) / denom;
-  if (s <= 0 || t <= 0) return false;
-  *point = 0.5 * ((oa + s * da) + (ob + t * db));
-  return true;
+  double cos_angle = 0;
+  Eigen::Vector3d x;
+  const bool ok = MidpointCos(oa, da, ob, db, &x, &cos_angle);
+  if (angle_rad) *angle_rad = std::acos(std::clamp(cos_angle, -1.0, 1.0));
+  if (ok) *point = x;
+  return ok;
 }
 
 double WarpedNcc(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b, const Eigen::Vector2d& q,
                  const Eigen::Matrix2d& jacobian, int h, double* stddev_a, double* stddev_b) {
-  const double reach_b =
-      h * (std::abs(jacobian(0, 0)) + std::abs(jacobian(0, 1)) + std::abs(jacobian(1, 0)) + std::abs(jacobian(1, 1)));
-  if (!Inside(gray_a, p, h + 1) || !Inside(gray_b, q, reach_b + 1)) return -2.0;
-  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-  int n = 0;
-  const bool integral = p.x() == std::floor(p.x()) && p.y() == std::floor(p.y());
-  const int pu = static_cast<int>(p.x()), pv = static_cast<int>(p.y());
-  for (int dy = -h; dy <= h; ++dy) {
-    const float* row_a = integral ? gray_a.ptr<float>(pv + dy) + pu : nullptr;
-    for (int dx = -h; dx <= h; ++dx) {
-      const double va = integral ? row_a[dx] : SampleBilinear(gray_a, p.x() + dx, p.y() + dy);
-      const double vb = SampleBilinear(gray_b, q.x() + jacobian(0, 0) * dx + jacobian(0, 1) * dy,
-                                       q.y() + jacobian(1, 0) * dx + jacobian(1, 1) * dy);
-      sa += va, sb += vb, saa += va * va, sbb += vb * vb, sab += va * vb;
-      ++n;
-    }
-  }
-  const double ma = sa / n, mb = sb / n;
-  const double va = std::max(0.0, saa / n - ma * ma), vb = std::max(0.0, sbb / n - mb * mb);
-  if (stddev_a) *stddev_a = std::sqrt(va);
-  if (stddev_b) *stddev_b = std::sqrt(vb);
-  if (va <= 1e-9 || vb <= 1e-9) return 0.0;
-  return (sab / n - ma * mb) / std::sqrt(va * vb);
+  if (h < 0 || h > kMaxHalfWindow) return -2.0;
+  return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b);
+}
+
+double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b,
+                         const Eigen::Vector2d& q, const Eigen::Matrix2d& jacobian, int h, double* stddev_a,
+                         double* stddev_b) {
+  if (h < 0 || h > kMaxHalfWindow) return -2.0;
+  return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b, true);
 }
 
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
@@ -172,17 +473,21 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   std::vector<PointMatch> feats;
   feats.reserve(matches.size());
   const double sep2 = o.min_feature_separation_px * o.min_feature_separation_px;
+  // A match is a duplicate when an earlier kept one lies closer than the separation in A or in B (looked up in
+  // grids of both images instead of comparing with every earlier match).
+  PointGrid grid_a(a.camera.width, a.camera.height, o.min_feature_separation_px);
+  PointGrid grid_b(b.camera.width, b.camera.height, o.min_feature_separation_px);
   for (const PointMatch& m : matches) {
     if (!m.a.allFinite() || !m.b.allFinite()) continue;
     if (!a.camera.InImage(m.a) || !b.camera.InImage(m.b)) continue;
-    bool dup = false;
-    for (const PointMatch& f : feats) {
-      if ((f.a - m.a).squaredNorm() < sep2 || (f.b - m.b).squaredNorm() < sep2) {
-        dup = true;
-        break;
-      }
+    if (sep2 > 0) {  // else no squared distance is below it
+      const bool dup = grid_a.AnyNear(m.a, [&](int i) { return (feats[i].a - m.a).squaredNorm() < sep2; }) ||
+                       grid_b.AnyNear(m.b, [&](int i) { return (feats[i].b - m.b).squaredNorm() < sep2; });
+      if (dup) continue;
+      grid_a.Insert(m.a, static_cast<int>(feats.size()));
+      grid_b.Insert(m.b, static_cast<int>(feats.size()));
     }
-    if (!dup) feats.push_back(m);
+    feats.push_back(m);
   }
   stats.features = static_cast<int>(feats.size());
   if (feats.size() < 3) return finish();
@@ -212,19 +517,31 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
 
   // Delaunay triangulation of the features in A.
   cv::Subdiv2D subdiv(cv::Rect(-2, -2, a.image.cols + 4, a.image.rows + 4));
-  std::map<std::pair<float, float>, int> index_of;
+  std::unordered_map<uint64_t, int> index_of;  // exact float position -> first feature there
+  index_of.reserve(2 * feats.size());
   for (size_t i = 0; i < feats.size(); ++i) {
     const cv::Point2f pt(static_cast<float>(feats[i].a.x()), static_cast<float>(feats[i].a.y()));
-    if (index_of.count({pt.x, pt.y})) continue;
-    index_of[{pt.x, pt.y}] = static_cast<int>(i);
+    if (!index_of.emplace(FloatPairKey(pt.x, pt.y), static_cast<int>(i)).second) continue;
     subdiv.insert(pt);
   }
   std::vector<cv::Vec6f> tri_list;
   subdiv.getTriangleList(tri_list);
 
-  cv::Mat gray_a = a.gray.empty() ? GrayFloat(a.image) : a.gray;
-  cv::Mat gray_b = b.gray.empty() ? GrayFloat(b.image) : b.gray;
-  cv::Mat1b visited = cv::Mat1b::zeros(a.image.rows, a.image.cols);
+  thread_local PairScratch scratch;
+  const cv::Mat& gray_a = a.gray.empty() ? GrayFloatInto(a.image, &scratch.gray8, &scratch.gray_a) : a.gray;
+  const cv::Mat& gray_b = b.gray.empty() ? GrayFloatInto(b.image, &scratch.gray8, &scratch.gray_b) : b.gray;
+  cv::Mat1b& visited = scratch.visited;
+  visited.create(a.image.rows, a.image.cols);
+  visited.setTo(0);
+  std::vector<DensePoint>& points = scratch.points;
+  points.clear();
+  const PixelCamera cam_a(a.camera), cam_b(b.camera);
+  const AngleLimit angle_limit(min_angle);
+  const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
+  const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
+  WindowA window_a;
+  std::vector<double>& scores = scratch.scores;
+  scores.assign(2 * n_steps + 1, -2.0);
   const cv::Rect image_rect(0, 0, a.image.cols, a.image.rows);
   cv::Rect roi = o.roi_a.area() > 0 ? (o.roi_a & image_rect) : image_rect;
   if (o.region.valid) roi &= o.region.ImageRect(a.camera, a.world_from_camera, o.region_image_margin_px);
@@ -238,7 +555,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     int idx[3];
     bool real = true;
     for (int k = 0; k < 3; ++k) {
-      auto it = index_of.find({t[2 * k], t[2 * k + 1]});
+      auto it = index_of.find(FloatPairKey(t[2 * k], t[2 * k + 1]));
       if (it == index_of.end()) {
         real = false;
         break;
@@ -254,7 +571,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     const double max_edge = std::max(
         {(a1 - a0).norm(), (a2 - a1).norm(), (a0 - a2).norm(), (b1 - b0).norm(), (b2 - b1).norm(), (b0 - b2).norm()});
     if (std::abs(area_a) < o.min_triangle_area_px2 || area_a * area_b <= 0 || max_edge > o.max_triangle_edge_px ||
-        SmallestAngleDeg(a0, a1, a2) < o.min_triangle_angle_deg) {
+        SmallestAngleBelow(a0, a1, a2, o.min_triangle_angle_deg)) {
       ++stats.triangles_skipped_shape;
       continue;
     }
@@ -300,6 +617,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     bmat << b0.x(), b1.x(), b2.x(), b0.y(), b1.y(), b2.y();
     const Eigen::Matrix<double, 2, 3> m = bmat * tinv;
     const Eigen::Matrix2d jac = m.leftCols<2>();
+    const WindowWarp warp(jac, h);
     const Eigen::Vector3d x0 = vertex_in_a[idx[0]];
     const Eigen::Vector3d plane_n = (vertex_in_a[idx[1]] - x0).cross(vertex_in_a[idx[2]] - x0);
     const double plane_d = plane_n.dot(x0);
@@ -318,7 +636,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         seen = 1;
         ++stats.pixels;
         const Eigen::Vector2d p(u, v);
-        const Eigen::Vector2d na = a.camera.Unproject(p);
+        bool window_a_set = false;
+        const Eigen::Vector2d na = cam_a.Unproject(p);
         Eigen::Vector2d q;
         if (o.mapping == static_cast<int>(DenseMapping::kPlane)) {
           const Eigen::Vector3d ray = na.homogeneous();
@@ -327,7 +646,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
             ++stats.rejected_outside;
             continue;
           }
-          if (!b.camera.Project(b_from_a * (ray * (plane_d / denom)), &q)) {
+          if (!cam_b.Project(b_from_a * (ray * (plane_d / denom)), &q)) {
             ++stats.rejected_outside;
             continue;
           }
@@ -339,22 +658,22 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           continue;
         }
         const Eigen::Vector3d nb_line = essential * na.homogeneous();
-        const double line_norm = std::hypot(nb_line.x(), nb_line.y());
-        if (!(line_norm > 0) || std::abs(nb_line.dot(b.camera.Unproject(q).homogeneous())) / line_norm * b.camera.fx >
-                                    o.epipolar_threshold_px) {
+        if (EpipolarFar(nb_line, std::abs(nb_line.dot(cam_b.Unproject(q).homogeneous())), b.camera.fx,
+                        o.epipolar_threshold_px)) {
           ++stats.rejected_epipolar;
           continue;
         }
         if (o.refine_along_epipolar) {
+          window_a.Set(gray_a, p, h);
+          window_a_set = true;
           const Eigen::Vector3d l = fundamental * Eigen::Vector3d(u, v, 1);
           const double ln = std::hypot(l.x(), l.y());
           const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
           const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
-          const int n_steps = static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px));
-          std::vector<double> scores(2 * n_steps + 1, -2.0);
           int best = -1;
           for (int s = -n_steps; s <= n_steps; ++s) {
-            scores[s + n_steps] = WarpedNcc(gray_a, p, gray_b, q0 + (s * o.refine_step_px) * dir, jac, h);
+            scores[s + n_steps] =
+                WindowNcc(window_a, warp, gray_b, q0 + (s * o.refine_step_px) * dir, nullptr, nullptr);
             if (best < 0 || scores[s + n_steps] > scores[best]) best = s + n_steps;
           }
           if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
@@ -389,7 +708,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         }
         if (h > 0) {
           double sd_a = 0, sd_b = 0;
-          const double ncc = WarpedNcc(gray_a, p, gray_b, q, jac, h, &sd_a, &sd_b);
+          if (!window_a_set) window_a.Set(gray_a, p, h);
+          const double ncc = WindowNcc(window_a, warp, gray_b, q, &sd_a, &sd_b);
           if (ncc < -1.5 || (sd_a >= o.min_window_stddev && sd_b >= o.min_window_stddev && ncc < o.min_ncc)) {
             ++stats.rejected_ncc;
             continue;
@@ -402,12 +722,12 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           }
         }
         const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();
-        const Eigen::Vector3d db = (rwb * b.camera.Unproject(q).homogeneous()).normalized();
+        const Eigen::Vector3d db = (rwb * cam_b.Unproject(q).homogeneous()).normalized();
         Eigen::Vector3d x;
-        double angle = 0;
+        double cos_angle = 0;
         Eigen::Vector2d pa_re, pb_re;
-        if (!TriangulateMidpoint(center_a, da, center_b, db, &x, &angle) || angle < min_angle ||
-            !a.camera.Project(a_from_world * x, &pa_re) || !b.camera.Project(b_from_world * x, &pb_re) ||
+        if (!MidpointCos(center_a, da, center_b, db, &x, &cos_angle) || angle_limit.Below(cos_angle) ||
+            !cam_a.Project(a_from_world * x, &pa_re) || !cam_b.Project(b_from_world * x, &pb_re) ||
             (pa_re - p).norm() > o.max_reprojection_px || (pb_re - q).norm() > o.max_reprojection_px) {
           ++stats.rejected_triangulation;
           continue;
@@ -421,15 +741,16 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         dp.point_in_world = x;
         dp.pixel_a = p.cast<float>();
         dp.pixel_b = q.cast<float>();
-        dp.toward_camera = (0.5 * (center_a + center_b) - x).normalized().cast<float>();
+        dp.toward_camera = (cameras_mid - x).normalized().cast<float>();
         const uint8_t* pa = a.image.ptr<uint8_t>(v) + u * channels;
         for (int k = 0; k < 3; ++k) dp.bgr[k] = pa[channels == 3 ? k : 0];
-        out.push_back(dp);
+        points.push_back(dp);
         ++stats.accepted;
       }
     }
   }
   if (refine_count > 0) stats.mean_refine_shift_px = refine_shift_sum / refine_count;
+  out.assign(points.begin(), points.end());
   // Triangles come from Subdiv2D in its own order; sort output into raster order of the source pixel is not
   // needed for determinism (Subdiv2D is deterministic for the same input), so keep the order as produced.
   return finish();

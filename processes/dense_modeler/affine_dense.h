@@ -117,6 +117,7 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* 
 
 // Dense points for the pair (A, B). a.image and b.image must have the same type (gray or BGR) and match their
 // cameras' sizes (else the result is empty). Output order is deterministic (triangle by triangle, raster inside).
+// Keeps per-thread scratch buffers between calls (gray images, visited mask, the points before the final copy).
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
                                          const AffineDenseOptions& options, DensePairStats* stats = nullptr);
 
@@ -132,11 +133,16 @@ double EpipolarDistancePx(const Eigen::Matrix3d& essential, const PinholeCamera&
 bool TriangulateMidpoint(const Eigen::Vector3d& origin_a, const Eigen::Vector3d& dir_a, const Eigen::Vector3d& origin_b,
                          const Eigen::Vector3d& dir_b, Eigen::Vector3d* point, double* angle_rad = nullptr);
 
-// NCC between the window of gray image A around p (offsets d in [-h, h]²) and gray image B at q + J·d
-// (bilinear). Returns -2 when a window leaves an image. *stddev_a/*stddev_b (optional) get the window std-devs.
+// NCC between the window of gray image A (CV_32FC1) around p (offsets d in [-h, h]², h = half_window in [0, 10])
+// and gray image B at q + J·d (bilinear). Returns -2 when a window leaves an image (or h is out of range).
+// *stddev_a/*stddev_b (optional) get the window std-devs. Samples B with SIMD where available (SSE2).
 double WarpedNcc(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b, const Eigen::Vector2d& q,
                  const Eigen::Matrix2d& jacobian, int half_window, double* stddev_a = nullptr,
                  double* stddev_b = nullptr);
+// The same with the portable (scalar) sampling path; bit-identical to WarpedNcc (for tests).
+double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b,
+                         const Eigen::Vector2d& q, const Eigen::Matrix2d& jacobian, int half_window,
+                         double* stddev_a = nullptr, double* stddev_b = nullptr);
 
 // CV_32FC1 gray of a CV_8UC1 / CV_8UC3 (BGR) image.
 cv::Mat GrayFloat(const cv::Mat& image);

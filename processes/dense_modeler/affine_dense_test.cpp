@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include "processes/dense_modeler/synthetic_scene.h"
 
@@ -234,6 +235,94 @@ TEST(AffineDense, TriangulateMidpointAndDegenerateInput) {
   bad.pixel_step = 0;
   std::string why;
   EXPECT_FALSE(ValidateAffineDenseOptions(bad, &why));
+}
+
+TEST(AffineDense, WarpedNccSimdPathBitIdenticalToPortableAndCorrect) {
+  // Random float images (not only integer gray levels), random warps, integral and sub-pixel p.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> level(0.0f, 255.0f);
+  cv::Mat gray_a(60, 70, CV_32FC1), gray_b(50, 80, CV_32FC1);
+  for (cv::Mat* m : {&gray_a, &gray_b})
+    for (int v = 0; v < m->rows; ++v)
+      for (int u = 0; u < m->cols; ++u) m->at<float>(v, u) = std::floor(level(rng)) + (u % 3 == 0 ? 0.37f * v : 0);
+  std::uniform_real_distribution<double> jitter(-0.6, 0.6), ua(0.0, 70.0), va(0.0, 60.0), ub(0.0, 80.0), vb(0.0, 50.0);
+  int compared = 0, valid = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const int h = 1 + i % 5;
+    const Eigen::Vector2d p =
+        i % 2 ? Eigen::Vector2d(std::floor(ua(rng)), std::floor(va(rng))) : Eigen::Vector2d(ua(rng), va(rng));
+    const Eigen::Vector2d q(ub(rng), vb(rng));
+    Eigen::Matrix2d j;
+    j << 1 + jitter(rng), jitter(rng), jitter(rng), 1 + jitter(rng);
+    double sa = -1, sb = -1, pa = -1, pb = -1;
+    const double fast = WarpedNcc(gray_a, p, gray_b, q, j, h, &sa, &sb);
+    const double portable = WarpedNccPortable(gray_a, p, gray_b, q, j, h, &pa, &pb);
+    ++compared;
+    EXPECT_EQ(fast, portable);  // bit-identical, including the -2 of windows leaving an image
+    EXPECT_EQ(sa, pa);
+    EXPECT_EQ(sb, pb);
+    if (fast < -1.5) continue;
+    ++valid;
+    // Reference: plain double-precision NCC of bilinear samples.
+    auto bilinear = [](const cv::Mat& m, double x, double y) {
+      const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+      const double fx = x - x0, fy = y - y0;
+      return (1 - fy) * ((1 - fx) * m.at<float>(y0, x0) + fx * m.at<float>(y0, x0 + 1)) +
+             fy * ((1 - fx) * m.at<float>(y0 + 1, x0) + fx * m.at<float>(y0 + 1, x0 + 1));
+    };
+    std::vector<double> wa, wb;
+    for (int dy = -h; dy <= h; ++dy)
+      for (int dx = -h; dx <= h; ++dx) {
+        wa.push_back(bilinear(gray_a, p.x() + dx, p.y() + dy));
+        wb.push_back(bilinear(gray_b, q.x() + j(0, 0) * dx + j(0, 1) * dy, q.y() + j(1, 0) * dx + j(1, 1) * dy));
+      }
+    double ma = 0, mb = 0;
+    for (size_t k = 0; k < wa.size(); ++k) ma += wa[k] / wa.size(), mb += wb[k] / wb.size();
+    double cab = 0, caa = 0, cbb = 0;
+    for (size_t k = 0; k < wa.size(); ++k)
+      cab += (wa[k] - ma) * (wb[k] - mb), caa += (wa[k] - ma) * (wa[k] - ma), cbb += (wb[k] - mb) * (wb[k] - mb);
+    EXPECT_NEAR(fast, cab / std::sqrt(caa * cbb), 1e-4);
+    EXPECT_NEAR(sa, std::sqrt(caa / wa.size()), 1e-3);
+    EXPECT_NEAR(sb, std::sqrt(cbb / wb.size()), 1e-3);
+  }
+  EXPECT_GT(valid, 1000);
+  EXPECT_LT(valid, compared);  // some windows left the images
+}
+
+TEST(AffineDense, FeatureDeduplicationKeepsTheFirstOfCloseMatches) {
+  // Random matches with many near-duplicates in A or in B: the features kept must be exactly those of the plain
+  // "closer than the separation to an earlier kept match, in A or in B" rule.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 640.0), v(-1.0, 480.0), near(-2.0, 2.0);
+  std::vector<PointMatch> matches;
+  for (int i = 0; i < 1500; ++i) {
+    PointMatch m{{u(rng), v(rng)}, {u(rng), v(rng)}};
+    matches.push_back(m);
+    if (i % 3 == 0) matches.push_back({m.a + Eigen::Vector2d(near(rng), near(rng)), {u(rng), v(rng)}});
+    if (i % 5 == 0) matches.push_back({{u(rng), v(rng)}, m.b + Eigen::Vector2d(near(rng), near(rng))});
+  }
+  const PinholeCamera cam = testing_scene::DefaultCamera();
+  DenseView a, b;
+  a.camera = b.camera = cam;
+  a.image = cv::Mat(cam.height, cam.width, CV_8UC3, cv::Scalar(0, 0, 0));
+  b.image = a.image;
+  b.world_from_camera.translation() = Eigen::Vector3d(100, 0, 0);
+  for (const double sep : {0.5, 1.5, 3.0, 25.0, -1.0, 0.0}) {
+    int expected = 0;
+    std::vector<PointMatch> kept;
+    for (const PointMatch& m : matches) {
+      if (!cam.InImage(m.a) || !cam.InImage(m.b)) continue;
+      bool dup = false;
+      for (const PointMatch& f : kept)
+        dup = dup || (f.a - m.a).squaredNorm() < sep * sep || (f.b - m.b).squaredNorm() < sep * sep;
+      if (!dup) kept.push_back(m), ++expected;
+    }
+    AffineDenseOptions o;
+    o.min_feature_separation_px = sep;
+    DensePairStats st;
+    ComputeDensePair(a, b, matches, o, &st);
+    EXPECT_EQ(st.features, expected) << "separation " << sep;
+  }
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 // its centre is (i + 0.5, j + 0.5, k + 0.5) * voxel_size_mm. Every point adds integer votes to its voxel and,
 // with the chosen neighbourhood, to its 6 face or 26 face/edge/corner neighbours with configurable weights.
 // Colours (BGR) are accumulated in the point's own voxel. Storage: blocks of 8x8x8 voxels in a hash map, so memory
-// grows with the occupied region only. Snapshots are a small binary file (format in voxel_votes.cpp).
+// grows with the occupied region only; blocks are found through an open-addressing hash table (linear probing) and
+// a point's 27 votes need at most 8 block look-ups. Snapshots are a small binary file (format in voxel_votes.cpp).
 // Not thread-safe. Constructor throws std::invalid_argument on invalid options; nothing else throws.
 #pragma once
 
@@ -12,7 +13,6 @@
 #include <cstdint>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "processes/dense_modeler/affine_dense.h"
@@ -62,7 +62,8 @@ class VoxelVoteGrid {
   // from, which orients the surface normal.
   bool AddPoint(const Eigen::Vector3d& point_in_world, const std::array<uint8_t, 3>& bgr,
                 const Eigen::Vector3f& toward_camera = Eigen::Vector3f::Zero());
-  // Adds every point; returns how many were accepted.
+  // Adds every point (worked on grouped by block for memory locality; the result is exactly that of AddPoint one
+  // by one in order); returns how many were accepted.
   int AddPoints(const std::vector<DensePoint>& points);
 
   int32_t Votes(const Eigen::Vector3i& ijk) const;
@@ -85,22 +86,48 @@ class VoxelVoteGrid {
   static constexpr int kBlockBits = 3;
   static constexpr int kBlockSide = 1 << kBlockBits;
   static constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
+  struct VoxelSums {  // one voxel's accumulators side by side (28 bytes): a point updates one or two cache lines
+    uint32_t color_sum[3] = {0, 0, 0};
+    int32_t color_count = 0;
+    float toward_camera_sum[3] = {0, 0, 0};
+  };
+
   struct Block {
     int32_t votes[kBlockVoxels] = {};
-    uint32_t color_sum[kBlockVoxels][3] = {};
-    int32_t color_count[kBlockVoxels] = {};
-    float toward_camera_sum[kBlockVoxels][3] = {};
+    VoxelSums sums[kBlockVoxels];
   };
+  static constexpr uint64_t kNoKey = ~uint64_t{0};  // empty slot (BlockKey uses 63 bits)
   static uint64_t BlockKey(int bx, int by, int bz);
+  static constexpr uint32_t kNoBlock = ~uint32_t{0};
   Block* GetBlock(int bx, int by, int bz, bool create);
+  uint32_t BlockIndex(int bx, int by, int bz, bool create);  // index into blocks_, kNoBlock when absent
+  bool VotableVoxel(const Eigen::Vector3d& point_in_world, Eigen::Vector3i* voxel) const;
+  // near: the blocks around the voxel's block by block step ((sz + 1) * 3 + (sy + 1)) * 3 + (sx + 1); near[13] =
+  // the voxel's block; null entries are looked up (created) when needed.
+  void AddPointAt(const Eigen::Vector3i& voxel, Block* near[27], const std::array<uint8_t, 3>& bgr,
+                  const Eigen::Vector3f& toward_camera);
   const Block* FindBlock(int bx, int by, int bz) const;
-  void AddVotes(Block* block, int local, int32_t weight);
+  size_t SlotOf(uint64_t key) const;  // the key's slot, or the empty slot where it would go
+  void GrowTable();
 
   VoxelVoteOptions options_;
   std::array<int32_t, 4> weight_by_order_{};  // votes by number of non-zero offsets (0 = own voxel)
-  std::unordered_map<uint64_t, uint32_t> block_index_;
+  // The voxels a point votes for (weight > 0, the own voxel included), in (dz, dy, dx) raster order, for each
+  // place of the point's voxel in its block ((lz, ly, lx) each 0 = first layer, 1 = inner, 2 = last layer):
+  struct PlacedNeighbour {
+    int block;  // near[] index of the block holding it: ((sz + 1) * 3 + (sy + 1)) * 3 + (sx + 1)
+    int delta;  // its local index in that block minus the point's local index
+    int32_t weight;
+  };
+  static constexpr int kInnerPlace = 13;  // inner layer on every axis: no neighbour crosses a block border
+  std::vector<PlacedNeighbour> placed_neighbours_[27];
+  int64_t neighbour_weight_total_ = 0;  // votes one point adds
+  std::vector<uint64_t> slot_key_;      // hash table of blocks: key per slot (kNoKey = empty), power-of-two size
+  std::vector<uint32_t> slot_block_;    // index into blocks_ per slot
   uint64_t cached_key_ = ~uint64_t{0};  // last block looked up (blocks never move: heap-allocated)
+  uint32_t cached_index_ = 0;
   Block* cached_block_ = nullptr;
+  std::vector<int32_t> group_of_block_;  // AddPoints' scratch: group per block index (-1 between calls)
   std::vector<std::unique_ptr<Block>> blocks_;
   std::vector<Eigen::Vector3i> block_coords_;
   int64_t num_voxels_ = 0;

@@ -8,6 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <random>
+#include <tuple>
 
 namespace objscan {
 namespace {
@@ -120,6 +123,71 @@ TEST(VoxelVotes, SnapshotRoundTripAndCorruptFiles) {
   EXPECT_FALSE(h.LoadSnapshot(path, &error));
   EXPECT_FALSE(h.LoadSnapshot("/nonexistent/file.bin", &error));
   std::filesystem::remove(path);
+}
+
+TEST(VoxelVotes, AddPointsMatchesPointByPointAndBruteForce) {
+  // Points clustered around block corners on both sides of zero (every place in a block, every border), some
+  // repeated in the same voxel (their float direction sums must match exactly), plus rejected ones.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> offset(-9.0, 9.0);
+  std::uniform_int_distribution<int> corner(-3, 3), colour(0, 255);
+  std::vector<DensePoint> pts;
+  for (int i = 0; i < 3000; ++i) {
+    DensePoint p;
+    p.point_in_world = Eigen::Vector3d(16.0 * corner(rng), 16.0 * corner(rng), 16.0 * corner(rng)) +
+                       Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
+    p.bgr = {{static_cast<uint8_t>(colour(rng)), static_cast<uint8_t>(colour(rng)), 7}};
+    p.toward_camera = Eigen::Vector3f(offset(rng), offset(rng), offset(rng)).normalized();
+    pts.push_back(p);
+    if (i % 7 == 0) {
+      p.point_in_world += Eigen::Vector3d(0.01, 0.01, 0.01);
+      p.toward_camera = Eigen::Vector3f(0.3f, -0.1f, 0.7f);
+      pts.push_back(p);
+    }
+  }
+  pts[10].point_in_world.x() = std::numeric_limits<double>::quiet_NaN();
+  pts[20].point_in_world.y() = 1e12;
+  pts[30].toward_camera.z() = std::numeric_limits<float>::infinity();
+  for (const VoxelVoteOptions& o :
+       {Weights(26, 10, 2, 1, 1), Weights(26, 5, 0, 2, 0), Weights(6, 4, 3, 9, 9), Weights(0, 3, 9, 9, 9)}) {
+    VoxelVoteGrid batch(o), single(o);
+    EXPECT_EQ(batch.AddPoints(pts), static_cast<int>(pts.size()) - 2);
+    for (const DensePoint& p : pts) single.AddPoint(p.point_in_world, p.bgr, p.toward_camera);
+    // Brute force: the weight of every offset added to a map of voxels.
+    std::map<std::tuple<int, int, int>, int64_t> expected;
+    for (const DensePoint& p : pts) {
+      if (!p.point_in_world.allFinite() || p.point_in_world.cwiseAbs().maxCoeff() > 1e6) continue;
+      const Eigen::Vector3i c = batch.VoxelOf(p.point_in_world);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int order = std::abs(dx) + std::abs(dy) + std::abs(dz);
+            const int w = order == 0             ? o.center_weight
+                          : o.neighbourhood == 0 ? 0
+                          : order == 1           ? o.face_weight
+                          : o.neighbourhood == 6 ? 0
+                          : order == 2           ? o.edge_weight
+                                                 : o.corner_weight;
+            if (w > 0) expected[{c.z() + dz, c.y() + dy, c.x() + dx}] += w;
+          }
+    }
+    const auto a = batch.Extract(1), b = single.Extract(1);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_EQ(a.size(), expected.size());
+    auto it = expected.begin();
+    for (size_t i = 0; i < a.size(); ++i, ++it) {
+      EXPECT_EQ(a[i].ijk, b[i].ijk);
+      EXPECT_EQ(a[i].votes, b[i].votes);
+      EXPECT_EQ(a[i].bgr, b[i].bgr);
+      EXPECT_EQ(a[i].color_count, b[i].color_count);
+      EXPECT_EQ(a[i].toward_camera, b[i].toward_camera);  // exact: same summation order per voxel
+      EXPECT_EQ(std::make_tuple(a[i].ijk.z(), a[i].ijk.y(), a[i].ijk.x()), it->first);
+      EXPECT_EQ(a[i].votes, it->second);
+    }
+    EXPECT_EQ(batch.num_voxels(), single.num_voxels());
+    EXPECT_EQ(batch.total_votes(), single.total_votes());
+    EXPECT_EQ(batch.points_added(), single.points_added());
+  }
 }
 
 }  // namespace
