@@ -120,7 +120,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
       s.voxel.bgr = it->second->bgr;
       kept.push_back(s);
     }
-    model.mesh = MeshFromSurfacePoints(kept, grid.voxel_size());
+    model.mesh = MeshFromSurfacePoints(SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius),
+                                       grid.voxel_size());
   } else {
     model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
   }

@@ -62,6 +62,10 @@ bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   if (o.normal_radius < 1 || o.normal_radius > 4) e << "ridge normal_radius must be in 1..4; ";
   if (!(o.ridge_tolerance > 0 && o.ridge_tolerance <= 1)) e << "ridge_tolerance must be in (0, 1]; ";
   if (o.min_component_voxels < 0) e << "min_component_voxels must be >= 0; ";
+  if (!(o.min_component_fraction >= 0 && o.min_component_fraction < 1))
+    e << "min_component_fraction must be in [0, 1); ";
+  if (!(o.smoothing_radius == 0 || (o.smoothing_radius >= 1 && o.smoothing_radius <= 8)))
+    e << "ridge smoothing_radius must be 0 or in [1, 8]; ";
   if (why) *why = e.str();
   return e.str().empty();
 }
@@ -129,42 +133,97 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
   }
   stats.ridge = static_cast<int64_t>(ridge.size());
 
-  // Drop small 26-connected fragments.
+  // Drop small 26-connected fragments: absolute and relative to the largest.
   std::vector<char> keep(ridge.size(), 1);
-  if (o.min_component_voxels > 1) {
+  if (o.min_component_voxels > 1 || o.min_component_fraction > 0) {
     std::unordered_map<uint64_t, size_t> index;
     index.reserve(ridge.size() * 2);
     for (size_t i = 0; i < ridge.size(); ++i) index.emplace(VoxelKey(ridge[i].voxel.ijk), i);
     std::vector<int> component(ridge.size(), -1);
-    std::vector<size_t> stack, members;
+    std::vector<size_t> component_size;
+    std::vector<size_t> stack;
     for (size_t i = 0; i < ridge.size(); ++i) {
       if (component[i] >= 0) continue;
-      members.clear();
+      const int id = static_cast<int>(component_size.size());
+      size_t members = 0;
       stack.assign(1, i);
-      component[i] = static_cast<int>(i);
+      component[i] = id;
       while (!stack.empty()) {
         const size_t k = stack.back();
         stack.pop_back();
-        members.push_back(k);
+        ++members;
         for (int dz = -1; dz <= 1; ++dz)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
               auto it = index.find(VoxelKey(ridge[k].voxel.ijk + Eigen::Vector3i(dx, dy, dz)));
               if (it == index.end() || component[it->second] >= 0) continue;
-              component[it->second] = static_cast<int>(i);
+              component[it->second] = id;
               stack.push_back(it->second);
             }
       }
-      if (static_cast<int>(members.size()) < o.min_component_voxels) {
-        for (size_t k : members) keep[k] = 0;
-        stats.fragments_dropped += static_cast<int64_t>(members.size());
-      }
+      component_size.push_back(members);
+    }
+    const size_t largest = *std::max_element(component_size.begin(), component_size.end());
+    const double min_size =
+        std::max(static_cast<double>(o.min_component_voxels), o.min_component_fraction * static_cast<double>(largest));
+    for (size_t i = 0; i < ridge.size(); ++i) {
+      if (static_cast<double>(component_size[static_cast<size_t>(component[i])]) >= min_size) continue;
+      keep[i] = 0;
+      ++stats.fragments_dropped;
     }
   }
   for (size_t i = 0; i < ridge.size(); ++i)
     if (keep[i]) out.push_back(ridge[i]);
   stats.kept = static_cast<int64_t>(out.size());
   if (stats_out) *stats_out = stats;
+  return out;
+}
+
+std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size,
+                                              double radius_voxels) {
+  std::vector<SurfaceVoxel> out = surface;
+  if (surface.empty() || !(voxel_size > 0) || !(radius_voxels > 0)) return out;
+  const double radius = radius_voxels * voxel_size, sigma = 0.5 * radius;
+  const double min_normal_cos = 0.5;
+  // Cells of side radius: the neighbours of a point are in its cell's 27-neighbourhood.
+  auto cell_of = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d g = p / radius;
+    return Eigen::Vector3i(static_cast<int>(std::floor(g.x())), static_cast<int>(std::floor(g.y())),
+                           static_cast<int>(std::floor(g.z())));
+  };
+  std::unordered_map<uint64_t, std::vector<size_t>> cells;
+  for (size_t i = 0; i < surface.size(); ++i) cells[VoxelKey(cell_of(surface[i].point_in_world))].push_back(i);
+  for (size_t i = 0; i < surface.size(); ++i) {
+    const Eigen::Vector3d p = surface[i].point_in_world;
+    const Eigen::Vector3i c0 = cell_of(p);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+    double wsum = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          auto it = cells.find(VoxelKey(c0 + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells.end()) continue;
+          for (size_t j : it->second) {
+            const Eigen::Vector3d d = surface[j].point_in_world - p;
+            const double dist2 = d.squaredNorm();
+            if (dist2 > radius * radius || surface[j].normal.dot(surface[i].normal) < min_normal_cos) continue;
+            const double w = std::max(surface[j].voxel.votes, 1) * std::exp(-0.5 * dist2 / (sigma * sigma));
+            mean += w * d;
+            second += w * d * d.transpose();
+            wsum += w;
+          }
+        }
+    if (!(wsum > 0)) continue;
+    mean /= wsum;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(second / wsum - mean * mean.transpose());
+    Eigen::Vector3d n = eig.eigenvectors().col(0);
+    if (!n.allFinite() || n.norm() < 0.5) continue;
+    n.normalize();
+    if (n.dot(surface[i].normal) < 0) n = -n;
+    out[i].normal = n;
+    out[i].point_in_world = p + n.dot(mean) * n;
+  }
   return out;
 }
 

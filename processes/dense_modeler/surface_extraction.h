@@ -6,7 +6,13 @@
 // surface point on the normal through a parabola fit of the votes at -1, 0, +1 voxel. Normals come from the
 // principal axes of the vote-weighted seed neighbourhood (the shell is locally a slab; the normal is its thin axis)
 // and point outwards: towards the cameras that saw the voxel's points when the grid recorded view directions,
-// otherwise away from the seeds' centroid. Small disconnected ridge fragments (stray matches) are dropped.
+// otherwise away from the seeds' centroid. Small disconnected ridge fragments (stray matches) are dropped: fewer
+// than min_component_voxels, or less than min_component_fraction of the largest fragment.
+// SmoothSurfacePoints then fits a local plane to the ridge points around each point, weighted by their votes (the
+// ridge's weak points, from few and often biased matches - chords of low-texture triangles, the shadowed junction
+// with the floor - are pulled onto the surface that the well-supported points around them define) and by a
+// Gaussian of their distance; the point moves onto that plane and takes its normal (the plane through the thin
+// sheet of ridge points is a steadier normal than the vote neighbourhood's thin axis).
 // MeshFromSurfacePoints turns the oriented surface points into a mesh through a signed distance field sampled in
 // a narrow band around them: the surface has holes where nothing was seen, and the mesh keeps them open rather than
 // invent a surface there.
@@ -27,6 +33,10 @@ struct RidgeOptions {
   double ridge_tolerance = 1.0;   // keep a voxel when votes >= tolerance x the interpolated votes one voxel along
                                   // +normal and -normal (1 = strict local maximum; < 1 keeps a thicker ridge), (0, 1]
   int min_component_voxels = 30;  // ridge fragments (26-connected) with fewer voxels are dropped (0 = keep all)
+  double min_component_fraction = 0.01;  // fragments with fewer voxels than this fraction of the largest one are
+                                         // dropped (0 = off), [0, 1)
+  double smoothing_radius = 4.0;         // voxels, radius of the vote-weighted local plane fit of SmoothSurfacePoints
+                                         // (0 = off), 0 or [1, 8]
 };
 
 bool ValidateRidgeOptions(const RidgeOptions& options, std::string* why);
@@ -47,6 +57,13 @@ struct RidgeStats {
 // Ridge voxels of the seeds (voxels over the vote threshold; their votes are read from grid), sorted by (k, j, i).
 std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std::vector<VoxelRecord>& seeds,
                                            const RidgeOptions& options, RidgeStats* stats = nullptr);
+
+// Vote-weighted local plane fit (see the top): for every point, the ridge points within radius_voxels whose normals
+// agree with its own (angle < 60 deg), weighted by votes x exp(-d^2 / (2 (radius/2)^2)), give a weighted centroid
+// and covariance; the point is projected onto the plane through the centroid normal to the smallest principal axis,
+// which becomes its normal (oriented like the old one). Points keep their voxel. radius_voxels <= 0: unchanged.
+std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size_mm,
+                                              double radius_voxels);
 
 // Mesh through oriented surface points: the signed distance n . (x - p), averaged with Gaussian weights
 // (sigma = voxel_size_mm) over the points within 2 voxels, is sampled on a grid of spacing voxel_size_mm; samples

@@ -67,8 +67,45 @@ TEST(SurfaceExtractionTest, SmallFragmentsAreDropped) {
   for (const SurfaceVoxel& s : ridge) EXPECT_LT((s.point_in_world - kCentre).norm(), kRadius + 5);
   EXPECT_GT(stats.fragments_dropped, 0);
   options.min_component_voxels = 0;
+  options.min_component_fraction = 0;
   const std::vector<SurfaceVoxel> all = ExtractVoteRidge(grid, grid.Extract(16), options);
   EXPECT_GT(all.size(), ridge.size());
+  // The blob is also small relative to the sphere's ridge: the relative criterion alone drops it.
+  options.min_component_fraction = 0.01;
+  RidgeStats relative;
+  const std::vector<SurfaceVoxel> kept = ExtractVoteRidge(grid, grid.Extract(16), options, &relative);
+  EXPECT_EQ(kept.size(), ridge.size());
+  EXPECT_GT(relative.fragments_dropped, 0);
+}
+
+TEST(SurfaceExtractionTest, SmoothingPullsWeakBiasedPointsOntoTheSurface) {
+  const VoxelVoteGrid grid = NoisySphereVotes(400000, 5);
+  std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions());
+  ASSERT_GT(ridge.size(), 1000u);
+  // Every 10th point: few votes and 3 mm inside (a chord of a weak match), as in the shadowed part of a scene.
+  for (size_t i = 0; i < ridge.size(); i += 10) {
+    ridge[i].voxel.votes = 20;
+    ridge[i].point_in_world -= 3.0 * ridge[i].normal;
+  }
+  auto radial_error = [](const SurfaceVoxel& s) { return std::abs((s.point_in_world - kCentre).norm() - kRadius); };
+  const std::vector<SurfaceVoxel> smooth = SmoothSurfacePoints(ridge, grid.voxel_size(), 4.0);
+  ASSERT_EQ(smooth.size(), ridge.size());
+  std::vector<double> biased, others;
+  int outward = 0;
+  for (size_t i = 0; i < smooth.size(); ++i) {
+    EXPECT_EQ(smooth[i].voxel.ijk, ridge[i].voxel.ijk);
+    (i % 10 == 0 ? biased : others).push_back(radial_error(smooth[i]));
+    outward += smooth[i].normal.dot((smooth[i].point_in_world - kCentre).normalized()) > 0.98;
+  }
+  std::sort(biased.begin(), biased.end());
+  std::sort(others.begin(), others.end());
+  EXPECT_LT(biased[biased.size() * 9 / 10], 0.8);  // was 3 mm
+  EXPECT_LT(others[others.size() * 9 / 10], 0.6);  // plane fit on a 40 mm sphere: small inward bias only
+  EXPECT_GT(outward, static_cast<int>(0.97 * smooth.size()));
+  // Radius 0: unchanged.
+  const std::vector<SurfaceVoxel> same = SmoothSurfacePoints(ridge, grid.voxel_size(), 0.0);
+  ASSERT_EQ(same.size(), ridge.size());
+  EXPECT_EQ(same[0].point_in_world, ridge[0].point_in_world);
 }
 
 TEST(SurfaceExtractionTest, MeshThroughSurfacePointsLiesOnTheSphere) {
@@ -109,6 +146,11 @@ TEST(SurfaceExtractionTest, EmptyInputAndOptions) {
   EXPECT_FALSE(ValidateRidgeOptions(bad, &why));
   EXPECT_NE(why.find("normal_radius"), std::string::npos);
   EXPECT_TRUE(ValidateRidgeOptions(RidgeOptions(), &why));
+  RidgeOptions bad_smoothing;
+  bad_smoothing.smoothing_radius = 0.5;
+  EXPECT_FALSE(ValidateRidgeOptions(bad_smoothing, &why));
+  EXPECT_NE(why.find("smoothing_radius"), std::string::npos);
+  EXPECT_TRUE(SmoothSurfacePoints({}, 2.0, 4.0).empty());
 }
 
 }  // namespace
