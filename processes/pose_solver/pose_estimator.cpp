@@ -55,8 +55,11 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
   if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
   if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
-  if (o.global_ba_all_frames && o.observations_kept_frames != 0)
-    e << "global BA over all frames needs observations kept frames = 0 (every frame's observations); ";
+  if (o.max_active_keyframes < 0 || (o.max_active_keyframes > 0 && o.max_active_keyframes < 10))
+    e << "max active keyframes must be 0 or >= 10; ";
+  if (o.global_ba_all_frames && (o.observations_kept_frames != 0 || o.max_active_keyframes != 0))
+    e << "global BA over all frames needs observations kept frames = 0 and max active keyframes = 0 (every frame's "
+         "observations); ";
   if (o.two_view_min_matches != 0 && o.two_view_min_matches < 8) e << "two view min matches must be 0 or >= 8; ";
   if (o.two_view_min_landmarks < 2) e << "two view min landmarks must be >= 2; ";
   const std::string msg = e.str();
@@ -241,6 +244,19 @@ void PoseEstimator::CompactFrame(int f) {
   // Its pose against the map as the windowed adjustments left it around the frame: from now on the frame only
   // follows its keyframes (FollowKeyframes), so its pose relative to them should be the best one available now.
   RefitPose(f);
+  DropObservations(f);
+  fr.compacted = true;
+}
+
+void PoseEstimator::FreezeKeyframe(int f) {
+  Frame& fr = frames_[f];
+  if (!fr.keyframe || fr.frozen || f == gauge_frame_ || f == gauge_frame_b_) return;
+  DropObservations(f);
+  fr.frozen = true;
+}
+
+void PoseEstimator::DropObservations(int f) {
+  Frame& fr = frames_[f];
   for (int64_t id : fr.ids) {
     auto it = track_frames_.find(id);
     if (it == track_frames_.end()) continue;
@@ -252,7 +268,6 @@ void PoseEstimator::CompactFrame(int f) {
   std::vector<int64_t>().swap(fr.ids);
   std::vector<Eigen::Vector2d>().swap(fr.pixels);
   std::vector<uint8_t>().swap(fr.outlier);
-  fr.compacted = true;
 }
 
 void PoseEstimator::FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_world_from_camera) {
@@ -610,6 +625,14 @@ void PoseEstimator::AddKeyframe(int f) {
     RescaleSixDof(gauge_frame_);
   last_keyframe_ = f;
   last_keyframe_inliers_ = frames_[f].inliers;
+  if (options_.max_active_keyframes > 0) {
+    active_keyframes_.push_back(f);
+    while (static_cast<int>(active_keyframes_.size()) > options_.max_active_keyframes) {
+      FreezeKeyframe(active_keyframes_.front());
+      active_keyframes_.pop_front();
+      any_frozen_ = true;
+    }
+  }
 }
 
 int PoseEstimator::TriangulateNew(int f) {
@@ -761,7 +784,7 @@ void PoseEstimator::PruneLandmarks(const std::vector<int64_t>& ids, const std::v
 void PoseEstimator::GlobalBundleAdjustment() {
   std::vector<int> frame_list;
   for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
-    if (frames_[g].posed &&
+    if (frames_[g].posed && !frames_[g].frozen &&
         (options_.global_ba_all_frames || frames_[g].keyframe || g == gauge_frame_ || g == gauge_frame_b_))
       frame_list.push_back(g);
   std::vector<int64_t> point_list;
@@ -798,6 +821,17 @@ void PoseEstimator::GlobalBundleAdjustment() {
   if (gauge_index < 0) gauge_index = 0;
   const bool floor_mode = options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight;
   bp.frame_fix[gauge_index] = floor_mode ? FrameFix::kFixedFloor : FrameFix::kFixed;
+  if (any_frozen_) {
+    // The frozen keyframes no longer tie the active ones to the gauge frames: the two oldest active keyframes
+    // (after the gauge frames) hold them where the windowed adjustments left them.
+    int held = 0;
+    for (size_t k = 0; k < frame_list.size() && held < 2; ++k) {
+      const int g = frame_list[k];
+      if (g == gauge_frame_ || g == gauge_frame_b_ || !frames_[g].keyframe) continue;
+      bp.frame_fix[k] = FrameFix::kFixed;
+      ++held;
+    }
+  }
   if (!floor_mode && gauge_b_index >= 0 && gauge_b_index != gauge_index) {
     bp.distance_frame_a = gauge_index;
     bp.distance_frame_b = gauge_b_index;

@@ -36,8 +36,9 @@
 //     frames) and landmarks (observations beyond the PnP inlier threshold left out), pose refits of the other
 //     frames, scale refinement (kSixDof), final poses for every frame.
 // Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
-// Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for keyframes, unposed
-// frames and the last observations_kept_frames frames only (set it to 0 to keep all for the final adjustment).
+// Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for the last
+// max_active_keyframes keyframes, unposed frames and the last observations_kept_frames frames only (set both to 0 to
+// keep all for the final adjustment), so memory per frame is flat once a stream has more keyframes than that.
 #pragma once
 
 #include <Eigen/Core>
@@ -79,6 +80,11 @@ struct PoseEstimatorOptions {
                                                // its final pose follows its neighbouring keyframes' final-BA
                                                // correction instead of a pose refit); 0 = keep every frame's
                                                // observations until Finish (memory ~40 kB per frame)
+  int max_active_keyframes = 60;               // keyframes that keep their observations; beyond it the oldest is
+                                               // frozen (observations dropped, pose and landmarks as the windowed
+                                               // BA left them), so memory stops growing on long streams, and the
+                                               // final BA adjusts the active keyframes with the two oldest held
+                                               // fixed; 0 = no limit (needs observations_kept_frames > 0 too)
   int global_ba_iterations = 40;               // Ceres iterations of the final BA
   double global_ba_function_tolerance = 1e-5;  // final BA stops when a step changes the cost by less than this
                                                // fraction (the Huber loss' IRLS tail creeps at ~1e-6 per step)
@@ -184,6 +190,7 @@ class PoseEstimator {
     bool posed = false;
     bool keyframe = false;
     bool compacted = false;  // observations dropped (see observations_kept_frames)
+    bool frozen = false;     // a keyframe whose observations were dropped (max_active_keyframes)
     Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
     PoseStatus status = PoseStatus::kInitializing;
     int inliers = 0;
@@ -211,6 +218,10 @@ class PoseEstimator {
   // observations_kept_frames).
   // First refits its pose against the current map (RefitPose).
   void CompactFrame(int f);
+  // Drops the observations of keyframe f (not a gauge frame) and marks it frozen; its pose no longer changes.
+  void FreezeKeyframe(int f);
+  // Removes frame f's observations (and f from track_frames_).
+  void DropObservations(int f);
   // Pose-only refinement of posed frame f against the current landmarks (its PnP inliers); unchanged when it sees
   // fewer than pnp.min_inliers of them.
   void RefitPose(int f);
@@ -259,7 +270,9 @@ class PoseEstimator {
   int last_keyframe_ = -1;
   int last_keyframe_inliers_ = 0;
   int lost_count_ = 0;
-  bool recovering_ = false;  // a restart after loss is in progress (chain through odometry)
+  bool recovering_ = false;           // a restart after loss is in progress (chain through odometry)
+  std::deque<int> active_keyframes_;  // keyframes with observations, oldest first (max_active_keyframes > 0)
+  bool any_frozen_ = false;           // a keyframe was frozen
   ScaleSource scale_source_ = ScaleSource::kNone;
   double init_ms_ = 0, final_ba_ms_ = 0;
   double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;

@@ -33,7 +33,8 @@ const SyntheticOrbit& Scene() {
   return s;
 }
 
-void RunEstimator(benchmark::State& state, MotionModel model, int observations_kept_frames = -1) {
+void RunEstimator(benchmark::State& state, MotionModel model, int observations_kept_frames = -1,
+                  int max_active_keyframes = -1) {
   const SyntheticOrbit& s = Scene();
   double tracks = 0;
   for (const auto& f : s.frames) tracks += f.features.size();
@@ -42,6 +43,7 @@ void RunEstimator(benchmark::State& state, MotionModel model, int observations_k
     PoseEstimatorOptions o;
     o.model = model;
     if (observations_kept_frames >= 0) o.observations_kept_frames = observations_kept_frames;
+    if (max_active_keyframes >= 0) o.max_active_keyframes = max_active_keyframes;
     PoseEstimator est(s.camera, o);
     const size_t half = s.frames.size() / 2;
     size_t bytes_half = 0;
@@ -84,11 +86,15 @@ void RunEstimator(benchmark::State& state, MotionModel model, int observations_k
 
 void BM_SixDof(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof); }
 void BM_FourDof(benchmark::State& state) { RunEstimator(state, MotionModel::kFourDof); }
-// Every frame's observations kept until Finish (observations_kept_frames = 0): the memory it costs.
-void BM_SixDofKeepAllObservations(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, 0); }
+// Every frame's observations kept until Finish (observations_kept_frames = max_active_keyframes = 0): the memory it
+// costs.
+void BM_SixDofKeepAllObservations(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, 0, 0); }
+// 12 active keyframes (the orbit has 40): memory per frame once keyframes are frozen.
+void BM_SixDofTwelveActiveKeyframes(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, -1, 12); }
 BENCHMARK(BM_SixDof)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FourDof)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SixDofKeepAllObservations)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SixDofTwelveActiveKeyframes)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace objscan

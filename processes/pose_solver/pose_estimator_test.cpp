@@ -16,14 +16,17 @@ struct RunFigures {
   double scale_error_final = 1;  // |scale of the SE(3)-free alignment - 1|
   ScaleSource scale_source = ScaleSource::kNone;
   int landmarks = 0;
-  size_t memory_bytes = 0;  // PoseEstimator::ApproxMemoryBytes before Finish
+  size_t memory_bytes = 0;       // PoseEstimator::ApproxMemoryBytes before Finish
+  size_t memory_bytes_half = 0;  // the same after half of the frames
 };
 
 RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options) {
   PoseEstimator estimator(s.camera, options);
   std::vector<Eigen::Isometry3d> online_est, online_true;
+  size_t memory_half = 0;
   for (size_t f = 0; f < s.frames.size(); ++f) {
     const FrameResult r = estimator.AddFrame(s.frames[f], &s.odometry[f]);
+    if (f + 1 == s.frames.size() / 2) memory_half = estimator.ApproxMemoryBytes();
     if (r.pose.status == PoseStatus::kTracking || r.pose.status == PoseStatus::kRelocalized) {
       online_est.push_back(r.pose.world_from_camera);
       online_true.push_back(s.world_from_camera[f]);
@@ -31,6 +34,7 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
   }
   RunFigures fig;
   fig.memory_bytes = estimator.ApproxMemoryBytes();
+  fig.memory_bytes_half = memory_half;
   fig.online_tracked = static_cast<int>(online_est.size());
   EvaluateTrajectory(online_est, online_true, true, &fig.online);
   const std::vector<CameraPoseEstimate> final_poses = estimator.Finish();
@@ -187,7 +191,35 @@ TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
   std::string why;
   EXPECT_FALSE(ValidatePoseEstimatorOptions(bad, &why));
   bad.observations_kept_frames = 0;
+  EXPECT_FALSE(ValidatePoseEstimatorOptions(bad, &why));
+  bad.max_active_keyframes = 0;
   EXPECT_TRUE(ValidatePoseEstimatorOptions(bad, &why)) << why;
+}
+
+// Only the last max_active_keyframes keyframes keep their observations (bounded memory on long streams): the final
+// BA adjusts them with the two oldest held, the frozen ones stay where the windowed BA left them.
+TEST(PoseEstimator, FrozenKeyframesBoundTheMemory) {
+  SyntheticOrbitOptions so;
+  so.odometry_scale_error = 0.02;
+  so.pan_bias_rad = 0.5 * M_PI / 180;
+  so.tilt_bias_rad = 0.5 * M_PI / 180;
+  so.odometry_heading_drift_rad_per_frame = 0.001;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  PoseEstimatorOptions o;
+  const RunFigures all_active = RunOrbit(s, o);  // 40 keyframes < max_active_keyframes
+  o.max_active_keyframes = 12;
+  const RunFigures bounded = RunOrbit(s, o);
+  EXPECT_EQ(bounded.final_posed, 200);
+  EXPECT_LE(bounded.final_error.ate_rmse, bounded.online.ate_rmse);
+  // Memory growth over the second half of the orbit (100 frames, 20 keyframes): flat once 12 keyframes are active.
+  const double growth_bounded = (double(bounded.memory_bytes) - double(bounded.memory_bytes_half)) / 100 / 1024;
+  const double growth_all = (double(all_active.memory_bytes) - double(all_active.memory_bytes_half)) / 100 / 1024;
+  std::printf(
+      "final ATE %.3f mm with 12 active keyframes, %.3f mm with all; estimator memory growth %.2f / %.2f "
+      "kB per frame\n",
+      bounded.final_error.ate_rmse, all_active.final_error.ate_rmse, growth_bounded, growth_all);
+  EXPECT_LT(growth_bounded, 2.0);  // kB per frame: poses (and a frames_ reallocation), new landmarks
+  EXPECT_GT(growth_all, growth_bounded + 3.0);  // 20 keyframes x ~1000 observations
 }
 
 TEST(PoseEstimator, DeterministicOutput) {

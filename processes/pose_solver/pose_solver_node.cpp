@@ -76,6 +76,8 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("global-ba-all-frames", &e->global_ba_all_frames, "final BA over all frames instead of keyframes");
   p.Add("observations-kept-frames", &e->observations_kept_frames,
         "frames a posed non-keyframe keeps its observations (0 = all, for the final BA)");
+  p.Add("max-active-keyframes", &e->max_active_keyframes,
+        "keyframes that keep their observations; older ones are frozen (bounded memory; 0 = no limit)");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
   p.Add("two-view-min-matches", &e->two_view_min_matches,
         "wide baseline (6dof): pose a frame PnP cannot pose from the essential matrix with the last posed frame when "
