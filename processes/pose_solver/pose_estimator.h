@@ -32,9 +32,11 @@
 //     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
 //     last good frame and the new span (no Sim(3) merge from common landmarks: KLT ids do not reappear). The first
 //     pose after recovery has status RELOCALIZED.
-//  4. Finish(): frames never posed get PnP against the final map, then global BA over the keyframes (or all posed
-//     frames) and landmarks (observations beyond the PnP inlier threshold left out), pose refits of the other
-//     frames, scale refinement (kSixDof), final poses for every frame.
+//  4. Finish(): frames never posed get PnP against the final map, then global BA over the active (not frozen)
+//     keyframes (or all posed frames) and landmarks (observations beyond the PnP inlier threshold left out; with
+//     frozen keyframes the two oldest active ones are held), pose refits of the other frames that still have
+//     observations, the compacted ones follow their keyframes, scale refinement (kSixDof), final poses for every
+//     frame.
 // Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
 // Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for the last
 // max_active_keyframes keyframes, unposed frames and the last observations_kept_frames frames only (set both to 0 to
