@@ -47,7 +47,7 @@ for m in mesh voxels; do
   "$BIN/objscan_evaluate" surface "$WORK/out6/model_$m.ply" "$WORK/gt/target_surface.ply" \
     --align "$WORK/out6/trajectory.txt" "$GT" --visible-from "$GT" > "$WORK/$m.txt" || fail "evaluate $m"
 done
-check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.6
+check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.4
 check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.8
 check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.92
 check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.88

@@ -8,11 +8,12 @@
 // and point outwards: towards the cameras that saw the voxel's points when the grid recorded view directions,
 // otherwise away from the seeds' centroid. Small disconnected ridge fragments (stray matches) are dropped: fewer
 // than min_component_voxels, or less than min_component_fraction of the largest fragment.
-// SmoothSurfacePoints then fits a local plane to the ridge points around each point, weighted by their votes (the
+// SmoothSurfacePoints then fits a local surface to the ridge points around each point, weighted by their votes (the
 // ridge's weak points, from few and often biased matches - chords of low-texture triangles, the shadowed junction
 // with the floor - are pulled onto the surface that the well-supported points around them define) and by a
-// Gaussian of their distance; the point moves onto that plane and takes its normal (the plane through the thin
-// sheet of ridge points is a steadier normal than the vote neighbourhood's thin axis).
+// Gaussian of their distance: a plane, then a quadratic height field over it (a plane alone would pull every point
+// of a curved surface inwards by the sagitta of the neighbourhood); the point moves onto that surface and takes its
+// normal (steadier than the vote neighbourhood's thin axis).
 // MeshFromSurfacePoints turns the oriented surface points into a mesh through a signed distance field sampled in
 // a narrow band around them: the surface has holes where nothing was seen, and the mesh keeps them open rather than
 // invent a surface there.
@@ -35,8 +36,8 @@ struct RidgeOptions {
   int min_component_voxels = 30;  // ridge fragments (26-connected) with fewer voxels are dropped (0 = keep all)
   double min_component_fraction = 0.01;  // fragments with fewer voxels than this fraction of the largest one are
                                          // dropped (0 = off), [0, 1)
-  double smoothing_radius = 4.0;         // voxels, radius of the vote-weighted local plane fit of SmoothSurfacePoints
-                                         // (0 = off), 0 or [1, 8]
+  double smoothing_radius = 8.0;         // voxels, radius of the vote-weighted local surface fit of SmoothSurfacePoints
+                                         // (0 = off), 0 or [1, 12]
 };
 
 bool ValidateRidgeOptions(const RidgeOptions& options, std::string* why);
@@ -58,10 +59,12 @@ struct RidgeStats {
 std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std::vector<VoxelRecord>& seeds,
                                            const RidgeOptions& options, RidgeStats* stats = nullptr);
 
-// Vote-weighted local plane fit (see the top): for every point, the ridge points within radius_voxels whose normals
-// agree with its own (angle < 60 deg), weighted by votes x exp(-d^2 / (2 (radius/2)^2)), give a weighted centroid
-// and covariance; the point is projected onto the plane through the centroid normal to the smallest principal axis,
-// which becomes its normal (oriented like the old one). Points keep their voxel. radius_voxels <= 0: unchanged.
+// Vote-weighted local surface fit (see the top): for every point, the ridge points within radius_voxels whose
+// normals agree with its own (angle < 60 deg), weighted by votes x exp(-d^2 / (2 (radius/2)^2)), give a weighted
+// centroid and covariance, whose smallest principal axis is the plane normal n; with >= 12 neighbours a weighted
+// quadratic height field h(u, v) over the point's tangent plane is fitted and the point moves to h(0, 0) along n,
+// taking the field's normal there (else onto the plane, taking n). Normals stay oriented like the old ones. Points
+// keep their voxel. radius_voxels <= 0: unchanged.
 std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size_mm,
                                               double radius_voxels);
 

@@ -108,6 +108,36 @@ TEST(SurfaceExtractionTest, SmoothingPullsWeakBiasedPointsOntoTheSurface) {
   EXPECT_EQ(same[0].point_in_world, ridge[0].point_in_world);
 }
 
+// Points exactly on a curved surface stay on it: a plane through the weighted centroid of a neighbourhood of radius r
+// on a sphere of radius R lies inside by about (r/2)^2 / R (0.32 mm for r = 16 mm on R = 100 mm); the quadratic height
+// field removes that bias.
+TEST(SurfaceExtractionTest, SmoothingHasNoCurvatureBias) {
+  constexpr double kSphereRadius = 100.0, kVoxel = 2.0;
+  std::vector<SurfaceVoxel> points;
+  const Eigen::Vector3d centre(0, 0, 100);
+  for (int i = 0; i < 20000; ++i) {  // Fibonacci sphere: ~2.5 mm spacing, like ridge points of 2 mm voxels
+    const double z = 1.0 - 2.0 * (i + 0.5) / 20000, r = std::sqrt(1.0 - z * z), phi = i * 2.39996322972865332;
+    SurfaceVoxel s;
+    s.normal = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+    s.point_in_world = centre + kSphereRadius * s.normal;
+    s.voxel.votes = 100 + i % 50;
+    points.push_back(s);
+  }
+  const std::vector<SurfaceVoxel> smooth = SmoothSurfacePoints(points, kVoxel, 8.0);
+  ASSERT_EQ(smooth.size(), points.size());
+  double mean_signed = 0, worst = 0, worst_normal_deg = 0;
+  for (const SurfaceVoxel& s : smooth) {
+    const double e = (s.point_in_world - centre).norm() - kSphereRadius;
+    mean_signed += e / smooth.size();
+    worst = std::max(worst, std::abs(e));
+    const double c = std::clamp(s.normal.dot((s.point_in_world - centre).normalized()), -1.0, 1.0);
+    worst_normal_deg = std::max(worst_normal_deg, std::acos(c) * 180 / M_PI);
+  }
+  EXPECT_LT(std::abs(mean_signed), 0.02);  // mm (a plane fit: about -0.3)
+  EXPECT_LT(worst, 0.05);                  // mm
+  EXPECT_LT(worst_normal_deg, 1.0);
+}
+
 TEST(SurfaceExtractionTest, MeshThroughSurfacePointsLiesOnTheSphere) {
   const VoxelVoteGrid grid = NoisySphereVotes(400000, 3);
   const std::vector<SurfaceVoxel> ridge = ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions());
