@@ -78,7 +78,7 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("ridge-min-component-fraction", &m->ridge.min_component_fraction,
         "ridge fragments smaller than this fraction of the largest are dropped");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
-        "voxels, radius of the vote-weighted plane fit of the surface points before meshing (0 = off)");
+        "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
   AffineDenseOptions* d = &m->dense;
   p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
   p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
