@@ -165,16 +165,21 @@ TEST(PoseEstimator, LostTrackingRecoversThroughOdometry) {
   EXPECT_LT(err.ate_rmse, 20.0);
 }
 
-// Non-keyframes drop their observations 30 frames after they were posed (the default): the estimator then holds
-// about a third of the memory, and the final poses (which follow the keyframes for those frames) are as accurate as
-// with every frame's observations kept for a pose refit after the final BA.
-TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
+// The robot simulator's odometry errors: 2 % slip, heading drift, 0.5 deg pan/tilt biases.
+SyntheticOrbitOptions SimLikeOdometryErrors() {
   SyntheticOrbitOptions so;
   so.odometry_scale_error = 0.02;
   so.pan_bias_rad = 0.5 * M_PI / 180;
   so.tilt_bias_rad = 0.5 * M_PI / 180;
   so.odometry_heading_drift_rad_per_frame = 0.001;
-  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  return so;
+}
+
+// Non-keyframes drop their observations 30 frames after they were posed (the default): the estimator then holds
+// about a third of the memory, and the final poses (which follow the keyframes for those frames) are as accurate as
+// with every frame's observations kept for a pose refit after the final BA.
+TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
+  const SyntheticOrbit s = MakeSyntheticOrbit(SimLikeOdometryErrors());
   PoseEstimatorOptions o;
   ASSERT_GT(o.observations_kept_frames, 0);
   const RunFigures dropped = RunOrbit(s, o);
@@ -199,12 +204,7 @@ TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
 // Only the last max_active_keyframes keyframes keep their observations (bounded memory on long streams): the final
 // BA adjusts them with the two oldest held, the frozen ones stay where the windowed BA left them.
 TEST(PoseEstimator, FrozenKeyframesBoundTheMemory) {
-  SyntheticOrbitOptions so;
-  so.odometry_scale_error = 0.02;
-  so.pan_bias_rad = 0.5 * M_PI / 180;
-  so.tilt_bias_rad = 0.5 * M_PI / 180;
-  so.odometry_heading_drift_rad_per_frame = 0.001;
-  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  const SyntheticOrbit s = MakeSyntheticOrbit(SimLikeOdometryErrors());
   PoseEstimatorOptions o;
   const RunFigures all_active = RunOrbit(s, o);  // 40 keyframes < max_active_keyframes
   o.max_active_keyframes = 12;
@@ -218,7 +218,7 @@ TEST(PoseEstimator, FrozenKeyframesBoundTheMemory) {
       "final ATE %.3f mm with 12 active keyframes, %.3f mm with all; estimator memory growth %.2f / %.2f "
       "kB per frame\n",
       bounded.final_error.ate_rmse, all_active.final_error.ate_rmse, growth_bounded, growth_all);
-  EXPECT_LT(growth_bounded, 2.0);  // kB per frame: poses (and a frames_ reallocation), new landmarks
+  EXPECT_LT(growth_bounded, 2.0);               // kB per frame: poses (and a frames_ reallocation), new landmarks
   EXPECT_GT(growth_all, growth_bounded + 3.0);  // 20 keyframes x ~1000 observations
 }
 
