@@ -164,7 +164,7 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
       }
       component_size.push_back(members);
     }
-    const size_t largest = *std::max_element(component_size.begin(), component_size.end());
+    const size_t largest = component_size.empty() ? 0 : *std::max_element(component_size.begin(), component_size.end());
     const double min_size =
         std::max(static_cast<double>(o.min_component_voxels), o.min_component_fraction * static_cast<double>(largest));
     for (size_t i = 0; i < ridge.size(); ++i) {

@@ -86,7 +86,10 @@ uint64_t VoxelVoteGrid::BlockKey(int bx, int by, int bz) {
 
 size_t VoxelVoteGrid::SlotOf(uint64_t key) const {
   const size_t mask = slot_key_.size() - 1;
-  size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+  // Fibonacci hashing: the product's high bits depend on every key bit (its low bits only on the key's low bits,
+  // which would leave z, in the key's top bits, out of the slot).
+  const int bits = __builtin_ctzll(static_cast<unsigned long long>(slot_key_.size()));  // size: a power of two
+  size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits)) & mask;
   while (slot_key_[i] != key && slot_key_[i] != kNoKey) i = (i + 1) & mask;
   return i;
 }

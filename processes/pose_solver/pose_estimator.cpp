@@ -55,8 +55,10 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
   if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
   if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
-  if (o.max_active_keyframes < 0 || (o.max_active_keyframes > 0 && o.max_active_keyframes < 10))
-    e << "max active keyframes must be 0 or >= 10; ";
+  if (o.max_active_keyframes < 0 ||
+      (o.max_active_keyframes > 0 &&
+       o.max_active_keyframes < std::max(10, o.local_window_keyframes + o.local_fixed_keyframes)))
+    e << "max active keyframes must be 0 or >= max(10, local window + local fixed keyframes); ";
   if (o.global_ba_all_frames && (o.observations_kept_frames != 0 || o.max_active_keyframes != 0))
     e << "global BA over all frames needs observations kept frames = 0 and max active keyframes = 0 (every frame's "
          "observations); ";
@@ -233,9 +235,23 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
     }
   }
   result.pose = Estimate(f);
-  if (options_.observations_kept_frames > 0 && f >= options_.observations_kept_frames)
-    CompactFrame(f - options_.observations_kept_frames);
+  if (options_.observations_kept_frames > 0) CompactOldFrames(f);
   return result;
+}
+
+void PoseEstimator::CompactOldFrames(int newest) {
+  for (; compaction_cursor_ <= newest - options_.observations_kept_frames; ++compaction_cursor_)
+    old_uncompacted_.push_back(compaction_cursor_);
+  // Frames posed late (preliminary window) are compacted once they are posed; unposed ones (lost stretches) keep
+  // their observations for the registration at Finish.
+  size_t kept = 0;
+  for (int g : old_uncompacted_) {
+    if (frames_[g].posed)
+      CompactFrame(g);
+    else
+      old_uncompacted_[kept++] = g;
+  }
+  old_uncompacted_.resize(kept);
 }
 
 void PoseEstimator::CompactFrame(int f) {
@@ -353,6 +369,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     fr.posed = true;
     fr.world_from_camera = best.world_from_camera[f];
     fr.keyframe = (f % options_.keyframe_interval == 0) || f == nf - 1;
+    if (fr.keyframe) NoteActiveKeyframe(first + f);
   }
   for (int p = 0; p < np; ++p) {
     points_[common[p]] = Point{best.points[p], false};
@@ -625,13 +642,18 @@ void PoseEstimator::AddKeyframe(int f) {
     RescaleSixDof(gauge_frame_);
   last_keyframe_ = f;
   last_keyframe_inliers_ = frames_[f].inliers;
-  if (options_.max_active_keyframes > 0) {
-    active_keyframes_.push_back(f);
-    while (static_cast<int>(active_keyframes_.size()) > options_.max_active_keyframes) {
-      FreezeKeyframe(active_keyframes_.front());
-      active_keyframes_.pop_front();
-      any_frozen_ = true;
-    }
+  NoteActiveKeyframe(f);
+}
+
+void PoseEstimator::NoteActiveKeyframe(int f) {
+  if (options_.max_active_keyframes <= 0) return;
+  active_keyframes_.push_back(f);
+  while (static_cast<int>(active_keyframes_.size()) > options_.max_active_keyframes) {
+    const int oldest = active_keyframes_.front();
+    active_keyframes_.pop_front();
+    if (oldest == gauge_frame_ || oldest == gauge_frame_b_) continue;  // gauge frames keep their observations
+    FreezeKeyframe(oldest);
+    any_frozen_ = true;
   }
 }
 
@@ -823,12 +845,14 @@ void PoseEstimator::GlobalBundleAdjustment() {
   bp.frame_fix[gauge_index] = floor_mode ? FrameFix::kFixedFloor : FrameFix::kFixed;
   if (any_frozen_) {
     // The frozen keyframes no longer tie the active ones to the gauge frames: the two oldest active keyframes
-    // (after the gauge frames) hold them where the windowed adjustments left them.
+    // (the ones right after the frozen block) hold them where the windowed adjustments left them.
     int held = 0;
-    for (size_t k = 0; k < frame_list.size() && held < 2; ++k) {
-      const int g = frame_list[k];
-      if (g == gauge_frame_ || g == gauge_frame_b_ || !frames_[g].keyframe) continue;
-      bp.frame_fix[k] = FrameFix::kFixed;
+    for (int g : active_keyframes_) {
+      if (held == 2) break;
+      if (g == gauge_frame_ || g == gauge_frame_b_ || !frames_[g].posed) continue;
+      const auto it = std::lower_bound(frame_list.begin(), frame_list.end(), g);
+      if (it == frame_list.end() || *it != g) continue;
+      bp.frame_fix[static_cast<size_t>(it - frame_list.begin())] = FrameFix::kFixed;
       ++held;
     }
   }
@@ -1067,9 +1091,9 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
     }
     GlobalBundleAdjustment();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
-    // Final per-frame statistics (compacted frames keep their online figures).
+    // Final per-frame statistics (compacted and frozen frames keep their online figures).
     for (auto& fr : frames_)
-      if (fr.posed && !fr.compacted) UpdateFrameStatistics(&fr);
+      if (fr.posed && !fr.compacted && !fr.frozen) UpdateFrameStatistics(&fr);
   }
   final_ba_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   std::vector<CameraPoseEstimate> out;

@@ -40,7 +40,9 @@
 // Pixels are corrected for distortion on input. Deterministic (seeded RANSAC, single-threaded Ceres).
 // Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for the last
 // max_active_keyframes keyframes, unposed frames and the last observations_kept_frames frames only (set both to 0 to
-// keep all for the final adjustment), so memory per frame is flat once a stream has more keyframes than that.
+// keep all for the final adjustment), so memory per frame is flat once a stream has more keyframes than that (long
+// lost stretches keep theirs until Finish). Landmarks() counts (num_observations, RMS) cover the observations still
+// held.
 #pragma once
 
 #include <Eigen/Core>
@@ -222,6 +224,10 @@ class PoseEstimator {
   void CompactFrame(int f);
   // Drops the observations of keyframe f (not a gauge frame) and marks it frozen; its pose no longer changes.
   void FreezeKeyframe(int f);
+  // Compacts the posed frames at least observations_kept_frames older than newest (each once).
+  void CompactOldFrames(int newest);
+  // Records keyframe f as active (max_active_keyframes > 0) and freezes the oldest beyond the limit.
+  void NoteActiveKeyframe(int f);
   // Removes frame f's observations (and f from track_frames_).
   void DropObservations(int f);
   // Pose-only refinement of posed frame f against the current landmarks (its PnP inliers); unchanged when it sees
@@ -275,6 +281,8 @@ class PoseEstimator {
   bool recovering_ = false;           // a restart after loss is in progress (chain through odometry)
   std::deque<int> active_keyframes_;  // keyframes with observations, oldest first (max_active_keyframes > 0)
   bool any_frozen_ = false;           // a keyframe was frozen
+  int compaction_cursor_ = 0;         // frames below this were queued for compaction
+  std::vector<int> old_uncompacted_;  // queued frames still unposed (compacted once posed)
   ScaleSource scale_source_ = ScaleSource::kNone;
   double init_ms_ = 0, final_ba_ms_ = 0;
   double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;

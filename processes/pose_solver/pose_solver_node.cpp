@@ -352,9 +352,13 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
                 WriteTumTrajectory(options_.output_dir + "/trajectory_online.txt", online_poses_, &error) &&
                 WriteLandmarksPly(options_.output_dir + "/landmarks.ply", lms, &error);
       if (ok) {
-        // Images in frame order; their observations come back from the spool in the same order.
+        // Images in frame order; their observations come back from the spool in the same (seq) order. The two
+        // are merged by seq: a spooled frame without a pose (the estimator rejected it) is skipped.
         const bool have_spool = spool_ && spool_->Rewind();
         size_t next = 0;
+        bool spool_done = !have_spool, spool_pending = false;
+        int64_t spool_seq = -1;
+        std::vector<TrackedFeature> spool_features;
         auto next_image = [&](ColmapImage* im) {
           if (next >= final_poses.size()) return false;
           const CameraPoseEstimate& pose = final_poses[next++];
@@ -363,8 +367,21 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
           std::snprintf(name, sizeof(name), "%06lld.png", static_cast<long long>(pose.seq));
           im->name = name;
           im->features.clear();
-          int64_t seq = -1;
-          if (have_spool && spool_->Next(&seq, &im->features) && seq != pose.seq) im->features.clear();
+          while (!spool_done) {
+            if (!spool_pending && !(spool_pending = spool_->Next(&spool_seq, &spool_features))) {
+              spool_done = true;
+              break;
+            }
+            if (spool_seq < pose.seq) {  // no pose for that frame
+              spool_pending = false;
+              continue;
+            }
+            if (spool_seq == pose.seq) {
+              im->features.swap(spool_features);
+              spool_pending = false;
+            }
+            break;  // a later frame's record stays pending
+          }
           return true;
         };
         ok = WriteColmapText(options_.output_dir + "/colmap", camera_, next_image, lms, &error);
