@@ -273,7 +273,16 @@ void PoseEstimator::FreezeKeyframe(int f) {
 
 void PoseEstimator::DropObservations(int f) {
   Frame& fr = frames_[f];
-  for (int64_t id : fr.ids) {
+  const Eigen::Isometry3d camera_from_world = fr.world_from_camera.inverse();
+  for (size_t i = 0; i < fr.ids.size(); ++i) {
+    const int64_t id = fr.ids[i];
+    auto point = points_.find(id);
+    Eigen::Vector2d uv;
+    if (fr.posed && !fr.outlier[i] && point != points_.end() &&
+        ProjectIdeal(camera_, camera_from_world * point->second.x, &uv)) {
+      ++point->second.dropped_observations;
+      point->second.dropped_sq_error += (uv - fr.pixels[i]).squaredNorm();
+    }
     auto it = track_frames_.find(id);
     if (it == track_frames_.end()) continue;
     std::vector<int>& list = it->second;  // ascending frame indices
@@ -1124,6 +1133,8 @@ std::vector<Landmark> PoseEstimator::Landmarks() const {
         ++n;
       }
     }
+    n += p.dropped_observations;
+    sum += p.dropped_sq_error;
     l.num_observations = n;
     l.reprojection_rms_px = n > 0 ? std::sqrt(sum / n) : 0.0;
     out.push_back(l);

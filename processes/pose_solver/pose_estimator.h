@@ -41,8 +41,8 @@
 // Memory: every frame keeps its pose (~0.3 kB); observations (~25 bytes per track) are kept for the last
 // max_active_keyframes keyframes, unposed frames and the last observations_kept_frames frames only (set both to 0 to
 // keep all for the final adjustment), so memory per frame is flat once a stream has more keyframes than that (long
-// lost stretches keep theirs until Finish). Landmarks() counts (num_observations, RMS) cover the observations still
-// held.
+// lost stretches keep theirs until Finish). Landmarks() counts (num_observations, RMS) include the dropped
+// observations, with their reprojection error as it was when they were dropped.
 #pragma once
 
 #include <Eigen/Core>
@@ -204,6 +204,8 @@ class PoseEstimator {
   struct Point {
     Eigen::Vector3d x;
     bool on_floor = false;
+    int dropped_observations = 0;  // inlier observations of frames that dropped theirs (counted in Landmarks())
+    double dropped_sq_error = 0;   // px^2, their summed squared reprojection error when they were dropped
   };
   enum class Phase { kInitializing, kTracking, kLost };
 

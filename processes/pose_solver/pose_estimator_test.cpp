@@ -18,6 +18,7 @@ struct RunFigures {
   int landmarks = 0;
   size_t memory_bytes = 0;       // PoseEstimator::ApproxMemoryBytes before Finish
   size_t memory_bytes_half = 0;  // the same after half of the frames
+  double mean_observations = 0;  // Landmark::num_observations, mean over the final landmarks
 };
 
 RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options) {
@@ -48,7 +49,10 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
   EvaluateTrajectory(fe, ft, true, &fig.final_error);
   fig.scale_error_final = std::abs(fig.final_error.scale - 1.0);
   fig.scale_source = estimator.scale_source();
-  fig.landmarks = static_cast<int>(estimator.Landmarks().size());
+  const std::vector<Landmark> landmarks = estimator.Landmarks();
+  fig.landmarks = static_cast<int>(landmarks.size());
+  for (const Landmark& l : landmarks)
+    fig.mean_observations += l.num_observations / std::max<double>(1, landmarks.size());
   std::printf(
       "tracked %d online ATE %.3f mm (max %.3f, scale %.4f) | final posed %d ATE %.3f mm (rot %.4f deg, "
       "scale %.4f) | landmarks %d, keyframes %d, init %.1f ms, final %.1f ms\n  %s\n",
@@ -189,6 +193,11 @@ TEST(PoseEstimator, DroppingOldObservationsKeepsTheFinalAccuracy) {
   EXPECT_LE(dropped.final_error.ate_rmse, 1.1 * kept.final_error.ate_rmse + 0.02);  // mm
   EXPECT_LE(dropped.final_error.rotation_mean_rad, 1.1 * kept.final_error.rotation_mean_rad + 0.002 * M_PI / 180);
   EXPECT_LT(dropped.memory_bytes, kept.memory_bytes / 2);
+  // Landmark observation counts still include the dropped observations.
+  EXPECT_GT(dropped.mean_observations, 0.9 * kept.mean_observations);
+  EXPECT_GT(kept.mean_observations, 10.0);
+  std::printf("mean observations per landmark: %.1f with old observations dropped, %.1f with all kept\n",
+              dropped.mean_observations, kept.mean_observations);
   std::printf("estimator memory: %.0f kB with old observations dropped, %.0f kB with all kept\n",
               dropped.memory_bytes / 1024.0, kept.memory_bytes / 1024.0);
   PoseEstimatorOptions bad;
