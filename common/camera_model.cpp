@@ -82,21 +82,12 @@ Eigen::Vector2d PinholeCamera::Distort(const Eigen::Vector2d& n) const {
   return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x), y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
 }
 
-bool PinholeCamera::Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) const {
-  if (!(p.z() > 0)) return false;
-  const Eigen::Vector2d d = Distort(Eigen::Vector2d(p.x() / p.z(), p.y() / p.z()));
-  *pixel = Eigen::Vector2d(fx * d.x() + skew * d.y() + cx, fy * d.y() + cy);
-  return true;
-}
-
-Eigen::Vector2d PinholeCamera::Unproject(const Eigen::Vector2d& pixel) const {
-  const double yd = (pixel.y() - cy) / fy;
-  const double xd = (pixel.x() - cx - skew * yd) / fx;
-  Eigen::Vector2d n(xd, yd);
+Eigen::Vector2d PinholeCamera::Undistort(const Eigen::Vector2d& distorted) const {
+  Eigen::Vector2d n = distorted;
   if (!HasDistortion()) return n;
   // Fixed-point iteration: n = d - (Distort(n) - n), converges for moderate distortion.
   for (int i = 0; i < 20; ++i) {
-    const Eigen::Vector2d err = Distort(n) - Eigen::Vector2d(xd, yd);
+    const Eigen::Vector2d err = Distort(n) - distorted;
     n -= err;
     if (err.squaredNorm() < 1e-24) break;
   }

@@ -22,10 +22,23 @@ struct PinholeCamera {
   bool IsValid(std::string* why = nullptr) const;
   Eigen::Matrix3d K() const;
 
-  // Projects a point in the camera frame (mm or any unit) to a distorted pixel. False when z <= 0.
-  bool Project(const Eigen::Vector3d& point_in_camera, Eigen::Vector2d* pixel) const;
-  // Normalized image coordinates (x/z, y/z) of a distorted pixel (undistorts iteratively).
-  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const;
+  // Projects a point in the camera frame (mm or any unit) to a distorted pixel. False when z <= 0. Inline (per-pixel
+  // loops call it); distortion goes through Distort.
+  bool Project(const Eigen::Vector3d& point_in_camera, Eigen::Vector2d* pixel) const {
+    if (!(point_in_camera.z() > 0)) return false;
+    const Eigen::Vector2d n(point_in_camera.x() / point_in_camera.z(), point_in_camera.y() / point_in_camera.z());
+    const Eigen::Vector2d d = HasDistortion() ? Distort(n) : n;
+    *pixel = Eigen::Vector2d(fx * d.x() + skew * d.y() + cx, fy * d.y() + cy);
+    return true;
+  }
+  // Normalized image coordinates (x/z, y/z) of a distorted pixel (undistorts iteratively). Inline like Project.
+  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const {
+    const double yd = (pixel.y() - cy) / fy;
+    const double xd = (pixel.x() - cx - skew * yd) / fx;
+    return HasDistortion() ? Undistort(Eigen::Vector2d(xd, yd)) : Eigen::Vector2d(xd, yd);
+  }
+  // Undistorts distorted normalized coordinates (fixed-point iteration; the inverse of Distort).
+  Eigen::Vector2d Undistort(const Eigen::Vector2d& distorted) const;
   // Distorts normalized coordinates (no-op without distortion).
   Eigen::Vector2d Distort(const Eigen::Vector2d& normalized) const;
   bool InImage(const Eigen::Vector2d& pixel, double margin = 0) const {

@@ -76,30 +76,6 @@ bool SmallestAngleBelow(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, co
 
 double Cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-// PinholeCamera's Unproject / Project written out for a camera without distortion (the same operations in the same
-// order, so bit-identical results), inlined into the pixel loop; with distortion they call the camera.
-class PixelCamera {
- public:
-  explicit PixelCamera(const PinholeCamera& camera) : camera_(camera), distorted_(camera.HasDistortion()) {}
-  Eigen::Vector2d Unproject(const Eigen::Vector2d& pixel) const {
-    if (distorted_) return camera_.Unproject(pixel);
-    const double yd = (pixel.y() - camera_.cy) / camera_.fy;
-    const double xd = (pixel.x() - camera_.cx - camera_.skew * yd) / camera_.fx;
-    return Eigen::Vector2d(xd, yd);
-  }
-  bool Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) const {
-    if (distorted_) return camera_.Project(p, pixel);
-    if (!(p.z() > 0)) return false;
-    const double x = p.x() / p.z(), y = p.y() / p.z();
-    *pixel = Eigen::Vector2d(camera_.fx * x + camera_.skew * y + camera_.cx, camera_.fy * y + camera_.cy);
-    return true;
-  }
-
- private:
-  const PinholeCamera& camera_;
-  const bool distorted_;
-};
-
 // TriangulateMidpoint with the cosine of the ray angle instead of the angle (no acos per pixel).
 inline bool MidpointCos(const Eigen::Vector3d& oa, const Eigen::Vector3d& da, const Eigen::Vector3d& ob,
                         const Eigen::Vector3d& db, Eigen::Vector3d* point, double* cos_angle) {
@@ -535,7 +511,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   visited.setTo(0);
   std::vector<DensePoint>& points = scratch.points;
   points.clear();
-  const PixelCamera cam_a(a.camera), cam_b(b.camera);
+  const PinholeCamera& cam_a = a.camera;
+  const PinholeCamera& cam_b = b.camera;
   const AngleLimit angle_limit(min_angle);
   const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
   const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
