@@ -177,30 +177,10 @@ void VoxelVoteGrid::AddPointAt(const Eigen::Vector3i& c, Block* near[27], const 
   ++points_added_;
   // The neighbour pattern of the voxel's place in its block (interior, or on which faces): per neighbour the
   // block (by step, near[] index) and the local index offset, wrapping into the neighbouring block.
-  const int place = ((lz == 0   ? 0
-                      : lz == m ? 2
-                                : 1) *
-                         3 +
-                     (ly == 0   ? 0
-                      : ly == m ? 2
-                                : 1)) *
-                        3 +
-                    (lx == 0   ? 0
-                     : lx == m ? 2
-                               : 1);
-  int64_t new_voxels = 0;      // voxels whose first vote this is
-  if (place == kInnerPlace) {  // all in the voxel's own block
-    int32_t* votes = center_block->votes + center_local;
-    for (const PlacedNeighbour& nb : placed_neighbours_[kInnerPlace]) {
-      int32_t& v = votes[nb.delta];
-      new_voxels += v == 0;
-      v += nb.weight;
-    }
-    num_voxels_ += new_voxels;
-    total_votes_ += neighbour_weight_total_;
-    return;
-  }
-  for (const PlacedNeighbour& nb : placed_neighbours_[place]) {
+  auto layer = [m](int l) { return l == 0 ? 0 : l == m ? 2 : 1; };
+  const int place = (layer(lz) * 3 + layer(ly)) * 3 + layer(lx);
+  int64_t new_voxels = 0;                                        // voxels whose first vote this is
+  for (const PlacedNeighbour& nb : placed_neighbours_[place]) {  // inner place: every nb.block is 13 (set)
     Block*& blk = near[nb.block];
     if (!blk)
       blk = GetBlock((c.x() >> kBlockBits) + nb.block % 3 - 1, (c.y() >> kBlockBits) + nb.block / 3 % 3 - 1,
