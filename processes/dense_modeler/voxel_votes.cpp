@@ -179,8 +179,19 @@ void VoxelVoteGrid::AddPointAt(const Eigen::Vector3i& c, Block* near[27], const 
   // block (by step, near[] index) and the local index offset, wrapping into the neighbouring block.
   auto layer = [m](int l) { return l == 0 ? 0 : l == m ? 2 : 1; };
   const int place = (layer(lz) * 3 + layer(ly)) * 3 + layer(lx);
-  int64_t new_voxels = 0;                                        // voxels whose first vote this is
-  for (const PlacedNeighbour& nb : placed_neighbours_[place]) {  // inner place: every nb.block is 13 (set)
+  int64_t new_voxels = 0;      // voxels whose first vote this is
+  if (place == kInnerPlace) {  // all in the voxel's own block; as the general loop it cost 25 % more time
+    int32_t* votes = center_block->votes + center_local;
+    for (const PlacedNeighbour& nb : placed_neighbours_[kInnerPlace]) {
+      int32_t& v = votes[nb.delta];
+      new_voxels += v == 0;
+      v += nb.weight;
+    }
+    num_voxels_ += new_voxels;
+    total_votes_ += neighbour_weight_total_;
+    return;
+  }
+  for (const PlacedNeighbour& nb : placed_neighbours_[place]) {
     Block*& blk = near[nb.block];
     if (!blk)
       blk = GetBlock((c.x() >> kBlockBits) + nb.block % 3 - 1, (c.y() >> kBlockBits) + nb.block / 3 % 3 - 1,

@@ -119,6 +119,7 @@ class VoxelVoteGrid {
     int delta;  // its local index in that block minus the point's local index
     int32_t weight;
   };
+  static constexpr int kInnerPlace = 13;  // inner layer on every axis: no neighbour crosses a block border
   std::vector<PlacedNeighbour> placed_neighbours_[27];
   int64_t neighbour_weight_total_ = 0;  // votes one point adds
   std::vector<uint64_t> slot_key_;      // hash table of blocks: key per slot (kNoKey = empty), power-of-two size
