@@ -84,6 +84,8 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("cy", &o->cy, "px, principal point v");
   p.Add("camera-name", &o->camera_name, "camera_name in image_t and camera_info_t");
   p.Add("noise-sigma", &o->noise_sigma, "grey levels, std of the Gaussian image noise per channel (0 = none)");
+  p.Add("blank-first", &o->blank_first, "first frame rendered as a uniform grey view (tracking loss test; -1 = none)");
+  p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
   p.Add("trilinear", &o->trilinear, "trilinear texture filtering between mip levels (slower)");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
@@ -190,6 +192,7 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (o.width > 8192 || o.height > 8192) return fail("--width/--height must be <= 8192");
   if (!std::isfinite(o.noise_sigma) || o.noise_sigma < 0 || o.noise_sigma > 100)
     return fail("--noise-sigma must be in [0, 100]");
+  if (o.blank_first < -1 || o.blank_count < 0) return fail("--blank-first must be >= -1 and --blank-count >= 0");
   if (!EncodingFromName(o.encoding, &encoding)) return fail("--encoding must be rgb8, bgr8, gray8 or jpeg");
   if (o.jpeg_quality < 1 || o.jpeg_quality > 100) return fail("--jpeg-quality must be in 1..100");
   if (o.lockstep_lag < 0) return fail("--lockstep-lag must be >= 0");
@@ -390,6 +393,9 @@ void RobotSimNode::PublishFrame() {
   image.seq = frame.seq;
   image.camera_name = camera_.name;
   image.image = render_.rgb;
+  if (options_.blank_first >= 0 && frame.seq >= options_.blank_first &&
+      frame.seq < static_cast<int64_t>(options_.blank_first) + options_.blank_count)
+    image.image = cv::Mat(render_.rgb.size(), render_.rgb.type(), cv::Scalar::all(128));
   Publish(options_.image_channel, ImageToMessage(image, encoding_, options_.jpeg_quality));
 
   if (poses_gt_.is_open()) {
