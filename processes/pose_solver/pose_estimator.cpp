@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -12,6 +13,8 @@
 #include <stdexcept>
 
 #include <ctime>
+
+#include "common/geometry.h"
 
 namespace objscan {
 
@@ -54,6 +57,12 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.min_floor_points < 3) e << "min floor points must be >= 3; ";
   if (o.online_scale_frames < 0) e << "online scale frames must be >= 0; ";
   if (o.relocalize_after_lost_frames < 1) e << "relocalize after lost frames must be >= 1; ";
+  if (!(o.fuse_search_mm > 0)) e << "fuse search mm must be > 0; ";
+  if (!(o.fuse_max_px > 0)) e << "fuse max px must be > 0; ";
+  if (!(o.fuse_min_parallax_deg >= 0)) e << "fuse min parallax deg must be >= 0; ";
+  if (!(o.join_search_mm >= 0)) e << "join search mm must be >= 0; ";
+  if (o.join_search_mm > 0 && !(o.join_max_mm > 0)) e << "join max mm must be > 0; ";
+  if (o.join_search_mm > 0 && o.join_min_landmarks < 3) e << "join min landmarks must be >= 3; ";
   if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
   if (o.max_active_keyframes < 0 ||
       (o.max_active_keyframes > 0 &&
@@ -140,6 +149,8 @@ size_t PoseEstimator::ApproxMemoryBytes() const {
   bytes += points_.size() * (sizeof(std::pair<const int64_t, Point>) + kNodeOverhead);
   for (const auto& [id, list] : track_frames_)
     bytes += sizeof(id) + sizeof(list) + kNodeOverhead + list.capacity() * sizeof(int);
+  bytes += alias_.size() * (sizeof(std::pair<const int64_t, Alias>) + kNodeOverhead);
+  bytes += fused_tracks_.capacity() * sizeof(fused_tracks_[0]);
   return bytes;
 }
 
@@ -175,8 +186,19 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
   feats.reserve(input.features.size());
   for (const auto& t : input.features) {
     if (!std::isfinite(t.u) || !std::isfinite(t.v)) continue;
-    feats.emplace_back(t.id, UndistortPixel(camera_, Eigen::Vector2d(t.u, t.v)));
+    int64_t id = t.id;
+    if (!alias_.empty()) {  // a fused track observes its landmark
+      auto a = alias_.find(id);
+      if (a != alias_.end()) {
+        id = a->second.landmark;
+        a->second.last_frame = f;
+      }
+    }
+    feats.emplace_back(id, UndistortPixel(camera_, Eigen::Vector2d(t.u, t.v)));
   }
+  // Tracks that ended: KLT ids do not come back; a few frames of grace cover frames lost on the way.
+  if (f % 16 == 0)
+    for (auto a = alias_.begin(); a != alias_.end();) a = f - a->second.last_frame > 8 ? alias_.erase(a) : std::next(a);
   std::sort(feats.begin(), feats.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   feats.erase(std::unique(feats.begin(), feats.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
               feats.end());
@@ -406,6 +428,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     have_anchor = true;
   }
   const double scale = have_odometry ? odo_scale : 1.0;
+  const ScaleSource scale_source_before = scale_source_;
   scale_source_ = have_odometry ? ScaleSource::kOdometry : ScaleSource::kNone;
   {
     Eigen::Isometry3d scaled = a.world_from_camera;
@@ -468,6 +491,18 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       ApplySimilarity(1.0, lift, first, last, new_points);
     }
   }
+  // After a loss: the odometry chaining above is only a start; the new map is joined to the old one through the
+  // landmarks both saw (Sim(3)), and those landmarks are fused.
+  std::string join_message;
+  if (recovering_ && options_.join_search_mm > 0) {
+    int joined = 0;
+    if (JoinToOldMap(first, last, new_points, &joined, &join_message)) {
+      scale_source_ = scale_source_before;
+      const int fused = FuseLandmarks(last, new_points);
+      join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
+                      " waiting for parallax";
+    }
+  }
   gauge_frame_ = gauge_frame_ < 0 ? first : gauge_frame_;
   if (gauge_frame_b_ < 0) gauge_frame_b_ = last;
   for (int f = first; f <= last; ++f) {
@@ -488,6 +523,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   m << "initialized on frames " << frames_[first].seq << ".." << frames_[last].seq << " with " << np
     << " common tracks, " << points_.size() << " landmarks, span RMS " << best_rms << " px, scale source "
     << static_cast<int>(scale_source_);
+  if (!join_message.empty()) m << "; " << join_message;
   last_message_ = m.str();
   return true;
 }
@@ -642,7 +678,13 @@ bool PoseEstimator::PoseFromMap(int f, const Eigen::Isometry3d* prior, std::stri
 void PoseEstimator::AddKeyframe(int f) {
   frames_[f].keyframe = true;
   int64_t t0 = MonotonicMicros();
-  TriangulateNew(f);
+  std::vector<int64_t> added;
+  TriangulateNew(f, &added);
+  // Tracks waiting for parallax (from a map join or fuse_landmarks), and with fuse_landmarks the new landmarks.
+  std::vector<int64_t> candidates;
+  candidates.swap(fuse_pending_);
+  if (options_.fuse_landmarks) candidates.insert(candidates.end(), added.begin(), added.end());
+  FuseLandmarks(f, candidates);
   tri_ms_ += (MonotonicMicros() - t0) * 1e-3;
   t0 = MonotonicMicros();
   LocalBundleAdjustment(f);
@@ -666,7 +708,7 @@ void PoseEstimator::NoteActiveKeyframe(int f) {
   }
 }
 
-int PoseEstimator::TriangulateNew(int f) {
+int PoseEstimator::TriangulateNew(int f, std::vector<int64_t>* added_ids) {
   const Frame& fr = frames_[f];
   int added = 0;
   std::vector<Eigen::Isometry3d> poses;
@@ -696,8 +738,244 @@ int PoseEstimator::TriangulateNew(int f) {
       p.on_floor = true;
     points_[id] = p;
     ++added;
+    if (added_ids) added_ids->push_back(id);
   }
   return added;
+}
+
+int PoseEstimator::FuseLandmarks(int f, const std::vector<int64_t>& candidates) {
+  if (candidates.empty()) return 0;
+  // Hash grid of the other landmarks, cells of fuse_search_mm.
+  const double cell = options_.fuse_search_mm;
+  auto key = [cell](const Eigen::Vector3d& x, int dx, int dy, int dz) {
+    const int64_t i = static_cast<int64_t>(std::floor(x.x() / cell)) + dx;
+    const int64_t j = static_cast<int64_t>(std::floor(x.y() / cell)) + dy;
+    const int64_t k = static_cast<int64_t>(std::floor(x.z() / cell)) + dz;
+    return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
+  };
+  const std::set<int64_t> is_candidate(candidates.begin(), candidates.end());
+  std::unordered_map<int64_t, std::vector<int64_t>> grid;
+  for (const auto& [id, p] : points_)
+    if (!is_candidate.count(id) && frames_[f].Find(id) < 0) grid[key(p.x, 0, 0, 0)].push_back(id);
+  if (grid.empty()) return 0;
+  int fused = 0;
+  const double search2 = options_.fuse_search_mm * options_.fuse_search_mm;
+  for (int64_t n : candidates) {
+    auto pn = points_.find(n);
+    auto tn = track_frames_.find(n);
+    if (pn == points_.end() || tn == track_frames_.end()) continue;
+    const Eigen::Vector3d xn = pn->second.x;
+    // The new track's posed views (held observations).
+    std::vector<std::pair<Eigen::Isometry3d, Eigen::Vector2d>> views;
+    for (int g : tn->second) {
+      const Frame& fr = frames_[g];
+      const int i = fr.Find(n);
+      if (fr.posed && i >= 0 && !fr.outlier[i]) views.emplace_back(fr.world_from_camera.inverse(), fr.pixels[i]);
+    }
+    if (static_cast<int>(views.size()) < 2) continue;
+    // Not before the track's views have fuse_min_parallax_deg between them (the position is then good to ~1 mm
+    // along the ray; at the first triangulation it is not); a live track is tried again at the next keyframe.
+    const Eigen::Vector3d ray_first = views.front().first.inverse().translation() - xn;
+    const Eigen::Vector3d ray_last = views.back().first.inverse().translation() - xn;
+    const double parallax = std::atan2(ray_first.cross(ray_last).norm(), ray_first.dot(ray_last));
+    if (parallax < options_.fuse_min_parallax_deg * M_PI / 180) {
+      if (frames_[f].Find(n) >= 0) fuse_pending_.push_back(n);
+      continue;
+    }
+    int64_t best = -1;
+    double best_err = options_.fuse_max_px;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto c = grid.find(key(xn, dx, dy, dz));
+          if (c == grid.end()) continue;
+          for (int64_t o : c->second) {
+            auto po = points_.find(o);
+            if (po == points_.end() || (po->second.x - xn).squaredNorm() > search2) continue;
+            // Never seen together with the new track (two tracks of one frame are two points).
+            bool together = false;
+            if (auto to = track_frames_.find(o); to != track_frames_.end())
+              for (int g : tn->second)
+                if (std::binary_search(to->second.begin(), to->second.end(), g)) {
+                  together = true;
+                  break;
+                }
+            if (together) continue;
+            double worst = 0;
+            for (const auto& [camera_from_world, px] : views) {
+              Eigen::Vector2d uv;
+              if (!ProjectIdeal(camera_, camera_from_world * po->second.x, &uv)) {
+                worst = 1e9;
+                break;
+              }
+              worst = std::max(worst, (uv - px).norm());
+              if (worst >= best_err) break;
+            }
+            if (worst < best_err) {
+              best_err = worst;
+              best = o;
+            }
+          }
+        }
+    if (best < 0) continue;
+    MergeLandmark(n, best, f);
+    ++fused;
+  }
+  return fused;
+}
+
+bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs,
+                                 std::string* message) {
+  *num_pairs = 0;
+  const std::set<int64_t> is_new(new_points.begin(), new_points.end());
+  std::vector<Eigen::Vector3d> old_x, new_x;
+  for (const auto& [id, p] : points_) (is_new.count(id) ? new_x : old_x).push_back(p.x);
+  if (old_x.empty() || new_x.empty()) {
+    *message = "no landmarks to join the maps (odometry chaining kept)";
+    return false;
+  }
+  // Old landmarks in a hash grid of join_search_mm cells.
+  const double cell = options_.join_search_mm;
+  auto cell_of = [cell](const Eigen::Vector3d& x) {
+    return Eigen::Vector3i(static_cast<int>(std::floor(x.x() / cell)), static_cast<int>(std::floor(x.y() / cell)),
+                           static_cast<int>(std::floor(x.z() / cell)));
+  };
+  auto hash = [](const Eigen::Vector3i& c) {
+    return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
+           (static_cast<int64_t>(c.z()) * 83492791);
+  };
+  std::unordered_map<int64_t, std::vector<int>> grid;
+  for (size_t i = 0; i < old_x.size(); ++i) grid[hash(cell_of(old_x[i]))].push_back(static_cast<int>(i));
+  auto for_old_near = [&](const Eigen::Vector3d& x, double radius, auto&& fn) {
+    const Eigen::Vector3i c = cell_of(x);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = grid.find(hash(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == grid.end()) continue;
+          for (int i : it->second)
+            if ((old_x[i] - x).squaredNorm() <= radius * radius) fn(i);
+        }
+  };
+  // 1. The offset old - new that most pairs within the search radius agree on (2 mm bins, 3x3x3 neighbourhoods):
+  //    landmarks of corners seen by both maps coincide there; other pairs spread over the whole search volume.
+  const double bin = 2.0;
+  std::unordered_map<int64_t, int> votes;
+  std::vector<Eigen::Vector3d> offsets;
+  for (const Eigen::Vector3d& x : new_x)
+    for_old_near(x, options_.join_search_mm, [&](int i) {
+      const Eigen::Vector3d d = old_x[i] - x;
+      offsets.push_back(d);
+      const Eigen::Vector3i b((d / bin).array().round().cast<int>());
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) ++votes[hash(b + Eigen::Vector3i(dx, dy, dz))];
+    });
+  if (offsets.empty()) {
+    *message = "no old landmark near the new map (odometry chaining kept)";
+    return false;
+  }
+  int best_votes = -1;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& d : offsets) {  // the vote of the best bin that holds an offset
+    const Eigen::Vector3i b((d / bin).array().round().cast<int>());
+    const int v = votes[hash(b)];
+    if (v > best_votes) {
+      best_votes = v;
+      offset = b.cast<double>() * bin;
+    }
+  }
+  // 2. Pairs (each new landmark's nearest old one after the shift) and Sim(3) by least squares, over rounds with a
+  //    shrinking radius. kFourDof on the floor: the maps share the floor plane, only x, y and yaw move.
+  const bool floor_mode = options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight;
+  Sim3 sim;
+  sim.translation = offset;
+  std::vector<Eigen::Vector3d> src, dst;
+  for (double radius : {8.0, 4.0, 2.5, options_.join_max_mm}) {
+    src.clear();
+    dst.clear();
+    for (const Eigen::Vector3d& x : new_x) {
+      const Eigen::Vector3d y = sim * x;
+      int nearest = -1;
+      double d2 = radius * radius;
+      for_old_near(y, radius, [&](int i) {
+        const double e = (old_x[i] - y).squaredNorm();
+        if (e <= d2) {
+          d2 = e;
+          nearest = i;
+        }
+      });
+      if (nearest < 0) continue;
+      src.push_back(x);
+      dst.push_back(old_x[nearest]);
+    }
+    if (static_cast<int>(src.size()) < options_.join_min_landmarks) break;
+    Sim3 next;
+    if (floor_mode) {
+      std::vector<Eigen::Vector3d> a = src, b = dst;
+      for (auto& v : a) v.z() = 0;
+      for (auto& v : b) v.z() = 0;
+      if (!AlignUmeyama(a, b, false, &next)) break;
+      next.translation.z() = 0;
+    } else if (!AlignUmeyama(src, dst, true, &next)) {
+      break;
+    }
+    sim = next;
+  }
+  *num_pairs = static_cast<int>(src.size());
+  if (*num_pairs < options_.join_min_landmarks) {
+    std::ostringstream m;
+    m << "maps not joined: " << *num_pairs << " common landmarks (< " << options_.join_min_landmarks
+      << "; most agreed offset " << offset.transpose() << " mm by " << best_votes
+      << " pair votes; odometry chaining kept)";
+    *message = m.str();
+    return false;
+  }
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = sim.rotation;
+  t.translation() = sim.translation;
+  ApplySimilarity(sim.scale, t, first, last, new_points);
+  std::ostringstream m;
+  m << "joined to the old map by " << *num_pairs << " landmarks (shift " << (sim.translation).norm() << " mm, rotation "
+    << RotationAngle(sim.rotation) * 180 / M_PI << " deg, scale " << sim.scale << ")";
+  *message = m.str();
+  return true;
+}
+
+void PoseEstimator::MergeLandmark(int64_t from, int64_t to, int f) {
+  auto tf = track_frames_.find(from);
+  std::vector<int> moved = tf != track_frames_.end() ? tf->second : std::vector<int>();
+  for (int g : moved) {
+    Frame& fr = frames_[g];
+    const int i = fr.Find(from);
+    if (i < 0) continue;
+    if (fr.Find(to) >= 0) {  // cannot happen (never seen together); keep the frame consistent anyway
+      fr.ids.erase(fr.ids.begin() + i);
+      fr.pixels.erase(fr.pixels.begin() + i);
+      fr.outlier.erase(fr.outlier.begin() + i);
+      continue;
+    }
+    // Keep ids sorted: move the entry to the landmark id's place.
+    const Eigen::Vector2d px = fr.pixels[i];
+    const uint8_t out = fr.outlier[i];
+    fr.ids.erase(fr.ids.begin() + i);
+    fr.pixels.erase(fr.pixels.begin() + i);
+    fr.outlier.erase(fr.outlier.begin() + i);
+    const size_t at = static_cast<size_t>(std::lower_bound(fr.ids.begin(), fr.ids.end(), to) - fr.ids.begin());
+    fr.ids.insert(fr.ids.begin() + at, to);
+    fr.pixels.insert(fr.pixels.begin() + at, px);
+    fr.outlier.insert(fr.outlier.begin() + at, out);
+  }
+  if (tf != track_frames_.end()) track_frames_.erase(tf);
+  std::vector<int>& list = track_frames_[to];
+  std::vector<int> merged;
+  merged.reserve(list.size() + moved.size());
+  std::merge(list.begin(), list.end(), moved.begin(), moved.end(), std::back_inserter(merged));
+  merged.erase(std::unique(merged.begin(), merged.end()), merged.end());
+  list.swap(merged);
+  points_.erase(from);
+  alias_[from] = Alias{to, f};
+  fused_tracks_.emplace_back(from, to);
 }
 
 void PoseEstimator::UpdateFrameStatistics(Frame* frame) const {

@@ -30,8 +30,15 @@
 //     GOOD pose (not a made-up one: consumers must ignore the pose of LOST frames). Every later frame tries PnP against
 //     all landmarks (relocalization works when track ids reappear). After relocalize_after_lost_frames lost frames the
 //     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
-//     last good frame and the new span (no Sim(3) merge from common landmarks: KLT ids do not reappear). The first
-//     pose after recovery has status RELOCALIZED.
+//     last good frame and the new span, then joined to it by the landmarks both saw (KLT ids do not reappear, so by
+//     position): the offset most new-old landmark pairs within join_search_mm agree on, then the least-squares
+//     Sim(3) (kFourDof on the floor: x, y, yaw) of the pairs within join_max_mm, applied to the new map; the paired
+//     landmarks are then fused (below), so the adjustments tie the two maps together. Fewer than
+//     join_min_landmarks pairs: the odometry chaining stands. The first pose after recovery has status RELOCALIZED.
+//     Fusion (FuseLandmarks): a new landmark becomes an older one when its track was never seen with the old one's,
+//     they lie within fuse_search_mm, the track's views span fuse_min_parallax_deg, and the old landmark reprojects
+//     within fuse_max_px in every held view of the track; later frames of the track observe the old landmark.
+//     Applied to every new landmark only with fuse_landmarks (loop closure, off by default).
 //  4. Finish(): frames never posed get PnP against the final map, then global BA over the active (not frozen)
 //     keyframes (or all posed frames) and landmarks (observations beyond the PnP inlier threshold left out; with
 //     frozen keyframes the two oldest active ones are held), pose refits of the other frames that still have
@@ -103,6 +110,24 @@ struct PoseEstimatorOptions {
   int online_scale_frames = 100;               // kSixDof: at keyframes within this many frames of the map start,
                                                // rescale the map by odometry / visual path length (0 = off)
   int relocalize_after_lost_frames = 10;       // lost frames before the preliminary phase restarts
+  bool fuse_landmarks = false;                 // loop closure by re-association: a new landmark whose track sees
+                                               // an older landmark (its track ended, never seen in the same frame)
+                                               // within fuse_max_px in every held view becomes that landmark; the
+                                               // track's later frames observe it (see FusedTrackIds). Off: on the
+                                               // rendered sim a re-detected corner is not the same surface point to
+                                               // better than the drift it would correct (docs/benchmarks.md). The
+                                               // landmarks of a map join (join_search_mm) are fused regardless.
+  double fuse_search_mm = 5.0;                 // mm, largest distance between the new and the old landmark
+  double fuse_min_parallax_deg = 10.0;         // deg, the new track's first and last view must see its landmark
+                                               // this far apart before it is fused (until then it is retried at
+                                               // keyframes while the track lives)
+  double fuse_max_px = 1.5;                    // px, the old landmark's largest reprojection error over the new
+                                               // track's views
+  double join_search_mm = 50.0;                // mm: after a restart, old landmarks this close to new ones (after
+                                               // the odometry chaining) are candidates for joining the maps by
+                                               // Sim(3); 0 = odometry chaining only
+  double join_max_mm = 1.5;                    // mm, final pair distance of the join
+  int join_min_landmarks = 15;                 // common landmarks needed to join (else odometry chaining is kept)
   int two_view_min_matches = 0;                // wide baseline (short tracks): when PnP fails, pose the frame from
                                                // the essential matrix of its tracks shared with the last posed frame
                                                // if at least this many are E-RANSAC inliers, scale from the landmarks
@@ -167,6 +192,10 @@ class PoseEstimator {
   std::vector<CameraPoseEstimate> Finish();
 
   std::vector<Landmark> Landmarks() const;
+  // Track ids re-associated with an older landmark (fuse_landmarks), as (track id, landmark id) in the order of
+  // fusion: the track's observations belong to that landmark (Landmarks() lists it under the landmark id only).
+  const std::vector<std::pair<int64_t, int64_t>>& FusedTrackIds() const { return fused_tracks_; }
+  int num_fused() const { return static_cast<int>(fused_tracks_.size()); }
   ScaleSource scale_source() const { return scale_source_; }
   bool initialized() const { return map_initialized_; }
   int num_frames() const { return static_cast<int>(frames_.size()); }
@@ -207,6 +236,10 @@ class PoseEstimator {
     int dropped_observations = 0;  // inlier observations of frames that dropped theirs (counted in Landmarks())
     double dropped_sq_error = 0;   // px^2, their summed squared reprojection error when they were dropped
   };
+  struct Alias {
+    int64_t landmark = 0;  // landmark id the track's observations go to
+    int last_frame = 0;    // last frame that carried the track
+  };
   enum class Phase { kInitializing, kTracking, kLost };
 
   bool TryInitialize(int newest);
@@ -216,7 +249,18 @@ class PoseEstimator {
   // posed with its inlier count, RMS and outlier flags set (status untouched). False with *why (frame untouched).
   bool PoseFromMap(int f, const Eigen::Isometry3d* prior, std::string* why);
   void AddKeyframe(int f);
-  int TriangulateNew(int f);
+  // Triangulates the tracks of frame f that have no landmark yet; their ids are appended to *added if not null.
+  int TriangulateNew(int f, std::vector<int64_t>* added = nullptr);
+  // fuse_landmarks: re-associates the new landmarks `candidates` (tracked in frame f) with older ones (see the
+  // option); returns the number fused.
+  int FuseLandmarks(int f, const std::vector<int64_t>& candidates);
+  // After a restart: joins the new map (frames first..last, points new_points, chained through odometry) to the old
+  // landmarks by the Sim(3) (kFourDof on the floor: x, y, yaw) of the landmarks both saw; false (nothing moved, with
+  // *message) when fewer than join_min_landmarks pairs agree.
+  bool JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs, std::string* message);
+  // Moves every held observation of landmark `from` to landmark `to`, removes `from` and aliases its track (frame f
+  // is the last that carried it).
+  void MergeLandmark(int64_t from, int64_t to, int f);
   void LocalBundleAdjustment(int f);
   // Sets frame->inliers and frame->rms (px) from its observations of the current points (pose solver inlier threshold).
   void UpdateFrameStatistics(Frame* frame) const;
@@ -270,6 +314,9 @@ class PoseEstimator {
   std::vector<Frame> frames_;
   std::map<int64_t, Point> points_;
   std::unordered_map<int64_t, std::vector<int>> track_frames_;  // track id -> frames that saw it
+  std::unordered_map<int64_t, Alias> alias_;                    // live fused tracks (input id -> landmark)
+  std::vector<std::pair<int64_t, int64_t>> fused_tracks_;       // every fusion (track id, landmark id)
+  std::vector<int64_t> fuse_pending_;  // new landmarks whose tracks lack the parallax to be fused yet
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
   int init_start_ = 0;      // first frame considered by the (re)initialization

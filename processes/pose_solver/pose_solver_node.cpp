@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "common/adapters.h"
 #include "common/bus.h"
@@ -79,6 +80,15 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("max-active-keyframes", &e->max_active_keyframes,
         "keyframes that keep their observations; older ones are frozen (bounded memory; 0 = no limit)");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
+  p.Add("fuse-landmarks", &e->fuse_landmarks,
+        "re-associate a new landmark with an old one whose track ended (loop closure; tracks that come back)");
+  p.Add("fuse-search", &e->fuse_search_mm, "mm, largest distance between a new and the old landmark it joins");
+  p.Add("fuse-max-px", &e->fuse_max_px, "px, the old landmark's largest reprojection error in the new track's views");
+  p.Add("fuse-min-parallax", &e->fuse_min_parallax_deg, "deg, parallax the new track needs before it is fused");
+  p.Add("join-search", &e->join_search_mm,
+        "mm, after a restart join the new map to the old by common landmarks this close (0 = odometry chaining only)");
+  p.Add("join-max", &e->join_max_mm, "mm, final landmark pair distance of the join");
+  p.Add("join-min-landmarks", &e->join_min_landmarks, "common landmarks needed to join the maps");
   p.Add("two-view-min-matches", &e->two_view_min_matches,
         "wide baseline (6dof): pose a frame PnP cannot pose from the essential matrix with the last posed frame when "
         "they share this many tracks (0 = off)");
@@ -289,6 +299,7 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   status_.SetValue("frames", estimator_->num_frames());
   if (estimator_->num_frames() % 30 == 1)  // O(frames + tracks): not on every frame
     status_.SetValue("estimator_kb", static_cast<double>(estimator_->ApproxMemoryBytes() / 1024));
+  status_.SetValue("fused_tracks", estimator_->num_fused());
   status_.SetValue("inliers", r.pose.num_inliers);
   status_.SetValue("rms_px", r.pose.reprojection_rms_px);
   status_.SetValue("lost_frames", static_cast<double>(lost_frames_));
@@ -354,6 +365,9 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
       if (ok) {
         // Images in frame order; their observations come back from the spool in the same (seq) order. The two
         // are merged by seq: a spooled frame without a pose (the estimator rejected it) is skipped.
+        // Fused tracks observe their landmark: the 2-D points carry the landmark id.
+        std::unordered_map<int64_t, int64_t> landmark_of_track;
+        for (const auto& [track, landmark] : estimator_->FusedTrackIds()) landmark_of_track[track] = landmark;
         const bool have_spool = spool_ && spool_->Rewind();
         size_t next = 0;
         bool spool_done = !have_spool, spool_pending = false;
@@ -378,6 +392,10 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
             }
             if (spool_seq == pose.seq) {
               im->features.swap(spool_features);
+              if (!landmark_of_track.empty())
+                for (TrackedFeature& feature : im->features)
+                  if (auto it = landmark_of_track.find(feature.id); it != landmark_of_track.end())
+                    feature.id = it->second;
               spool_pending = false;
             }
             break;  // a later frame's record stays pending

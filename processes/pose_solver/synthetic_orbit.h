@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <random>
+#include <unordered_map>
 #include <vector>
 
 #include "common/camera_model.h"
@@ -42,7 +43,8 @@ struct SyntheticOrbit {
   std::vector<Eigen::Vector3d> points;               // truth, world
   std::vector<Eigen::Isometry3d> world_from_camera;  // truth per frame
   std::vector<TrackFrame> frames;
-  std::vector<OdometryReading> odometry;  // one per frame, at the frame time
+  std::vector<OdometryReading> odometry;            // one per frame, at the frame time
+  std::unordered_map<int64_t, int> point_of_track;  // track id -> index into points (truth)
 };
 
 inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
@@ -138,7 +140,10 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
         track_id[i] = -1;
         continue;
       }
-      if (track_id[i] < 0 || uni(rng) < o.dropout_per_frame) track_id[i] = next_id++;
+      if (track_id[i] < 0 || uni(rng) < o.dropout_per_frame) {
+        track_id[i] = next_id++;
+        s.point_of_track[track_id[i]] = i;
+      }
       uv += o.noise_px * Eigen::Vector2d(gauss(rng), gauss(rng));
       if (uni(rng) < o.outlier_fraction) {
         const double m = 5 + 15 * uni(rng), ang = 2 * M_PI * uni(rng);
