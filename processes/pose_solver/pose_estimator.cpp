@@ -491,18 +491,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       ApplySimilarity(1.0, lift, first, last, new_points);
     }
   }
-  // After a loss: the odometry chaining above is only a start; the new map is joined to the old one through the
-  // landmarks both saw (Sim(3)), and those landmarks are fused.
-  std::string join_message;
-  if (recovering_ && options_.join_search_mm > 0) {
-    int joined = 0;
-    if (JoinToOldMap(first, last, new_points, &joined, &join_message)) {
-      scale_source_ = scale_source_before;
-      const int fused = FuseLandmarks(last, new_points);
-      join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
-                      " waiting for parallax";
-    }
-  }
+  const bool was_recovering = recovering_;
   gauge_frame_ = gauge_frame_ < 0 ? first : gauge_frame_;
   if (gauge_frame_b_ < 0) gauge_frame_b_ = last;
   for (int f = first; f <= last; ++f) {
@@ -516,6 +505,18 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   last_keyframe_ = last;
   // Span BA in the final model (4-DOF projects the poses onto the robot model here).
   LocalBundleAdjustment(last);
+  // After a loss the odometry chaining above is only a start: the new map, adjusted in the final model, is joined
+  // to the old one through the landmarks both saw (Sim(3)), and those landmarks are fused.
+  std::string join_message;
+  if (was_recovering && options_.join_search_mm > 0) {
+    int pairs = 0;
+    if (JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
+      scale_source_ = scale_source_before;
+      const int fused = FuseLandmarks(last, new_points);
+      join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
+                      " waiting for parallax";
+    }
+  }
   // Per-frame statistics.
   for (int f = first; f <= last; ++f) UpdateFrameStatistics(&frames_[f]);
   last_keyframe_inliers_ = frames_[last].inliers;
@@ -911,14 +912,17 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
     }
     if (static_cast<int>(src.size()) < options_.join_min_landmarks) break;
     Sim3 next;
-    if (floor_mode) {
-      std::vector<Eigen::Vector3d> a = src, b = dst;
-      for (auto& v : a) v.z() = 0;
-      for (auto& v : b) v.z() = 0;
-      if (!AlignUmeyama(a, b, false, &next)) break;
+    if (!AlignUmeyama(src, dst, true, &next)) break;
+    if (floor_mode) {  // keep the floor: yaw only, scale about the floor plane (z = 0 stays), no vertical shift
+      const double yaw = std::atan2(next.rotation(1, 0), next.rotation(0, 0));
+      next.rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      Eigen::Vector3d mean_src = Eigen::Vector3d::Zero(), mean_dst = Eigen::Vector3d::Zero();
+      for (size_t k = 0; k < src.size(); ++k) {
+        mean_src += src[k] / static_cast<double>(src.size());
+        mean_dst += dst[k] / static_cast<double>(src.size());
+      }
+      next.translation = mean_dst - next.scale * (next.rotation * mean_src);
       next.translation.z() = 0;
-    } else if (!AlignUmeyama(src, dst, true, &next)) {
-      break;
     }
     sim = next;
   }

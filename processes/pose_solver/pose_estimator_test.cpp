@@ -150,9 +150,11 @@ double RunLostOrbit(const PoseEstimatorOptions& o) {
   const SyntheticOrbit s = MakeSyntheticOrbit(so);
   PoseEstimator est(s.camera, o);
   int lost = 0, relocalized = 0, tracking_after = 0;
+  std::string join_message;
   Eigen::Isometry3d last_good = Eigen::Isometry3d::Identity();
   for (size_t f = 0; f < s.frames.size(); ++f) {
     const FrameResult r = est.AddFrame(s.frames[f], &s.odometry[f]);
+    if (r.initialized_now && f > 95) join_message = est.last_message();
     if (r.pose.status == PoseStatus::kTracking && f < 80) last_good = r.pose.world_from_camera;
     if (r.pose.status == PoseStatus::kLost) {
       ++lost;
@@ -176,8 +178,9 @@ double RunLostOrbit(const PoseEstimatorOptions& o) {
     }
   TrajectoryError err;
   EXPECT_TRUE(EvaluateTrajectory(e, t, true, &err));
-  std::printf("after loss (join search %.0f mm): %zu posed, ATE %.2f mm, scale %.4f\n", o.join_search_mm, e.size(),
-              err.ate_rmse, err.scale);
+  std::printf("after loss (%s, join search %.0f mm): %zu posed, ATE %.2f mm, scale %.4f\n  %s\n",
+              o.model == MotionModel::kFourDof ? "4-DOF" : "6-DOF", o.join_search_mm, e.size(), err.ate_rmse, err.scale,
+              join_message.c_str());
   return err.ate_rmse;
 }
 
@@ -191,6 +194,14 @@ TEST(PoseEstimator, LostTrackingRecoversAndJoinsTheMaps) {
   // their common landmarks the whole orbit is as good as one without a loss.
   EXPECT_LT(joined, 0.5);  // mm
   EXPECT_LT(joined, 0.5 * chained);
+  // The robot's 4-DOF model on the floor: the join moves x, y, yaw and the scale about the floor plane.
+  o = PoseEstimatorOptions();
+  o.model = MotionModel::kFourDof;
+  const double joined_4dof = RunLostOrbit(o);
+  o.join_search_mm = 0;
+  const double chained_4dof = RunLostOrbit(o);
+  EXPECT_LT(joined_4dof, 0.5);  // mm
+  EXPECT_LT(joined_4dof, 0.5 * chained_4dof);
 }
 
 // Old points come back into view (floor points behind the sphere, the start of the orbit on the second lap, tracks
