@@ -122,6 +122,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     }
     model.mesh = MeshFromSurfacePoints(SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius),
                                        grid.voxel_size());
+    // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
+    model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
   } else {
     model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
   }

@@ -514,7 +514,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
-            " seeds, " + std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped");
+            " seeds, " + std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
+            std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped");
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +

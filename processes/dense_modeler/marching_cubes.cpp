@@ -186,4 +186,48 @@ bool IsClosedOrientedMesh(const TriangleMesh& mesh) {
   return !mesh.triangles.empty();
 }
 
+int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
+  if (min_fraction <= 0 || mesh->triangles.empty()) return 0;
+  const int n = static_cast<int>(mesh->vertices.size());
+  std::vector<int> parent(n);
+  for (int i = 0; i < n; ++i) parent[i] = i;
+  auto find = [&parent](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const auto& t : mesh->triangles) {
+    const int a = find(t[0]);
+    for (int k = 1; k < 3; ++k) {
+      const int b = find(t[k]);
+      if (a != b) parent[b] = a;
+    }
+  }
+  std::vector<int64_t> piece_triangles(n, 0);
+  for (const auto& t : mesh->triangles) ++piece_triangles[find(t[0])];
+  const int64_t largest = *std::max_element(piece_triangles.begin(), piece_triangles.end());
+  const double keep_from = min_fraction * static_cast<double>(largest);
+  std::vector<int32_t> new_index(n, -1);
+  TriangleMesh out;
+  int64_t dropped = 0;
+  for (const auto& t : mesh->triangles) {
+    if (static_cast<double>(piece_triangles[find(t[0])]) < keep_from) {
+      ++dropped;
+      continue;
+    }
+    std::array<int32_t, 3> u;
+    for (int k = 0; k < 3; ++k) {
+      if (new_index[t[k]] < 0) {
+        new_index[t[k]] = static_cast<int32_t>(out.vertices.size());
+        out.vertices.push_back(mesh->vertices[t[k]]);
+        if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[t[k]]);
+      }
+      u[k] = new_index[t[k]];
+    }
+    out.triangles.push_back(u);
+  }
+  if (dropped == 0) return 0;
+  *mesh = std::move(out);
+  return dropped;
+}
+
 }  // namespace objscan

@@ -44,4 +44,9 @@ TriangleMesh MeshFromVoxels(const std::vector<CarvedVoxel>& voxels, double voxel
 // True when every undirected edge is used by exactly two triangles with opposite directions (closed, oriented).
 bool IsClosedOrientedMesh(const TriangleMesh& mesh);
 
+// Drops the connected pieces of the mesh (triangles sharing vertices) with fewer triangles than min_fraction of the
+// largest piece. When any is dropped, the vertices are renumbered in the order the kept triangles first use them
+// (unused ones dropped). Returns the triangles dropped; min_fraction <= 0: unchanged.
+int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction);
+
 }  // namespace objscan

@@ -89,6 +89,38 @@ TEST(MarchingCubes, VoxelisedSphereClosedWithinHalfVoxel) {
   for (const auto& c : mesh.bgr) EXPECT_EQ(c[2], 30);
 }
 
+// A large sphere and a small one far from it in one mesh: the small piece (< 1 % of the large one's triangles) goes,
+// the large one stays whole and closed, with its vertices renumbered consistently.
+TEST(MarchingCubes, SmallMeshPiecesRemoved) {
+  TriangleMesh big = ExtractIsosurface(SphereVolume(40, 1.0, Eigen::Vector3d(20, 20, 20), 15), 0.f);
+  const TriangleMesh small = ExtractIsosurface(SphereVolume(8, 1.0, Eigen::Vector3d(3.5, 3.5, 3.5), 1.6), 0.f);
+  ASSERT_GT(small.triangles.size(), 0u);
+  ASSERT_LT(small.triangles.size() * 100, big.triangles.size());
+  const size_t big_triangles = big.triangles.size(), big_vertices = big.vertices.size();
+  TriangleMesh both = big;
+  const int32_t offset = static_cast<int32_t>(both.vertices.size());
+  for (size_t i = 0; i < small.vertices.size(); ++i) {
+    both.vertices.push_back(small.vertices[i] + Eigen::Vector3f(100, 0, 0));
+    both.bgr.push_back(small.bgr[i]);
+  }
+  for (const auto& t : small.triangles) both.triangles.push_back({{t[0] + offset, t[1] + offset, t[2] + offset}});
+  TriangleMesh unchanged = both;
+  EXPECT_EQ(RemoveSmallMeshPieces(&unchanged, 0.0), 0);
+  EXPECT_EQ(unchanged.triangles.size(), both.triangles.size());
+  EXPECT_EQ(RemoveSmallMeshPieces(&both, 0.01), static_cast<int64_t>(small.triangles.size()));
+  EXPECT_EQ(both.triangles.size(), big_triangles);
+  EXPECT_EQ(both.vertices.size(), big_vertices);
+  EXPECT_EQ(both.bgr.size(), both.vertices.size());
+  EXPECT_TRUE(IsClosedOrientedMesh(both));
+  for (const auto& v : both.vertices) EXPECT_LT(v.x(), 50.f);  // none of the small sphere's
+  // Both pieces kept when the small one is above the fraction.
+  TriangleMesh again = big;
+  for (const auto& v : small.vertices) again.vertices.push_back(v + Eigen::Vector3f(100, 0, 0));
+  again.bgr.resize(again.vertices.size());
+  for (const auto& t : small.triangles) again.triangles.push_back({{t[0] + offset, t[1] + offset, t[2] + offset}});
+  EXPECT_EQ(RemoveSmallMeshPieces(&again, 1e-4), 0);
+}
+
 TEST(MarchingCubes, EmptyAndDegenerateInput) {
   EXPECT_TRUE(MeshFromVoxels({}, 2.0).triangles.empty());
   ScalarVolume bad;

@@ -35,7 +35,8 @@ struct RidgeOptions {
                                   // +normal and -normal (1 = strict local maximum; < 1 keeps a thicker ridge), (0, 1]
   int min_component_voxels = 30;  // ridge fragments (26-connected) with fewer voxels are dropped (0 = keep all)
   double min_component_fraction = 0.01;  // fragments with fewer voxels than this fraction of the largest one are
-                                         // dropped (0 = off), [0, 1)
+                                         // dropped, and after carving mesh pieces with fewer triangles than this
+                                         // fraction of the largest (0 = off), [0, 1)
   double smoothing_radius = 8.0;         // voxels, radius of the vote-weighted local surface fit of SmoothSurfacePoints
                                          // (0 = off), 0 or [1, 12]
 };
@@ -49,9 +50,11 @@ struct SurfaceVoxel {
 };
 
 struct RidgeStats {
-  int64_t seeds = 0;              // input voxels
-  int64_t ridge = 0;              // local maxima along the normal
-  int64_t fragments_dropped = 0;  // voxels in dropped fragments
+  int64_t seeds = 0;                   // input voxels
+  int64_t ridge = 0;                   // local maxima along the normal
+  int64_t fragments_dropped = 0;       // voxels in dropped fragments
+  int64_t mesh_triangles_dropped = 0;  // triangles of mesh pieces under min_component_fraction of the largest
+                                       // (BuildFinalModel, after carving)
   int64_t kept = 0;
 };
 
