@@ -49,8 +49,8 @@ for m in mesh voxels; do
 done
 check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.4
 check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.8
-check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.92
-check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.88
+check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.94
+check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.90
 check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.0 target
 check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 3.0 target
 check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.5 target

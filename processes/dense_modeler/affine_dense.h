@@ -64,8 +64,11 @@ struct AffineDenseOptions {
   double min_ncc = 0.7;                  // min NCC of the warped window, [-1, 1]
   double min_window_stddev = 0.5;        // gray levels, windows flatter than this skip the NCC test (textureless)
   bool refine_along_epipolar = true;     // refine Q by a 1-D NCC search along the epipolar line
-  double refine_search_px = 1.5;         // px, half length of the refinement search (> 0)
-  double refine_step_px = 0.25;          // px, refinement search step (> 0)
+  double refine_search_px = 3.0;         // px, half length of the refinement search (> 0); the affine map of a
+                                         // curved surface's triangle is off by more than 1.5 px often enough that
+                                         // +-1.5 px lost much of the lower sphere and the box (docs/benchmarks.md)
+  double refine_step_px = 0.5;           // px, refinement search step (> 0); the best step is refined by a
+                                         // parabola through its neighbours
   bool reject_refine_at_border = true;   // drop P when the refinement's best NCC is at either end of the search:
                                          // the true match lies farther than refine_search_px from the affine
                                          // prediction (a triangle across a crease or a depth change)
