@@ -4,7 +4,7 @@
 # it have new ids. The pose solver reports LOST, restarts the preliminary phase, chains the new map through the
 # odometry (2 % slip, heading drift, pan/tilt bias) and joins it to the old map by their common landmarks (Sim(3)).
 # Bounds: the whole trajectory, both maps, against the truth after one Sim(3) alignment. Odometry chaining alone
-# leaves about 3.4 mm (6-DOF) / 3.3 mm (4-DOF); the join brings it to 0.41 / 0.08 mm (docs/benchmarks.md).
+# leaves about 3.4 mm (6-DOF) / 3.3 mm (4-DOF); the join brings it to 0.42 / 0.07 mm (docs/benchmarks.md).
 set -euo pipefail
 BIN="$1"; SRC="$2"
 WORK=$(mktemp -d); trap 'rm -rf "$WORK"' EXIT

@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include <ctime>
 
@@ -61,7 +62,8 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (!(o.fuse_max_px > 0)) e << "fuse max px must be > 0; ";
   if (!(o.fuse_min_parallax_deg >= 0)) e << "fuse min parallax deg must be >= 0; ";
   if (!(o.join_search_mm >= 0)) e << "join search mm must be >= 0; ";
-  if (o.join_search_mm > 0 && !(o.join_max_mm > 0)) e << "join max mm must be > 0; ";
+  if (o.join_search_mm > 0 && o.join_search_mm < 8) e << "join search mm must be 0 or >= 8; ";
+  if (o.join_search_mm > 0 && !(o.join_max_mm > 0 && o.join_max_mm <= 2.5)) e << "join max mm must be in (0, 2.5]; ";
   if (o.join_search_mm > 0 && o.join_min_landmarks < 3) e << "join min landmarks must be >= 3; ";
   if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
   if (o.max_active_keyframes < 0 ||
@@ -150,7 +152,7 @@ size_t PoseEstimator::ApproxMemoryBytes() const {
   for (const auto& [id, list] : track_frames_)
     bytes += sizeof(id) + sizeof(list) + kNodeOverhead + list.capacity() * sizeof(int);
   bytes += alias_.size() * (sizeof(std::pair<const int64_t, Alias>) + kNodeOverhead);
-  bytes += fused_tracks_.capacity() * sizeof(fused_tracks_[0]);
+  bytes += fused_tracks_.capacity() * sizeof(fused_tracks_[0]) + fuse_pending_.capacity() * sizeof(int64_t);
   return bytes;
 }
 
@@ -252,6 +254,7 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
     if (lost_count_ >= options_.relocalize_after_lost_frames) {
       phase_ = Phase::kInitializing;
       recovering_ = true;
+      fuse_pending_.clear();
       init_start_ = f + 1;
       last_message_ = "lost: restarting the preliminary phase at frame " + std::to_string(f + 1);
     }
@@ -512,6 +515,7 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     int pairs = 0;
     if (JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
       scale_source_ = scale_source_before;
+      join_first_frame_ = first;
       const int fused = FuseLandmarks(last, new_points);
       join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
                       " waiting for parallax";
@@ -685,6 +689,8 @@ void PoseEstimator::AddKeyframe(int f) {
   std::vector<int64_t> candidates;
   candidates.swap(fuse_pending_);
   if (options_.fuse_landmarks) candidates.insert(candidates.end(), added.begin(), added.end());
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   FuseLandmarks(f, candidates);
   tri_ms_ += (MonotonicMicros() - t0) * 1e-3;
   t0 = MonotonicMicros();
@@ -756,8 +762,15 @@ int PoseEstimator::FuseLandmarks(int f, const std::vector<int64_t>& candidates) 
   };
   const std::set<int64_t> is_candidate(candidates.begin(), candidates.end());
   std::unordered_map<int64_t, std::vector<int64_t>> grid;
+  // Without fuse_landmarks only a map join's landmarks are fused, and only onto the old map (last seen before the
+  // join's span).
+  auto is_old = [&](int64_t id) {
+    if (options_.fuse_landmarks) return true;
+    auto t = track_frames_.find(id);
+    return t == track_frames_.end() || t->second.back() < join_first_frame_;
+  };
   for (const auto& [id, p] : points_)
-    if (!is_candidate.count(id) && frames_[f].Find(id) < 0) grid[key(p.x, 0, 0, 0)].push_back(id);
+    if (!is_candidate.count(id) && frames_[f].Find(id) < 0 && is_old(id)) grid[key(p.x, 0, 0, 0)].push_back(id);
   if (grid.empty()) return 0;
   int fused = 0;
   const double search2 = options_.fuse_search_mm * options_.fuse_search_mm;
@@ -858,45 +871,49 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
             if ((old_x[i] - x).squaredNorm() <= radius * radius) fn(i);
         }
   };
-  // 1. The offset old - new that most pairs within the search radius agree on (2 mm bins, 3x3x3 neighbourhoods):
-  //    landmarks of corners seen by both maps coincide there; other pairs spread over the whole search volume.
+  // 1. The offset old - new that most pairs within the search radius agree on (2 mm bins, summed over 3x3x3
+  //    neighbourhoods): landmarks of corners seen by both maps coincide there; other pairs spread over the whole
+  //    search volume.
   const double bin = 2.0;
-  std::unordered_map<int64_t, int> votes;
-  std::vector<Eigen::Vector3d> offsets;
+  std::unordered_map<int64_t, std::pair<Eigen::Vector3i, int>> votes;  // bin hash -> (bin, pairs)
   for (const Eigen::Vector3d& x : new_x)
     for_old_near(x, options_.join_search_mm, [&](int i) {
-      const Eigen::Vector3d d = old_x[i] - x;
-      offsets.push_back(d);
-      const Eigen::Vector3i b((d / bin).array().round().cast<int>());
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) ++votes[hash(b + Eigen::Vector3i(dx, dy, dz))];
+      const Eigen::Vector3i b(((old_x[i] - x) / bin).array().round().cast<int>());
+      auto& v = votes[hash(b)];
+      v.first = b;
+      ++v.second;
     });
-  if (offsets.empty()) {
+  if (votes.empty()) {
     *message = "no old landmark near the new map (odometry chaining kept)";
     return false;
   }
   int best_votes = -1;
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& d : offsets) {  // the vote of the best bin that holds an offset
-    const Eigen::Vector3i b((d / bin).array().round().cast<int>());
-    const int v = votes[hash(b)];
-    if (v > best_votes) {
-      best_votes = v;
-      offset = b.cast<double>() * bin;
+  Eigen::Vector3i best_bin = Eigen::Vector3i::Zero();
+  for (const auto& [h, v] : votes) {
+    int sum = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = votes.find(hash(v.first + Eigen::Vector3i(dx, dy, dz)));
+          if (it != votes.end()) sum += it->second.second;
+        }
+    const Eigen::Vector3i& b = v.first;  // ties: the smallest bin, so the result does not depend on hash order
+    if (sum > best_votes || (sum == best_votes && std::make_tuple(b.x(), b.y(), b.z()) <
+                                                      std::make_tuple(best_bin.x(), best_bin.y(), best_bin.z()))) {
+      best_votes = sum;
+      best_bin = b;
     }
   }
-  // 2. Pairs (each new landmark's nearest old one after the shift) and Sim(3) by least squares, over rounds with a
-  //    shrinking radius. kFourDof on the floor: the maps share the floor plane, only x, y and yaw move.
-  const bool floor_mode = options_.model == MotionModel::kFourDof && scale_source_ == ScaleSource::kCameraHeight;
-  Sim3 sim;
-  sim.translation = offset;
-  std::vector<Eigen::Vector3d> src, dst;
-  for (double radius : {8.0, 4.0, 2.5, options_.join_max_mm}) {
-    src.clear();
-    dst.clear();
+  const Eigen::Vector3d offset = best_bin.cast<double>() * bin;
+  // 2. Pairs (each new landmark's nearest old one after the transform) and the transform by least squares, over
+  //    rounds with a shrinking radius: Sim(3) for kSixDof; kFourDof keeps the robot model (floor plane, camera
+  //    height): x, y and yaw only.
+  const bool four_dof = options_.model == MotionModel::kFourDof;
+  auto pairs_for = [&](const Sim3& t, double radius, std::vector<Eigen::Vector3d>* from,
+                       std::vector<Eigen::Vector3d>* to) {
+    int n = 0;
     for (const Eigen::Vector3d& x : new_x) {
-      const Eigen::Vector3d y = sim * x;
+      const Eigen::Vector3d y = t * x;
       int nearest = -1;
       double d2 = radius * radius;
       for_old_near(y, radius, [&](int i) {
@@ -907,31 +924,48 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
         }
       });
       if (nearest < 0) continue;
-      src.push_back(x);
-      dst.push_back(old_x[nearest]);
+      ++n;
+      if (from) from->push_back(x);
+      if (to) to->push_back(old_x[nearest]);
     }
+    return n;
+  };
+  Sim3 sim;
+  sim.translation = offset;
+  std::vector<Eigen::Vector3d> src, dst;
+  for (double radius : {8.0, 4.0, 2.5, options_.join_max_mm}) {
+    src.clear();
+    dst.clear();
+    pairs_for(sim, radius, &src, &dst);
     if (static_cast<int>(src.size()) < options_.join_min_landmarks) break;
     Sim3 next;
-    if (!AlignUmeyama(src, dst, true, &next)) break;
-    if (floor_mode) {  // keep the floor: yaw only, scale about the floor plane (z = 0 stays), no vertical shift
-      const double yaw = std::atan2(next.rotation(1, 0), next.rotation(0, 0));
-      next.rotation = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      Eigen::Vector3d mean_src = Eigen::Vector3d::Zero(), mean_dst = Eigen::Vector3d::Zero();
-      for (size_t k = 0; k < src.size(); ++k) {
-        mean_src += src[k] / static_cast<double>(src.size());
-        mean_dst += dst[k] / static_cast<double>(src.size());
-      }
-      next.translation = mean_dst - next.scale * (next.rotation * mean_src);
+    bool ok = false;
+    if (four_dof) {
+      std::vector<Eigen::Vector3d> a = src, b = dst;
+      for (auto& v : a) v.z() = 0;
+      for (auto& v : b) v.z() = 0;
+      ok = AlignUmeyama(a, b, false, &next);
       next.translation.z() = 0;
+    } else {
+      ok = AlignUmeyama(src, dst, true, &next);
+    }
+    if (!ok) {
+      *num_pairs = static_cast<int>(src.size());
+      *message = "maps not joined: degenerate landmark pairs (odometry chaining kept)";
+      return false;
     }
     sim = next;
   }
   *num_pairs = static_cast<int>(src.size());
-  if (*num_pairs < options_.join_min_landmarks) {
+  // Chance pairs: the same count with the transform shifted by a wrong 6 mm in x and y.
+  Sim3 wrong = sim;
+  wrong.translation += Eigen::Vector3d(6, 6, 0);
+  const int chance = pairs_for(wrong, options_.join_max_mm, nullptr, nullptr);
+  if (*num_pairs < options_.join_min_landmarks || *num_pairs < 3 * chance) {
     std::ostringstream m;
-    m << "maps not joined: " << *num_pairs << " common landmarks (< " << options_.join_min_landmarks
-      << "; most agreed offset " << offset.transpose() << " mm by " << best_votes
-      << " pair votes; odometry chaining kept)";
+    m << "maps not joined: " << *num_pairs << " common landmarks (need " << options_.join_min_landmarks
+      << " and 3x the " << chance << " found at a wrong offset; most agreed offset " << offset.transpose() << " mm by "
+      << best_votes << " pairs; odometry chaining kept)";
     *message = m.str();
     return false;
   }
@@ -940,8 +974,9 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
   t.translation() = sim.translation;
   ApplySimilarity(sim.scale, t, first, last, new_points);
   std::ostringstream m;
-  m << "joined to the old map by " << *num_pairs << " landmarks (shift " << (sim.translation).norm() << " mm, rotation "
-    << RotationAngle(sim.rotation) * 180 / M_PI << " deg, scale " << sim.scale << ")";
+  m << "joined to the old map by " << *num_pairs << " landmarks (" << chance << " at a wrong offset; shift "
+    << sim.translation.norm() << " mm, rotation " << RotationAngle(sim.rotation) * 180 / M_PI << " deg, scale "
+    << sim.scale << ")";
   *message = m.str();
   return true;
 }
@@ -971,6 +1006,16 @@ void PoseEstimator::MergeLandmark(int64_t from, int64_t to, int f) {
     fr.outlier.insert(fr.outlier.begin() + at, out);
   }
   if (tf != track_frames_.end()) track_frames_.erase(tf);
+  // Tracks fused into `from` earlier now observe `to` (no alias chains).
+  for (auto& [track, alias] : alias_)
+    if (alias.landmark == from) alias.landmark = to;
+  for (auto& [track, landmark] : fused_tracks_)
+    if (landmark == from) landmark = to;
+  if (auto pf = points_.find(from); pf != points_.end()) {
+    Point& target = points_[to];
+    target.dropped_observations += pf->second.dropped_observations;
+    target.dropped_sq_error += pf->second.dropped_sq_error;
+  }
   std::vector<int>& list = track_frames_[to];
   std::vector<int> merged;
   merged.reserve(list.size() + moved.size());

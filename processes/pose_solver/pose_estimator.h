@@ -31,14 +31,18 @@
 //     all landmarks (relocalization works when track ids reappear). After relocalize_after_lost_frames lost frames the
 //     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
 //     last good frame and the new span, then joined to it by the landmarks both saw (KLT ids do not reappear, so by
-//     position): the offset most new-old landmark pairs within join_search_mm agree on, then the least-squares
-//     Sim(3) (kFourDof on the floor: x, y, yaw) of the pairs within join_max_mm, applied to the new map; the paired
-//     landmarks are then fused (below), so the adjustments tie the two maps together. Fewer than
-//     join_min_landmarks pairs: the odometry chaining stands. The first pose after recovery has status RELOCALIZED.
-//     Fusion (FuseLandmarks): a new landmark becomes an older one when its track was never seen with the old one's,
-//     they lie within fuse_search_mm, the track's views span fuse_min_parallax_deg, and the old landmark reprojects
-//     within fuse_max_px in every held view of the track; later frames of the track observe the old landmark.
-//     Applied to every new landmark only with fuse_landmarks (loop closure, off by default).
+//     position), after the new span's BA in the final camera model: the offset most new-old landmark pairs within
+//     join_search_mm agree on, then the least-squares Sim(3) (kFourDof: x, y and yaw only, the robot model fixes
+//     the rest) of the nearest pairs, the radius shrinking to join_max_mm, applied to the new map. The join needs
+//     join_min_landmarks pairs and three times the pairs the same transform finds 6 mm off (chance), else the
+//     odometry chaining stands. The joined span's landmarks are then fused onto the old map's (below, whatever
+//     fuse_landmarks says), so the adjustments tie the two maps together. The first pose after recovery has status
+//     RELOCALIZED.
+//     Fusion (FuseLandmarks): a new landmark becomes an older one when its track was never seen with the old one's
+//     in a frame that still holds observations, they lie within fuse_search_mm, the track's first and last held
+//     (posed, inlier) views see it fuse_min_parallax_deg apart, and the old landmark reprojects within fuse_max_px
+//     in every such view; later frames of the track observe the old landmark. With fuse_landmarks every new
+//     landmark is tried against every older one (loop closure, off by default); otherwise only a join's.
 //  4. Finish(): frames never posed get PnP against the final map, then global BA over the active (not frozen)
 //     keyframes (or all posed frames) and landmarks (observations beyond the PnP inlier threshold left out; with
 //     frozen keyframes the two oldest active ones are held), pose refits of the other frames that still have
@@ -118,7 +122,7 @@ struct PoseEstimatorOptions {
                                                // better than the drift it would correct (docs/benchmarks.md). The
                                                // landmarks of a map join (join_search_mm) are fused regardless.
   double fuse_search_mm = 5.0;                 // mm, largest distance between the new and the old landmark
-  double fuse_min_parallax_deg = 10.0;         // deg, the new track's first and last view must see its landmark
+  double fuse_min_parallax_deg = 10.0;         // deg, the new track's first and last held view must see it
                                                // this far apart before it is fused (until then it is retried at
                                                // keyframes while the track lives)
   double fuse_max_px = 1.5;                    // px, the old landmark's largest reprojection error over the new
@@ -126,7 +130,8 @@ struct PoseEstimatorOptions {
   double join_search_mm = 50.0;                // mm: after a restart, old landmarks this close to new ones (after
                                                // the odometry chaining) are candidates for joining the maps by
                                                // Sim(3); 0 = odometry chaining only
-  double join_max_mm = 1.5;                    // mm, final pair distance of the join
+  double join_max_mm = 1.5;                    // mm, final pair distance of the join, (0, 2.5] (the rounds before
+                                               // use 8, 4 and 2.5 mm; join_search_mm must be 0 or >= 8)
   int join_min_landmarks = 15;                 // common landmarks needed to join (else odometry chaining is kept)
   int two_view_min_matches = 0;                // wide baseline (short tracks): when PnP fails, pose the frame from
                                                // the essential matrix of its tracks shared with the last posed frame
@@ -251,12 +256,13 @@ class PoseEstimator {
   void AddKeyframe(int f);
   // Triangulates the tracks of frame f that have no landmark yet; their ids are appended to *added if not null.
   int TriangulateNew(int f, std::vector<int64_t>* added = nullptr);
-  // fuse_landmarks: re-associates the new landmarks `candidates` (tracked in frame f) with older ones (see the
-  // option); returns the number fused.
+  // Re-associates the new landmarks `candidates` (tracked in frame f) with older ones (see the top; without
+  // fuse_landmarks only with landmarks last seen before the joined span); candidates still short of parallax whose
+  // track lives go to fuse_pending_. Returns the number fused.
   int FuseLandmarks(int f, const std::vector<int64_t>& candidates);
   // After a restart: joins the new map (frames first..last, points new_points, chained through odometry) to the old
-  // landmarks by the Sim(3) (kFourDof on the floor: x, y, yaw) of the landmarks both saw; false (nothing moved, with
-  // *message) when fewer than join_min_landmarks pairs agree.
+  // landmarks by the Sim(3) (kFourDof: x, y, yaw) of the landmarks both saw (see the top); false (nothing moved,
+  // with *message) when too few pairs agree or they are degenerate.
   bool JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs, std::string* message);
   // Moves every held observation of landmark `from` to landmark `to`, removes `from` and aliases its track (frame f
   // is the last that carried it).
@@ -317,6 +323,8 @@ class PoseEstimator {
   std::unordered_map<int64_t, Alias> alias_;                    // live fused tracks (input id -> landmark)
   std::vector<std::pair<int64_t, int64_t>> fused_tracks_;       // every fusion (track id, landmark id)
   std::vector<int64_t> fuse_pending_;  // new landmarks whose tracks lack the parallax to be fused yet
+  int join_first_frame_ = 0;           // first frame of the last joined map (without fuse_landmarks, fusion targets
+                                       // are landmarks last seen before it)
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
   int init_start_ = 0;      // first frame considered by the (re)initialization

@@ -202,6 +202,14 @@ TEST(PoseEstimator, LostTrackingRecoversAndJoinsTheMaps) {
   const double chained_4dof = RunLostOrbit(o);
   EXPECT_LT(joined_4dof, 0.5);  // mm
   EXPECT_LT(joined_4dof, 0.5 * chained_4dof);
+  // 4-DOF without the floor (odometry scale): still x, y, yaw only.
+  o = PoseEstimatorOptions();
+  o.model = MotionModel::kFourDof;
+  o.use_floor_for_scale = false;
+  const double joined_no_floor = RunLostOrbit(o);
+  o.join_search_mm = 0;
+  const double chained_no_floor = RunLostOrbit(o);
+  EXPECT_LT(joined_no_floor, chained_no_floor);
 }
 
 // Old points come back into view (floor points behind the sphere, the start of the orbit on the second lap, tracks
