@@ -22,25 +22,14 @@ source "$SRC/tests/accuracy_lib.sh"
 # scene NAME MESH_P90 VOXEL_P90 MESH_COMPLETENESS VOXEL_COMPLETENESS: runs one scene and checks it against these
 # regression bounds (mm, mm, fraction, fraction).
 scene() {
-  local name="$1" mesh_p90="$2" voxel_p90="$3" mesh_c="$4" voxel_c="$5" d="$WORK/$1" f m
+  local name="$1" mesh_p90="$2" voxel_p90="$3" mesh_c="$4" voxel_c="$5" d="$WORK/$1" m
   mkdir -p "$d"
-  "$BIN/robot_sim" --lcm-url "file://$d/sim.lcmlog?mode=w" --scene "$SRC/drivers/robot_sim/scenes/$name.scene" \
-    --frames $FRAMES --seed 1 --realtime=false --encoding jpeg --jpeg-quality 95 --ground-truth-dir "$d/gt" \
-    > "$d/sim.out" 2>&1 || { cat "$d/sim.out"; fail "robot_sim ($name)"; }
+  render_orbit "$name" "$d"
   local gt="$d/gt/poses_gt.txt"
   "$BIN/objscan_replay" --log "$d/sim.lcmlog" --out "$d/out" > "$d/replay.out" 2>&1 \
     || { tail -30 "$d/replay.out"; fail "replay ($name)"; }
   echo "$name: pose solver, 6-DOF:"
-  for f in online final; do
-    local file="$d/out/trajectory.txt"; [ $f = online ] && file="$d/out/trajectory_online.txt"
-    "$BIN/objscan_evaluate" trajectory "$file" "$gt" > "$d/$f.txt" || fail "evaluate $name $f"
-    local limit=0.3; [ $f = online ] && limit=2.0
-    check "$name $f ATE RMSE (mm)" "$(value ate_rmse "$d/$f.txt")" "<=" $limit
-    local scale; scale=$(value scale "$d/$f.txt")
-    check "$name $f scale error" "$(awk -v s="$scale" 'BEGIN{d=s-1; if(d<0)d=-d; printf "%.5f", d}')" "<=" 0.01
-    check "$name $f registered fraction" "$(value registered_fraction "$d/$f.txt")" ">=" 0.98
-  done
-  check "$name online rotation mean (deg)" "$(value rotation_mean_deg "$d/online.txt")" "<=" 0.2
+  trajectory_checks "$name" "$d/out" "$gt"
   echo "$name: dense model:"
   for m in mesh voxels; do
     "$BIN/objscan_evaluate" surface "$d/out/model_$m.ply" "$d/gt/target_surface.ply" \

@@ -10,37 +10,20 @@ WORK=$(mktemp -d); trap 'rm -rf "$WORK"' EXIT
 FAILED=0
 fail() { echo "FAIL: $*"; exit 1; }
 
-"$BIN/robot_sim" --lcm-url "file://$WORK/sim.lcmlog?mode=w" --scene "$SRC/drivers/robot_sim/scenes/sphere.scene" \
-  --frames 200 --seed 1 --realtime=false --encoding jpeg --jpeg-quality 95 --ground-truth-dir "$WORK/gt" \
-  > "$WORK/sim.out" 2>&1 || { cat "$WORK/sim.out"; fail "robot_sim"; }
-GT="$WORK/gt/poses_gt.txt"
-
 source "$SRC/tests/accuracy_lib.sh"
-trajectory_checks() {  # NAME OUTDIR
-  local name="$1" out="$2" f
-  for f in online final; do
-    local file="$out/trajectory.txt"; [ $f = online ] && file="$out/trajectory_online.txt"
-    "$BIN/objscan_evaluate" trajectory "$file" "$GT" > "$WORK/$name-$f.txt" || fail "evaluate $name $f"
-    local limit=0.3; [ $f = online ] && limit=2.0
-    check "$name $f ATE RMSE (mm)" "$(value ate_rmse "$WORK/$name-$f.txt")" "<=" $limit
-    local scale; scale=$(value scale "$WORK/$name-$f.txt")
-    check "$name $f scale error" "$(awk -v s="$scale" 'BEGIN{d=s-1; if(d<0)d=-d; printf "%.5f", d}')" "<=" 0.01
-    check "$name $f registered fraction" "$(value registered_fraction "$WORK/$name-$f.txt")" ">=" 0.98
-  done
-  check "$name online rotation mean (deg)" "$(value rotation_mean_deg "$WORK/$name-online.txt")" "<=" 0.2
-}
-
+render_orbit sphere "$WORK"
+GT="$WORK/gt/poses_gt.txt"
 # 6-DOF, full pipeline.
 "$BIN/objscan_replay" --log "$WORK/sim.lcmlog" --out "$WORK/out6" > "$WORK/replay6.out" 2>&1 \
   || { tail -30 "$WORK/replay6.out"; fail "replay (6-DOF)"; }
 echo "pose solver, 6-DOF:"
-trajectory_checks 6dof "$WORK/out6"
+trajectory_checks 6dof "$WORK/out6" "$GT"
 
 # 4-DOF (the robot's floor model), poses only.
 "$BIN/objscan_replay" --log "$WORK/sim.lcmlog" --out "$WORK/out4" --no-dense --pose-model 4dof \
   > "$WORK/replay4.out" 2>&1 || { tail -30 "$WORK/replay4.out"; fail "replay (4-DOF)"; }
 echo "pose solver, 4-DOF:"
-trajectory_checks 4dof "$WORK/out4"
+trajectory_checks 4dof "$WORK/out4" "$GT"
 
 echo "dense model (6-DOF poses):"
 for m in mesh voxels; do

@@ -11,11 +11,9 @@ WORK=$(mktemp -d); trap 'rm -rf "$WORK"' EXIT
 FAILED=0
 fail() { echo "FAIL: $*"; exit 1; }
 
-"$BIN/robot_sim" --lcm-url "file://$WORK/sim.lcmlog?mode=w" --scene "$SRC/drivers/robot_sim/scenes/sphere.scene" \
-  --frames 200 --seed 1 --realtime=false --encoding jpeg --jpeg-quality 95 --ground-truth-dir "$WORK/gt" \
-  --blank-first 80 --blank-count 20 > "$WORK/sim.out" 2>&1 || { cat "$WORK/sim.out"; fail "robot_sim"; }
-GT="$WORK/gt/poses_gt.txt"
 source "$SRC/tests/accuracy_lib.sh"
+render_orbit sphere "$WORK" --blank-first 80 --blank-count 20
+GT="$WORK/gt/poses_gt.txt"
 
 for model in 6dof 4dof; do
   "$BIN/objscan_replay" --log "$WORK/sim.lcmlog" --out "$WORK/$model" --no-dense --pose-model $model \

@@ -16,6 +16,7 @@
 #include <ctime>
 
 #include "common/geometry.h"
+#include "common/point_grid.h"
 
 namespace objscan {
 
@@ -752,28 +753,24 @@ int PoseEstimator::TriangulateNew(int f, std::vector<int64_t>* added_ids) {
 
 int PoseEstimator::FuseLandmarks(int f, const std::vector<int64_t>& candidates) {
   if (candidates.empty()) return 0;
-  // Hash grid of the other landmarks, cells of fuse_search_mm.
-  const double cell = options_.fuse_search_mm;
-  auto key = [cell](const Eigen::Vector3d& x, int dx, int dy, int dz) {
-    const int64_t i = static_cast<int64_t>(std::floor(x.x() / cell)) + dx;
-    const int64_t j = static_cast<int64_t>(std::floor(x.y() / cell)) + dy;
-    const int64_t k = static_cast<int64_t>(std::floor(x.z() / cell)) + dz;
-    return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791);
-  };
-  const std::set<int64_t> is_candidate(candidates.begin(), candidates.end());
-  std::unordered_map<int64_t, std::vector<int64_t>> grid;
-  // Without fuse_landmarks only a map join's landmarks are fused, and only onto the old map (last seen before the
-  // join's span).
+  // The other landmarks. Without fuse_landmarks only a map join's landmarks are fused, and only onto the old map
+  // (last seen before the join's span).
   auto is_old = [&](int64_t id) {
     if (options_.fuse_landmarks) return true;
     auto t = track_frames_.find(id);
     return t == track_frames_.end() || t->second.back() < join_first_frame_;
   };
+  const std::set<int64_t> is_candidate(candidates.begin(), candidates.end());
+  std::vector<int64_t> old_ids;
+  std::vector<Eigen::Vector3d> old_x;
   for (const auto& [id, p] : points_)
-    if (!is_candidate.count(id) && frames_[f].Find(id) < 0 && is_old(id)) grid[key(p.x, 0, 0, 0)].push_back(id);
-  if (grid.empty()) return 0;
+    if (!is_candidate.count(id) && frames_[f].Find(id) < 0 && is_old(id)) {
+      old_ids.push_back(id);
+      old_x.push_back(p.x);
+    }
+  if (old_ids.empty()) return 0;
+  const PointGrid grid(old_x, options_.fuse_search_mm);
   int fused = 0;
-  const double search2 = options_.fuse_search_mm * options_.fuse_search_mm;
   for (int64_t n : candidates) {
     auto pn = points_.find(n);
     auto tn = track_frames_.find(n);
@@ -798,39 +795,24 @@ int PoseEstimator::FuseLandmarks(int f, const std::vector<int64_t>& candidates) 
     }
     int64_t best = -1;
     double best_err = options_.fuse_max_px;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto c = grid.find(key(xn, dx, dy, dz));
-          if (c == grid.end()) continue;
-          for (int64_t o : c->second) {
-            auto po = points_.find(o);
-            if (po == points_.end() || (po->second.x - xn).squaredNorm() > search2) continue;
-            // Never seen together with the new track (two tracks of one frame are two points).
-            bool together = false;
-            if (auto to = track_frames_.find(o); to != track_frames_.end())
-              for (int g : tn->second)
-                if (std::binary_search(to->second.begin(), to->second.end(), g)) {
-                  together = true;
-                  break;
-                }
-            if (together) continue;
-            double worst = 0;
-            for (const auto& [camera_from_world, px] : views) {
-              Eigen::Vector2d uv;
-              if (!ProjectIdeal(camera_, camera_from_world * po->second.x, &uv)) {
-                worst = 1e9;
-                break;
-              }
-              worst = std::max(worst, (uv - px).norm());
-              if (worst >= best_err) break;
-            }
-            if (worst < best_err) {
-              best_err = worst;
-              best = o;
-            }
-          }
-        }
+    grid.ForEachWithin(xn, options_.fuse_search_mm, [&](int k) {
+      const int64_t o = old_ids[k];
+      auto po = points_.find(o);  // old landmarks stay (merges remove candidates only); guarded all the same
+      if (po == points_.end()) return;
+      // Never seen together with the new track (two tracks of one frame are two points).
+      if (auto to = track_frames_.find(o); to != track_frames_.end())
+        for (int g : tn->second)
+          if (std::binary_search(to->second.begin(), to->second.end(), g)) return;
+      double worst = 0;
+      for (const auto& [camera_from_world, px] : views) {
+        Eigen::Vector2d uv;
+        if (!ProjectIdeal(camera_, camera_from_world * po->second.x, &uv)) return;
+        worst = std::max(worst, (uv - px).norm());
+        if (worst >= best_err) return;
+      }
+      best_err = worst;
+      best = o;
+    });
     if (best < 0) continue;
     MergeLandmark(n, best, f);
     ++fused;
@@ -848,28 +830,10 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
     *message = "no landmarks to join the maps (odometry chaining kept)";
     return false;
   }
-  // Old landmarks in a hash grid of join_search_mm cells.
-  const double cell = options_.join_search_mm;
-  auto cell_of = [cell](const Eigen::Vector3d& x) {
-    return Eigen::Vector3i(static_cast<int>(std::floor(x.x() / cell)), static_cast<int>(std::floor(x.y() / cell)),
-                           static_cast<int>(std::floor(x.z() / cell)));
-  };
+  const PointGrid grid(old_x, options_.join_search_mm);
   auto hash = [](const Eigen::Vector3i& c) {
     return (static_cast<int64_t>(c.x()) * 73856093) ^ (static_cast<int64_t>(c.y()) * 19349663) ^
            (static_cast<int64_t>(c.z()) * 83492791);
-  };
-  std::unordered_map<int64_t, std::vector<int>> grid;
-  for (size_t i = 0; i < old_x.size(); ++i) grid[hash(cell_of(old_x[i]))].push_back(static_cast<int>(i));
-  auto for_old_near = [&](const Eigen::Vector3d& x, double radius, auto&& fn) {
-    const Eigen::Vector3i c = cell_of(x);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = grid.find(hash(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == grid.end()) continue;
-          for (int i : it->second)
-            if ((old_x[i] - x).squaredNorm() <= radius * radius) fn(i);
-        }
   };
   // 1. The offset old - new that most pairs within the search radius agree on (2 mm bins, summed over 3x3x3
   //    neighbourhoods): landmarks of corners seen by both maps coincide there; other pairs spread over the whole
@@ -877,7 +841,7 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
   const double bin = 2.0;
   std::unordered_map<int64_t, std::pair<Eigen::Vector3i, int>> votes;  // bin hash -> (bin, pairs)
   for (const Eigen::Vector3d& x : new_x)
-    for_old_near(x, options_.join_search_mm, [&](int i) {
+    grid.ForEachWithin(x, options_.join_search_mm, [&](int i) {
       const Eigen::Vector3i b(((old_x[i] - x) / bin).array().round().cast<int>());
       auto& v = votes[hash(b)];
       v.first = b;
@@ -916,7 +880,7 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
       const Eigen::Vector3d y = t * x;
       int nearest = -1;
       double d2 = radius * radius;
-      for_old_near(y, radius, [&](int i) {
+      grid.ForEachWithin(y, radius, [&](int i) {
         const double e = (old_x[i] - y).squaredNorm();
         if (e <= d2) {
           d2 = e;

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/point_grid.h"
+
 namespace objscan {
 
 bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error) {
@@ -248,56 +250,6 @@ std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points
 }
 
 namespace {
-// Uniform hash grid for nearest-neighbour queries within a bounded radius.
-class PointGrid {
- public:
-  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell) : points_(points), cell_(cell) {
-    for (size_t i = 0; i < points.size(); ++i) cells_[Key(points[i])].push_back(static_cast<int>(i));
-  }
-  // Nearest distance, searching rings up to max_rings cells away; returns +inf if nothing found.
-  // Cost grows with max_rings^4: keep it small and use NearestExact for points that may be far.
-  double Nearest(const Eigen::Vector3d& q, int max_rings) const {
-    const Eigen::Vector3i c = Cell(q);
-    double best = std::numeric_limits<double>::infinity();
-    for (int r = 0; r <= max_rings; ++r) {
-      for (int dx = -r; dx <= r; ++dx)
-        for (int dy = -r; dy <= r; ++dy)
-          for (int dz = -r; dz <= r; ++dz) {
-            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
-            auto it = cells_.find(Pack(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it == cells_.end()) continue;
-            for (int i : it->second) best = std::min(best, (points_[i] - q).norm());
-          }
-      if (best <= r * cell_) break;  // nothing in a further ring can be closer
-    }
-    return best;
-  }
-  // Exact nearest distance: the ring search near the query, then every point when nothing was found close by
-  // (far-off points, e.g. a model that is not aligned to the truth).
-  double NearestExact(const Eigen::Vector3d& q) const {
-    constexpr int kRings = 8;
-    const double near = Nearest(q, kRings);
-    if (near <= kRings * cell_) return near;
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& p : points_) best = std::min(best, (p - q).squaredNorm());
-    return std::sqrt(best);
-  }
-
- private:
-  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const {
-    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / cell_)), static_cast<int>(std::floor(p.y() / cell_)),
-                           static_cast<int>(std::floor(p.z() / cell_)));
-  }
-  static int64_t Pack(const Eigen::Vector3i& c) {
-    return (static_cast<int64_t>(c.x() + (1 << 20)) << 42) | (static_cast<int64_t>(c.y() + (1 << 20)) << 21) |
-           static_cast<int64_t>(c.z() + (1 << 20));
-  }
-  int64_t Key(const Eigen::Vector3d& p) const { return Pack(Cell(p)); }
-  const std::vector<Eigen::Vector3d>& points_;
-  double cell_;
-  std::unordered_map<int64_t, std::vector<int>> cells_;
-};
-
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
