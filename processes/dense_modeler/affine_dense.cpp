@@ -283,9 +283,9 @@ double WindowNcc(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, 
 
 // Points of one image in a uniform grid of cells at least `radius` wide, for "is an earlier point closer than
 // radius" queries (the candidates of the 3x3 cells around a point include every point within radius).
-class PointGrid {
+class ImagePointGrid {
  public:
-  PointGrid(int width, int height, double radius) {
+  ImagePointGrid(int width, int height, double radius) {
     cell_ = std::max(std::abs(radius), 4.0);
     nx_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((width + 1) / cell_))));
     ny_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((height + 1) / cell_))));
@@ -356,7 +356,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (o.mapping != 0 && o.mapping != 1) e << "mapping must be 0 (affine) or 1 (plane); ";
   if (o.pixel_step < 1) e << "pixel-step must be >= 1; ";
   if (!(o.epipolar_threshold_px > 0)) e << "epipolar-threshold must be > 0; ";
-  if (o.ncc_half_window < 0 || o.ncc_half_window > 10) e << "ncc-half-window must be in [0, 10]; ";
+  if (o.ncc_half_window < 0 || o.ncc_half_window > kMaxHalfWindow)
+    e << "ncc-half-window must be in [0, " << kMaxHalfWindow << "]; ";
   if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min-ncc must be in [-1, 1]; ";
   if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction-min-ncc must be in [-1, 1]; ";
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
@@ -376,13 +377,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
 }
 
 cv::Mat GrayFloat(const cv::Mat& image) {
-  cv::Mat gray;
-  if (image.channels() == 3)
-    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  else
-    gray = image;
-  cv::Mat out;
-  gray.convertTo(out, CV_32F);
+  cv::Mat gray8, out;
+  GrayFloatInto(image, &gray8, &out);
   return out;
 }
 
@@ -451,8 +447,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   const double sep2 = o.min_feature_separation_px * o.min_feature_separation_px;
   // A match is a duplicate when an earlier kept one lies closer than the separation in A or in B (looked up in
   // grids of both images instead of comparing with every earlier match).
-  PointGrid grid_a(a.camera.width, a.camera.height, o.min_feature_separation_px);
-  PointGrid grid_b(b.camera.width, b.camera.height, o.min_feature_separation_px);
+  ImagePointGrid grid_a(a.camera.width, a.camera.height, o.min_feature_separation_px);
+  ImagePointGrid grid_b(b.camera.width, b.camera.height, o.min_feature_separation_px);
   for (const PointMatch& m : matches) {
     if (!m.a.allFinite() || !m.b.allFinite()) continue;
     if (!a.camera.InImage(m.a) || !b.camera.InImage(m.b)) continue;

@@ -13,6 +13,17 @@
 namespace objscan {
 namespace {
 
+// Unit smallest principal axis (eigenvector of the smallest eigenvalue) of a weighted point set, from its weighted
+// mean, the sum of w d d^T and the sum of weights; false when the solver gives no usable vector.
+bool ThinAxis(const Eigen::Vector3d& mean, const Eigen::Matrix3d& second, double wsum, Eigen::Vector3d* axis) {
+  const Eigen::Matrix3d cov = second / wsum - mean * mean.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);
+  if (!n.allFinite() || n.norm() < 0.5) return false;
+  *axis = n.normalized();
+  return true;
+}
+
 // Votes around the seeds: a dense copy of the grid over the seeds' bounding box when it is small enough (the
 // normal and ridge tests read each voxel many times), grid lookups otherwise.
 class VoteField {
@@ -110,11 +121,8 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
         }
     if (wsum <= 0) continue;
     mean /= wsum;
-    const Eigen::Matrix3d cov = second / wsum - mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    Eigen::Vector3d n = eig.eigenvectors().col(0);  // smallest eigenvalue
-    if (!n.allFinite() || n.norm() < 0.5) continue;
-    n.normalize();
+    Eigen::Vector3d n;
+    if (!ThinAxis(mean, second, wsum, &n)) continue;
     Eigen::Vector3d outward = s.toward_camera.cast<double>();
     if (outward.squaredNorm() < 1e-12) outward = s.ijk.cast<double>() - centroid;
     if (n.dot(outward) < 0) n = -n;
@@ -220,10 +228,8 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
         }
     if (!(wsum > 0)) continue;
     mean /= wsum;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(second / wsum - mean * mean.transpose());
-    Eigen::Vector3d n = eig.eigenvectors().col(0);
-    if (!n.allFinite() || n.norm() < 0.5) continue;
-    n.normalize();
+    Eigen::Vector3d n;
+    if (!ThinAxis(mean, second, wsum, &n)) continue;
     if (n.dot(surface[i].normal) < 0) n = -n;
     // Plane through the weighted centroid: on a curved surface the centroid lies inside by about the mean squared
     // neighbour distance / (2 x radius of curvature) (0.16 mm on the 100 mm sphere with the default radius). A

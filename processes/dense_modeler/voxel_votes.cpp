@@ -107,22 +107,17 @@ void VoxelVoteGrid::GrowTable() {
   }
 }
 
-VoxelVoteGrid::Block* VoxelVoteGrid::GetBlock(int bx, int by, int bz, bool create) {
-  const uint32_t index = BlockIndex(bx, by, bz, create);
-  return index == kNoBlock ? nullptr : blocks_[index].get();
-}
+VoxelVoteGrid::Block* VoxelVoteGrid::GetBlock(int bx, int by, int bz) { return blocks_[BlockIndex(bx, by, bz)].get(); }
 
-uint32_t VoxelVoteGrid::BlockIndex(int bx, int by, int bz, bool create) {
+uint32_t VoxelVoteGrid::BlockIndex(int bx, int by, int bz) {
   const uint64_t key = BlockKey(bx, by, bz);
-  if (key == cached_key_ && cached_block_) return cached_index_;
+  if (key == cached_key_) return cached_index_;
   size_t slot = SlotOf(key);
   if (slot_key_[slot] == key) {
     cached_key_ = key;
     cached_index_ = slot_block_[slot];
-    cached_block_ = blocks_[cached_index_].get();
     return cached_index_;
   }
-  if (!create) return kNoBlock;
   if (2 * (blocks_.size() + 1) > slot_key_.size()) {  // load factor <= 1/2
     GrowTable();
     slot = SlotOf(key);
@@ -133,7 +128,6 @@ uint32_t VoxelVoteGrid::BlockIndex(int bx, int by, int bz, bool create) {
   block_coords_.emplace_back(bx, by, bz);
   cached_key_ = key;
   cached_index_ = slot_block_[slot];
-  cached_block_ = blocks_.back().get();
   return cached_index_;
 }
 
@@ -156,7 +150,7 @@ bool VoxelVoteGrid::AddPoint(const Eigen::Vector3d& p, const std::array<uint8_t,
   Eigen::Vector3i c;
   if (!VotableVoxel(p, &c)) return false;
   Block* near[27] = {};
-  near[13] = GetBlock(c.x() >> kBlockBits, c.y() >> kBlockBits, c.z() >> kBlockBits, true);
+  near[13] = GetBlock(c.x() >> kBlockBits, c.y() >> kBlockBits, c.z() >> kBlockBits);
   AddPointAt(c, near, bgr, toward_camera);
   return true;
 }
@@ -195,7 +189,7 @@ void VoxelVoteGrid::AddPointAt(const Eigen::Vector3i& c, Block* near[27], const 
     Block*& blk = near[nb.block];
     if (!blk)
       blk = GetBlock((c.x() >> kBlockBits) + nb.block % 3 - 1, (c.y() >> kBlockBits) + nb.block / 3 % 3 - 1,
-                     (c.z() >> kBlockBits) + nb.block / 9 - 1, true);
+                     (c.z() >> kBlockBits) + nb.block / 9 - 1);
     int32_t& v = blk->votes[center_local + nb.delta];
     new_voxels += v == 0;
     v += nb.weight;
@@ -218,7 +212,7 @@ int VoxelVoteGrid::AddPoints(const std::vector<DensePoint>& points) {
   for (size_t i = 0; i < n; ++i) {
     if (!VotableVoxel(points[i].point_in_world, &voxel[i])) continue;
     const Eigen::Vector3i& c = voxel[i];
-    const uint32_t block = BlockIndex(c.x() >> kBlockBits, c.y() >> kBlockBits, c.z() >> kBlockBits, true);
+    const uint32_t block = BlockIndex(c.x() >> kBlockBits, c.y() >> kBlockBits, c.z() >> kBlockBits);
     if (block >= group_of_block_.size()) group_of_block_.resize(blocks_.size(), -1);
     int32_t& g = group_of_block_[block];
     if (g < 0) {
@@ -299,8 +293,7 @@ void VoxelVoteGrid::Clear() {
   blocks_.clear();
   block_coords_.clear();
   group_of_block_.clear();
-  cached_key_ = ~uint64_t{0};
-  cached_block_ = nullptr;
+  cached_key_ = kNoKey;
   num_voxels_ = total_votes_ = points_added_ = 0;
 }
 
@@ -398,7 +391,7 @@ bool VoxelVoteGrid::LoadSnapshot(const std::string& path, std::string* error) {
       if (error) *error = "bad snapshot record: " + path;
       return false;
     }
-    Block* b = loaded.GetBlock(r.i >> kBlockBits, r.j >> kBlockBits, r.k >> kBlockBits, true);
+    Block* b = loaded.GetBlock(r.i >> kBlockBits, r.j >> kBlockBits, r.k >> kBlockBits);
     const int l = ((r.k & m) * kBlockSide + (r.j & m)) * kBlockSide + (r.i & m);
     if (b->votes[l] == 0 && r.votes > 0) ++loaded.num_voxels_;
     b->votes[l] += r.votes;
@@ -410,8 +403,7 @@ bool VoxelVoteGrid::LoadSnapshot(const std::string& path, std::string* error) {
     loaded.points_added_ += r.count;
   }
   *this = std::move(loaded);
-  cached_key_ = ~uint64_t{0};
-  cached_block_ = nullptr;
+  cached_key_ = kNoKey;
   return true;
 }
 

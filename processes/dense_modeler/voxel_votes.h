@@ -98,9 +98,8 @@ class VoxelVoteGrid {
   };
   static constexpr uint64_t kNoKey = ~uint64_t{0};  // empty slot (BlockKey uses 63 bits)
   static uint64_t BlockKey(int bx, int by, int bz);
-  static constexpr uint32_t kNoBlock = ~uint32_t{0};
-  Block* GetBlock(int bx, int by, int bz, bool create);
-  uint32_t BlockIndex(int bx, int by, int bz, bool create);  // index into blocks_, kNoBlock when absent
+  Block* GetBlock(int bx, int by, int bz);      // the block, created (zeroed) when absent
+  uint32_t BlockIndex(int bx, int by, int bz);  // its index into blocks_, the block created when absent
   bool VotableVoxel(const Eigen::Vector3d& point_in_world, Eigen::Vector3i* voxel) const;
   // near: the blocks around the voxel's block by block step ((sz + 1) * 3 + (sy + 1)) * 3 + (sx + 1); near[13] =
   // the voxel's block; null entries are looked up (created) when needed.
@@ -124,9 +123,8 @@ class VoxelVoteGrid {
   int64_t neighbour_weight_total_ = 0;  // votes one point adds
   std::vector<uint64_t> slot_key_;      // hash table of blocks: key per slot (kNoKey = empty), power-of-two size
   std::vector<uint32_t> slot_block_;    // index into blocks_ per slot
-  uint64_t cached_key_ = ~uint64_t{0};  // last block looked up (blocks never move: heap-allocated)
+  uint64_t cached_key_ = kNoKey;        // last block looked up (kNoKey = none; BlockKey never returns it)
   uint32_t cached_index_ = 0;
-  Block* cached_block_ = nullptr;
   std::vector<int32_t> group_of_block_;  // AddPoints' scratch: group per block index (-1 between calls)
   std::vector<std::unique_ptr<Block>> blocks_;
   std::vector<Eigen::Vector3i> block_coords_;
