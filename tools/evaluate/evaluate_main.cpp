@@ -10,11 +10,15 @@
 //       completeness is measured on the visible surface (needs truth normals). Accuracy is always against the whole
 //       true surface (a model point on a part no camera saw is still on the surface); visible_accuracy_* repeat it
 //       against the completeness set only (the stricter figure the tests used before 29 Nov).
+//       --write-aligned FILE writes the model points as scored (after --align; "x y z" per line, truth frame) and
+//       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are.
 // Output is one "key value" pair per line (easy to grep in tests and scripts).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "tools/evaluate/evaluation.h"
 
@@ -22,6 +26,13 @@ namespace {
 int Fail(const std::string& message) {
   std::fprintf(stderr, "error: %s\n", message.c_str());
   return 1;
+}
+
+bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& points, std::string* error) {
+  std::ofstream out(path);
+  for (const Eigen::Vector3d& p : points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  if (!out) *error = "cannot write " + path;
+  return static_cast<bool>(out);
 }
 }  // namespace
 
@@ -61,7 +72,7 @@ int main(int argc, char** argv) {
   }
   if (command == "surface") {
     double threshold = 2.0, min_z = -1e300;
-    std::string align_est, align_truth, visible_from;
+    std::string align_est, align_truth, visible_from, write_aligned, write_visible;
     ViewIntrinsics intrinsics;
     int min_views = 2;
     for (int i = 4; i < argc; ++i) {
@@ -78,6 +89,10 @@ int main(int argc, char** argv) {
         if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
                         &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
           return Fail("--intrinsics wants fx,fy,cx,cy,width,height");
+      } else if (a == "--write-aligned" && i + 1 < argc) {
+        write_aligned = argv[++i];
+      } else if (a == "--write-visible" && i + 1 < argc) {
+        write_visible = argv[++i];
       } else if (a == "--align" && i + 2 < argc) {
         align_est = argv[++i];
         align_truth = argv[++i];
@@ -106,6 +121,8 @@ int main(int argc, char** argv) {
       if (!EvaluateTumTrajectories(est, tru, true, 0.005, &e, &error)) return Fail(error);
       for (auto& p : model) p = e.error.alignment * p;
     }
+    if (!write_aligned.empty() && !WriteXyz(write_aligned, model, &error)) return Fail(error);
+    if (!write_visible.empty() && !WriteXyz(write_visible, visible, &error)) return Fail(error);
     const SurfaceEvaluation s = EvaluateSurface(model, truth, visible, threshold);
     const SurfaceEvaluation v = EvaluateSurface(model, visible, threshold);
     std::printf(

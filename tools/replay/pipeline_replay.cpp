@@ -4,10 +4,12 @@
 #include <sys/stat.h>
 
 #include <memory>
+#include <sstream>
 #include <vector>
 
 #include "common/bus.h"
 #include "common/log.h"
+#include "common/options.h"
 #include "objscan/control_t.hpp"
 #include "processes/tracker/tracker_node.h"
 #ifdef OBJSCAN_HAVE_POSE_SOLVER
@@ -49,11 +51,31 @@ bool IsFeedableControl(const void* data, int size) {
   return msg.command == control_t::COMMAND_END_OF_STREAM;
 }
 
+// Applies "--name value ..." (split at white space) to the options that add_options registers; false with *error
+// naming the node on an unknown option or a bad value.
+template <typename NodeOptions, typename AddOptions>
+bool ApplyNodeArgs(const std::string& node, const std::string& args, AddOptions add_options, NodeOptions* options,
+                   std::string* error) {
+  if (args.empty()) return true;
+  OptionParser parser(node, "");
+  add_options(parser, options);
+  std::istringstream in(args);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  std::string why;
+  if (!parser.ParseArgs(words, &why)) {
+    *error = node + " options '" + args + "': " + why;
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResult* result, std::string* error) {
   mkdir(options.out_dir.c_str(), 0755);
-  lcm_eventlog_t* log = lcm_eventlog_create(options.log_path.c_str(), "r");
+  std::unique_ptr<lcm_eventlog_t, void (*)(lcm_eventlog_t*)> log(lcm_eventlog_create(options.log_path.c_str(), "r"),
+                                                                 lcm_eventlog_destroy);
   if (log == nullptr) {
     *error = "cannot read log " + options.log_path;
     return false;
@@ -66,6 +88,7 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
     std::vector<std::unique_ptr<Node>> nodes;
     TrackerNodeOptions tracker_options;
     tracker_options.exit_when_finished = false;
+    if (!ApplyNodeArgs("tracker", options.tracker_args, AddTrackerNodeOptions, &tracker_options, error)) return false;
     nodes.push_back(std::make_unique<TrackerNode>(bus, tracker_options));
     result->nodes = "tracker";
 #ifdef OBJSCAN_HAVE_POSE_SOLVER
@@ -74,6 +97,8 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
       pose_options.exit_when_finished = false;
       pose_options.output_dir = options.out_dir;
       pose_options.model = options.pose_model;
+      if (!ApplyNodeArgs("pose_solver", options.pose_solver_args, AddPoseSolverNodeOptions, &pose_options, error))
+        return false;
       std::string why;
       if (!ValidatePoseSolverNodeOptions(pose_options, &why)) {
         *error = "pose solver options: " + why;
@@ -88,11 +113,14 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
       DenseModelerNodeOptions dense_options;
       dense_options.exit_when_finished = false;
       dense_options.output_dir = options.out_dir;
+      if (!ApplyNodeArgs("dense_modeler", options.dense_modeler_args, AddDenseModelerNodeOptions, &dense_options,
+                         error))
+        return false;
       nodes.push_back(std::make_unique<DenseModelerNode>(bus, dense_options));
       result->nodes += ",dense_modeler";
     }
 #endif
-    while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log)) {
+    while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log.get())) {
       ++result->events_read;
       const std::string channel(event->channel, event->channellen);
       const bool feed = options.input_channels.count(channel) &&
@@ -109,11 +137,9 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
     while (memq->Handle(0) > 0) {
     }
   } catch (const std::exception& e) {
-    lcm_eventlog_destroy(log);
     *error = e.what();
     return false;
   }
-  lcm_eventlog_destroy(log);
   return true;
 }
 

@@ -15,20 +15,25 @@
 namespace objscan {
 
 struct PipelineReplayOptions {
-  std::string log_path;            // input LCM log (e.g. DIR/session.lcmlog from objscan run)
-  std::string out_dir;             // output folder: replay.lcmlog and the nodes' files
-  std::set<std::string> input_channels = {"CAMERA_IMAGE", "CAMERA_INFO", "ROBOT_ODOMETRY", "GROUND_TRUTH_POSE",
-                                          "OBJSCAN_CONTROL", "TARGET"};  // fed from the log
-  bool run_pose_solver = true;     // include the pose solver when it is built
-  bool run_dense_modeler = true;   // include the dense modeler when it is built
-  std::string pose_model = "6dof"; // pose solver camera model: "6dof" or "4dof" (the robot's floor model)
+  std::string log_path;  // input LCM log (e.g. DIR/session.lcmlog from objscan run)
+  std::string out_dir;   // output folder: replay.lcmlog and the nodes' files
+  std::set<std::string> input_channels = {"CAMERA_IMAGE",      "CAMERA_INFO",     "ROBOT_ODOMETRY",
+                                          "GROUND_TRUTH_POSE", "OBJSCAN_CONTROL", "TARGET"};  // fed from the log
+  bool run_pose_solver = true;      // include the pose solver when it is built
+  bool run_dense_modeler = true;    // include the dense modeler when it is built
+  std::string pose_model = "6dof";  // pose solver camera model: "6dof" or "4dof" (the robot's floor model)
+  // Extra options of each node, as on its process's command line ("--name value ..." split at white space, e.g.
+  // "--ridge-smoothing-radius 6"); applied after the replay's own settings. An unknown option fails the replay.
+  std::string tracker_args;
+  std::string pose_solver_args;
+  std::string dense_modeler_args;
 };
 
 struct PipelineReplayResult {
-  int64_t events_read = 0;       // events in the log
-  int64_t events_fed = 0;        // events published to the nodes
-  int64_t messages_out = 0;      // messages the nodes published (all channels)
-  std::string nodes;             // names of the nodes that ran
+  int64_t events_read = 0;   // events in the log
+  int64_t events_fed = 0;    // events published to the nodes
+  int64_t messages_out = 0;  // messages the nodes published (all channels)
+  std::string nodes;         // names of the nodes that ran
 };
 
 // Runs the replay. Blocks until the log is consumed. Returns false with *error when the log cannot be read or the
