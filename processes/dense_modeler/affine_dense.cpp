@@ -360,6 +360,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
     e << "ncc-half-window must be in [0, " << kMaxHalfWindow << "]; ";
   if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min-ncc must be in [-1, 1]; ";
   if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction-min-ncc must be in [-1, 1]; ";
+  if (!(o.junction_floor_ncc_margin <= 2)) e << "junction-floor-ncc-margin must be <= 2 (< 0 = off); ";
+  if (!(o.junction_floor_min_separation_px >= 0)) e << "junction-floor-min-separation must be >= 0 px; ";
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
   if (!(o.max_triangle_edge_px > 0)) e << "max-triangle-edge must be > 0; ";
@@ -692,6 +694,25 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
                ncc < o.junction_min_ncc)) {
             ++stats.rejected_ncc;
             continue;
+          }
+          // The floor hypothesis: the ray of P meets the floor plane at X_f, seen in B at q_f. In the crevice between
+          // the floor and the object, the triangle's plane puts P in the air in front of the shadowed floor that P
+          // really sees; when the floor explains the match about as well (q_f near q, or an NCC at q_f nearly as
+          // high), P is ambiguous and dropped.
+          if (junction && o.junction_floor_ncc_margin >= 0) {
+            const Eigen::Vector3d ray = (rwa * na.homogeneous()).normalized();
+            const double along = o.region.floor_normal.dot(ray);
+            if (along < -1e-9) {
+              const Eigen::Vector3d x_floor = center_a - (o.region.HeightAboveFloor(center_a) / along) * ray;
+              Eigen::Vector2d q_floor;
+              if (cam_b.Project(b_from_world * x_floor, &q_floor) &&
+                  ((q_floor - q).norm() < o.junction_floor_min_separation_px ||
+                   (Inside(b.image, q_floor, h + 1) && WindowNcc(window_a, warp, gray_b, q_floor, nullptr, nullptr) >=
+                                                           ncc - o.junction_floor_ncc_margin))) {
+                ++stats.rejected_floor_ambiguous;
+                continue;
+              }
+            }
           }
         }
         const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();

@@ -91,8 +91,14 @@ struct AffineDenseOptions {
   // object's shadowed lower part but also the air of the crevice, where flat dark windows pass any NCC test:
   double junction_min_window_stddev = 4.0;  // gray levels, their pixels need windows this textured (< 0 = off)
   double junction_min_ncc = 0.9;            // and this NCC, [-1, 1]
-  double region_slack_mm = 10.0;            // mm, a triangle is skipped only when its vertices are this far outside
-  double region_image_margin_px = 8.0;      // px, margin around the region's projected box in A
+  // and must not be explained by the floor as well: P's ray meets the floor plane at a point seen in B at q_f; P is
+  // dropped when q_f is closer than junction_floor_min_separation_px to Q or its NCC is at least the NCC at Q
+  // minus junction_floor_ncc_margin (the crevice's shadowed floor seen under the object, which the triangle's
+  // plane would put in the air):
+  double junction_floor_ncc_margin = 0.1;         // NCC units, <= 2 (< 0 = off)
+  double junction_floor_min_separation_px = 1.0;  // px, >= 0
+  double region_slack_mm = 10.0;        // mm, a triangle is skipped only when its vertices are this far outside
+  double region_image_margin_px = 8.0;  // px, margin around the region's projected box in A
 };
 
 // Counters of one pair (for status, tests and tuning).
@@ -107,10 +113,11 @@ struct DensePairStats {
   int64_t rejected_epipolar = 0;
   int64_t rejected_color = 0;
   int64_t rejected_ncc = 0;
-  int64_t rejected_refine_border = 0;  // refinement's best score at the end of its search
-  int64_t rejected_triangulation = 0;  // small angle, behind a camera or reprojection error
-  int64_t rejected_box = 0;            // outside the world box or the region
-  int triangles_skipped_region = 0;    // vertices surely outside the region
+  int64_t rejected_refine_border = 0;    // refinement's best score at the end of its search
+  int64_t rejected_triangulation = 0;    // small angle, behind a camera or reprojection error
+  int64_t rejected_box = 0;              // outside the world box or the region
+  int64_t rejected_floor_ambiguous = 0;  // floor-junction pixel that the floor plane explains as well
+  int triangles_skipped_region = 0;      // vertices surely outside the region
   int64_t accepted = 0;
   double mean_refine_shift_px = 0;  // mean |Q_refined - Q| (refinement on)
 };

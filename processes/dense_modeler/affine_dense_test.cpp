@@ -325,5 +325,57 @@ TEST(AffineDense, FeatureDeduplicationKeepsTheFirstOfCloseMatches) {
   }
 }
 
+TEST(AffineDense, FloorJunctionPixelsThatTheFloorExplainsAreDropped) {
+  // Only a textured floor (z = 0) is in view, but every other feature is a false "object" feature 12 mm above it
+  // (like the lower rim of an object seen against the floor behind): triangles joining the two put their pixels, which
+  // all see the floor, in the air - the crevice curtain. The floor hypothesis finds them out.
+  PlaneScene floor{Eigen::Vector3d::UnitZ(), 0.0};
+  const Eigen::Isometry3d pa = testing_scene::LookAt({0, -700, 400}, {0, 0, 0});
+  const double a10 = 10 * M_PI / 180;
+  const Eigen::Isometry3d pb = testing_scene::LookAt({700 * std::sin(a10), -700 * std::cos(a10), 400}, {0, 0, 0});
+  const DenseView a = View(floor.camera, pa, floor.Render(pa)), b = View(floor.camera, pb, floor.Render(pb));
+  std::vector<PointMatch> matches;
+  int k = 0;
+  for (const PointMatch& m : floor.Matches(pa, pb, 30)) {
+    Eigen::Vector3d x;
+    ASSERT_TRUE(floor.Intersect(pa, m.a, &x));
+    if (k++ % 2 == 0) {
+      matches.push_back(m);
+      continue;
+    }
+    const Eigen::Vector3d lifted = x + Eigen::Vector3d(0, 0, 12);
+    Eigen::Vector2d ua, ub;
+    if (floor.camera.Project(pa.inverse() * lifted, &ua) && floor.camera.Project(pb.inverse() * lifted, &ub))
+      matches.push_back({ua, ub});
+  }
+  AffineDenseOptions o;
+  o.region.valid = true;
+  o.region.box_min = Eigen::Vector3d(-1000, -1000, -100);
+  o.region.box_max = Eigen::Vector3d(1000, 1000, 300);
+  o.region.has_floor = true;
+  o.region.floor_clearance_mm = 4;
+  o.junction_min_window_stddev = 0;  // the smooth test texture: only the floor hypothesis decides here
+  o.junction_min_ncc = 0.7;
+  o.junction_floor_ncc_margin = -1;  // off
+  DensePairStats off_stats;
+  const std::vector<DensePoint> off = ComputeDensePair(a, b, matches, o, &off_stats);
+  o.junction_floor_ncc_margin = 0.1;
+  DensePairStats on_stats;
+  const std::vector<DensePoint> on = ComputeDensePair(a, b, matches, o, &on_stats);
+  std::printf("curtain points: %zu without the floor hypothesis, %zu with (%lld dropped as floor)\n", off.size(),
+              on.size(), static_cast<long long>(on_stats.rejected_floor_ambiguous));
+  ASSERT_GT(off.size(), 200u);  // without it the air between the floor and the false features is "reconstructed"
+  EXPECT_EQ(off_stats.rejected_floor_ambiguous, 0);
+  EXPECT_GT(on_stats.rejected_floor_ambiguous, static_cast<int64_t>(off.size()));
+  EXPECT_LE(on.size(), off.size() / 20);
+
+  std::string why;
+  o.junction_floor_ncc_margin = 3;
+  o.junction_floor_min_separation_px = -1;
+  EXPECT_FALSE(ValidateAffineDenseOptions(o, &why));
+  EXPECT_NE(why.find("junction-floor-ncc-margin"), std::string::npos);
+  EXPECT_NE(why.find("junction-floor-min-separation"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace objscan

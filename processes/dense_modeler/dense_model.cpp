@@ -1,6 +1,7 @@
 #include "processes/dense_modeler/dense_model.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -19,9 +20,12 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (!ValidateSpaceCarvingOptions(o.carving, &w)) e << w << "; ";
   if (!(o.min_relative_votes >= 0 && o.min_relative_votes <= 1)) e << "min relative votes must be in [0, 1]; ";
   if (o.vote_threshold < 1) e << "vote threshold must be >= 1; ";
+  if (!(o.floor_band_mm >= 0)) e << "floor band must be >= 0 mm; ";
+  if (!(o.floor_band_normal_deg > 0 && o.floor_band_normal_deg < 90)) e << "floor band normal must be in (0, 90) deg; ";
   if (o.smoothing_passes < 0 || o.smoothing_passes > 5) e << "smoothing passes must be in [0, 5]; ";
   if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
   if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
+  if (!ValidateMeshVisibilityOptions(o.visibility, &w)) e << w << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -90,6 +94,19 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
   std::vector<Eigen::Vector3d> normals;
   if (ridge) {
     surface = ExtractVoteRidge(grid, seeds, o.ridge, &model.ridge);
+    if (region.valid && region.has_floor && o.floor_band_mm > 0) {
+      // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not.
+      const double min_cos = std::cos(o.floor_band_normal_deg * M_PI / 180.0);
+      std::vector<SurfaceVoxel> kept;
+      kept.reserve(surface.size());
+      for (const SurfaceVoxel& s : surface) {
+        if (region.HeightAboveFloor(s.point_in_world) < o.floor_band_mm && s.normal.dot(region.floor_normal) >= min_cos)
+          ++model.floor_band_dropped;
+        else
+          kept.push_back(s);
+      }
+      surface.swap(kept);
+    }
     seeds.clear();
     for (const SurfaceVoxel& s : surface) {
       seeds.push_back(s.voxel);
@@ -122,6 +139,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     }
     model.mesh = MeshFromSurfacePoints(SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius),
                                        grid.voxel_size());
+    // Sheets inside the object, under the surface other pairs built, are hidden from every view.
+    model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
   } else {

@@ -11,6 +11,7 @@
 #include "common/sensor_data.h"
 #include "processes/dense_modeler/affine_dense.h"
 #include "processes/dense_modeler/marching_cubes.h"
+#include "processes/dense_modeler/mesh_visibility.h"
 #include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/surface_extraction.h"
@@ -31,6 +32,12 @@ struct DenseModelOptions {
                                     // 1 = ridge: the vote ridge along the normal (ExtractVoteRidge, min_relative_votes
                                     // unused), carved with its normals, meshed through its sub-voxel surface points
   RidgeOptions ridge;               // ridge extraction (surface_method 1)
+  double floor_band_mm = 12.0;      // mm, ridge voxels lower than this above the region's floor that face up (normal
+                                    // within floor_band_normal_deg of the floor normal) are floor, dropped (0 = off;
+                                    // surface_method 1, region with a floor): the region's hard floor clearance can
+                                    // then stay low enough to keep the object's walls down to the floor
+  double floor_band_normal_deg = 45.0;  // deg, see floor_band_mm, (0, 90)
+  MeshVisibilityOptions visibility;     // removal of mesh parts no view sees (inner sheets; surface_method 1)
 };
 
 bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
@@ -51,15 +58,19 @@ struct FinalModel {
   TriangleMesh mesh;
   SpaceCarvingStats carving;
   RidgeStats ridge;                                    // surface_method 1 only
+  MeshVisibilityStats visibility;                      // surface_method 1 only
   int64_t seeds = 0;                                   // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;                      // ridge voxels dropped as floor (floor_band_mm)
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
 };
 
 // Seeds = voxels with votes >= threshold whose centre is inside region (when valid: box and floor half-space).
+// Ridge voxels near the floor that face up are dropped as floor (floor_band_mm).
 // Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
 // views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
-// oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen).
+// oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh
+// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces.
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
                            const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
 

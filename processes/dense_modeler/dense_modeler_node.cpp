@@ -79,6 +79,18 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "ridge fragments smaller than this fraction of the largest are dropped");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
+  p.Add("floor-band", &m->floor_band_mm,
+        "mm, ridge voxels lower than this above the floor that face up are dropped as floor (0 = off)");
+  p.Add("floor-band-normal", &m->floor_band_normal_deg, "deg, largest angle of a floor voxel's normal to the floor's");
+  p.Add("mesh-min-seen-views", &m->visibility.min_seen_views,
+        "mesh vertices seen (unoccluded, facing) by fewer views are removed: inner sheets (0 = off)");
+  p.Add("mesh-min-seen-fraction", &m->visibility.min_seen_fraction,
+        "mesh vertices seen by fewer than this fraction of the views they face are removed (0 = off)");
+  p.Add("mesh-visibility-tolerance", &m->visibility.depth_tolerance_mm,
+        "mm, a mesh vertex this far behind the rendered mesh still counts as seen");
+  p.Add("mesh-visibility-min-facing-cos", &m->visibility.min_facing_cos,
+        "cos of the largest angle between a mesh vertex normal and the ray to a camera that sees it");
+  p.Add("mesh-visibility-max-views", &m->visibility.max_views, "views rendered for the mesh visibility at most");
   AffineDenseOptions* d = &m->dense;
   p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
   p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
@@ -104,6 +116,10 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-junction-min-window-stddev", &d->junction_min_window_stddev,
         "gray levels, floor-object triangles need this texture (< 0 = off)");
   p.Add("dense-junction-min-ncc", &d->junction_min_ncc, "min NCC in floor-object triangles");
+  p.Add("dense-junction-floor-ncc-margin", &d->junction_floor_ncc_margin,
+        "floor-object triangle pixels whose floor-plane match has an NCC >= theirs minus this are dropped (< 0 = off)");
+  p.Add("dense-junction-floor-min-separation", &d->junction_floor_min_separation_px,
+        "px, floor-object triangle pixels whose floor-plane match lies closer than this are dropped");
   p.Add("dense-region-margin", &d->region_image_margin_px, "px, margin around the region's projected box");
   VoxelVoteOptions* v = &m->votes;
   p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
@@ -514,8 +530,11 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
-            " seeds, " + std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
-            std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped");
+            " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
+            std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
+            std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped, " +
+            std::to_string(model.visibility.vertices_removed) + " mesh vertices hidden in " +
+            std::to_string(model.visibility.views) + " views removed");
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +

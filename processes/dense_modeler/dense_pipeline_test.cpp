@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <random>
 #include <unordered_set>
 
 #include "processes/dense_modeler/dense_model.h"
@@ -189,6 +190,63 @@ TEST(DensePipeline, TexturedSphereFromRingNoisyTracks) {
   EXPECT_LE(refined.final.p90, 1.5);
   EXPECT_GE(refined.final.completeness, 0.90);
   EXPECT_LE(refined.mesh_p90, 1.0);
+}
+
+// A wall (x = 0, facing -x) standing on the floor and a sheet of floor points 6 mm above the floor plane in front of
+// it (what is left of the floor's noisy points above the region's clearance), voted as the dense pairs would.
+VoxelVoteGrid WallAndFloorVotes() {
+  VoxelVoteGrid grid;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0.0, 0.8);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (int i = 0; i < 120000; ++i) {
+    const double y = -40 + 80 * uni(rng), z = 4 + 76 * uni(rng);
+    grid.AddPoint(Eigen::Vector3d(gauss(rng), y, z), {{90, 120, 150}}, Eigen::Vector3f(-0.95f, 0, 0.31f));
+  }
+  for (int i = 0; i < 60000; ++i) {
+    const double x = -60 + 56 * uni(rng), y = -40 + 80 * uni(rng);
+    grid.AddPoint(Eigen::Vector3d(x, y, 6 + gauss(rng)), {{60, 60, 60}}, Eigen::Vector3f(-0.31f, 0, 0.95f));
+  }
+  return grid;
+}
+
+TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
+  const VoxelVoteGrid grid = WallAndFloorVotes();
+  RegionOfInterest region;
+  region.valid = true;
+  region.box_min = Eigen::Vector3d(-100, -100, -50);
+  region.box_max = Eigen::Vector3d(100, 100, 200);
+  region.has_floor = true;
+  region.floor_clearance_mm = 4;
+  DenseModelOptions options;
+  options.carve = false;
+  auto lowest_wall_and_floor = [&](const FinalModel& model, double* lowest_wall, int* floor_vertices) {
+    *lowest_wall = 1e9;
+    *floor_vertices = 0;
+    for (const auto& v : model.mesh.vertices) {
+      if (v.x() < -6 && v.z() < 12) ++*floor_vertices;
+      if (std::abs(v.x()) < 2 && std::abs(v.y()) < 30) *lowest_wall = std::min(*lowest_wall, double{v.z()});
+    }
+  };
+  double lowest_wall = 0;
+  int floor_vertices = 0;
+  const FinalModel with_band = BuildFinalModel(grid, {}, options, region);
+  lowest_wall_and_floor(with_band, &lowest_wall, &floor_vertices);
+  EXPECT_GT(with_band.floor_band_dropped, 500);
+  EXPECT_EQ(floor_vertices, 0);
+  EXPECT_LT(lowest_wall, 9.0);  // the wall is kept down to a few mm over the clearance
+
+  options.floor_band_mm = 0;  // off: the floor sheet is part of the model
+  const FinalModel without_band = BuildFinalModel(grid, {}, options, region);
+  lowest_wall_and_floor(without_band, &lowest_wall, &floor_vertices);
+  EXPECT_EQ(without_band.floor_band_dropped, 0);
+  EXPECT_GT(floor_vertices, 1000);
+
+  std::string why;
+  options.floor_band_mm = -1;
+  options.floor_band_normal_deg = 90;
+  EXPECT_FALSE(ValidateDenseModelOptions(options, &why));
+  EXPECT_NE(why.find("floor band"), std::string::npos);
 }
 
 }  // namespace

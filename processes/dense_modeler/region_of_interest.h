@@ -71,7 +71,8 @@ struct AutoRoiOptions {
   double floor_tolerance_mm = 5.0;   // mm, plane inlier distance (> 0)
   int min_floor_points = 30;         // landmarks needed to accept a floor plane (>= 3)
   double max_floor_tilt_deg = 20.0;  // deg, max angle between the floor normal and world +z, (0, 90)
-  double floor_clearance_mm = 10.0;  // mm, points lower than this above the floor are outside the region (>= 0)
+  double floor_clearance_mm = 4.0;   // mm, points lower than this above the floor are outside the region (>= 0);
+                                     // floor just above it is dropped later as surface facing up (floor_band_mm)
   int ransac_iterations = 300;       // floor RANSAC samples (>= 1)
 };
 

@@ -1,0 +1,161 @@
+#include "processes/dense_modeler/mesh_visibility.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace objscan {
+
+bool ValidateMeshVisibilityOptions(const MeshVisibilityOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (o.min_seen_views < 0) e << "mesh min_seen_views must be >= 0; ";
+  if (!(o.min_seen_fraction >= 0 && o.min_seen_fraction <= 1)) e << "mesh min_seen_fraction must be in [0, 1]; ";
+  if (!(o.depth_tolerance_mm > 0)) e << "mesh visibility depth tolerance must be > 0; ";
+  if (!(o.min_facing_cos >= -1 && o.min_facing_cos < 1)) e << "mesh visibility min facing cos must be in [-1, 1); ";
+  if (o.max_views < 1) e << "mesh visibility max views must be >= 1; ";
+  const std::string msg = e.str();
+  if (why) *why = msg.empty() ? msg : msg.substr(0, msg.size() - 2);
+  return msg.empty();
+}
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Area-weighted vertex normals (triangles are oriented inside -> outside); zero for unused vertices.
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3f> normals(mesh.vertices.size(), Eigen::Vector3f::Zero());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f n =
+        (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+  }
+  for (Eigen::Vector3f& n : normals)
+    if (n.squaredNorm() > 0) n.normalize();
+  return normals;
+}
+
+struct Projected {
+  float u = 0, v = 0, z = -1;  // px, px, mm (z <= 0: not in front of the camera)
+};
+
+// Depth of the mesh's nearest surface at every pixel centre (kInf where none), from the projected vertices.
+void RenderDepth(const TriangleMesh& mesh, const std::vector<Projected>& p, int width, int height,
+                 std::vector<float>* depth) {
+  depth->assign(static_cast<size_t>(width) * height, kInf);
+  for (const auto& t : mesh.triangles) {
+    const Projected &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
+    if (!(a.z > 0 && b.z > 0 && c.z > 0)) continue;
+    const int x0 = std::max(0, static_cast<int>(std::ceil(std::min({a.u, b.u, c.u}))));
+    const int x1 = std::min(width - 1, static_cast<int>(std::floor(std::max({a.u, b.u, c.u}))));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({a.v, b.v, c.v}))));
+    const int y1 = std::min(height - 1, static_cast<int>(std::floor(std::max({a.v, b.v, c.v}))));
+    if (x0 > x1 || y0 > y1) continue;
+    const float area = (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u);
+    if (std::abs(area) < 1e-12f) continue;
+    const float inv_area = 1.0f / area;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        // Barycentric weights from the edge functions; inclusive on the edges (shared edges covered twice is
+        // harmless for a minimum), either winding.
+        const float wa = ((b.u - x) * (c.v - y) - (b.v - y) * (c.u - x)) * inv_area;
+        const float wb = ((c.u - x) * (a.v - y) - (c.v - y) * (a.u - x)) * inv_area;
+        const float wc = 1.0f - wa - wb;
+        if (wa < 0 || wb < 0 || wc < 0) continue;
+        const float z = 1.0f / (wa / a.z + wb / b.z + wc / c.z);  // 1/z is linear in the image
+        float& d = (*depth)[static_cast<size_t>(y) * width + x];
+        d = std::min(d, z);
+      }
+  }
+}
+
+}  // namespace
+
+std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
+                                          const MeshVisibilityOptions& o, int* views_used) {
+  std::vector<VertexViews> seen(mesh.vertices.size());
+  if (views_used) *views_used = 0;
+  if (mesh.vertices.empty() || views.empty() || !ValidateMeshVisibilityOptions(o, nullptr)) return seen;
+  const std::vector<Eigen::Vector3f> normals = VertexNormals(mesh);
+  const size_t stride = (views.size() + static_cast<size_t>(o.max_views) - 1) / static_cast<size_t>(o.max_views);
+  std::vector<Projected> projected(mesh.vertices.size());
+  std::vector<float> depth;
+  for (size_t vi = 0; vi < views.size(); vi += stride) {
+    const CarvingView& view = views[vi];
+    const PinholeCamera& cam = view.camera;
+    if (!cam.IsValid()) continue;
+    const Eigen::Isometry3d camera_from_world = view.world_from_camera.inverse();
+    const Eigen::Vector3f centre = view.world_from_camera.translation().cast<float>();
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Eigen::Vector3d pc = camera_from_world * mesh.vertices[i].cast<double>();
+      Eigen::Vector2d uv;
+      Projected& pr = projected[i];
+      pr.z = -1;
+      if (!cam.Project(pc, &uv)) continue;
+      pr.u = static_cast<float>(uv.x());
+      pr.v = static_cast<float>(uv.y());
+      pr.z = static_cast<float>(pc.z());
+    }
+    RenderDepth(mesh, projected, cam.width, cam.height, &depth);
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Projected& pr = projected[i];
+      if (!(pr.z > 0) || !cam.InImage(Eigen::Vector2d(pr.u, pr.v))) continue;
+      const Eigen::Vector3f to_camera = centre - mesh.vertices[i];
+      if (normals[i].squaredNorm() > 0 && normals[i].dot(to_camera) < o.min_facing_cos * to_camera.norm()) continue;
+      ++seen[i].facing;
+      // The farthest rendered depth of the pixel centres around the vertex: a vertex on the surface is level with
+      // its own neighbourhood whatever the slope; an empty pixel (no surface there) hides nothing.
+      const int x0 = static_cast<int>(std::floor(pr.u)), y0 = static_cast<int>(std::floor(pr.v));
+      float around = 0;
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const int x = std::clamp(x0 + dx, 0, cam.width - 1), y = std::clamp(y0 + dy, 0, cam.height - 1);
+          around = std::max(around, depth[static_cast<size_t>(y) * cam.width + x]);
+        }
+      if (pr.z <= around + static_cast<float>(o.depth_tolerance_mm)) ++seen[i].seen;
+    }
+    if (views_used) ++*views_used;
+  }
+  return seen;
+}
+
+MeshVisibilityStats RemoveOccludedMeshParts(TriangleMesh* mesh, const std::vector<CarvingView>& views,
+                                            const MeshVisibilityOptions& o) {
+  MeshVisibilityStats stats;
+  if ((o.min_seen_views <= 0 && o.min_seen_fraction <= 0) || views.empty() || mesh->vertices.empty()) return stats;
+  const std::vector<VertexViews> seen = CountSeeingViews(*mesh, views, o, &stats.views);
+  if (stats.views == 0) return stats;
+  std::vector<char> keep(mesh->vertices.size());
+  for (size_t i = 0; i < keep.size(); ++i) {
+    keep[i] = seen[i].seen >= o.min_seen_views && seen[i].seen >= o.min_seen_fraction * seen[i].facing;
+    if (!keep[i]) ++stats.vertices_removed;
+  }
+  if (stats.vertices_removed == 0) return stats;
+  // Triangles of seen vertices only; vertices no kept triangle uses go too (kept ones keep their order).
+  std::vector<char> used(mesh->vertices.size(), 0);
+  std::vector<std::array<int32_t, 3>> triangles;
+  for (const auto& t : mesh->triangles) {
+    if (!keep[t[0]] || !keep[t[1]] || !keep[t[2]]) {
+      ++stats.triangles_removed;
+      continue;
+    }
+    triangles.push_back(t);
+    for (int k = 0; k < 3; ++k) used[t[k]] = 1;
+  }
+  std::vector<int32_t> new_index(mesh->vertices.size(), -1);
+  TriangleMesh out;
+  for (size_t i = 0; i < used.size(); ++i) {
+    if (!used[i]) continue;
+    new_index[i] = static_cast<int32_t>(out.vertices.size());
+    out.vertices.push_back(mesh->vertices[i]);
+    if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[i]);
+  }
+  for (auto& t : triangles) t = {new_index[t[0]], new_index[t[1]], new_index[t[2]]};
+  out.triangles = std::move(triangles);
+  *mesh = std::move(out);
+  return stats;
+}
+
+}  // namespace objscan
