@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/point_grid.h"
 #include "processes/dense_modeler/export.h"
 
 namespace objscan {
@@ -143,6 +144,24 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
+    // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
+    // no mesh vertex within 1.5 voxels were dropped with their mesh part (hidden, floor-facing or a small piece).
+    std::vector<Eigen::Vector3d> vertices;
+    vertices.reserve(model.mesh.vertices.size());
+    for (const Eigen::Vector3f& v : model.mesh.vertices) vertices.push_back(v.cast<double>());
+    const double reach = 1.5 * grid.voxel_size();
+    const PointGrid near_mesh(vertices, reach);
+    std::vector<CarvedVoxel> supported;
+    supported.reserve(model.voxels.size());
+    for (const CarvedVoxel& v : model.voxels) {
+      bool found = false;
+      near_mesh.ForEachWithin(grid.CenterOf(v.ijk), reach, [&found](int) { found = true; });
+      if (found)
+        supported.push_back(v);
+      else
+        ++model.voxels_without_mesh;
+    }
+    model.voxels.swap(supported);
   } else {
     model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
   }

@@ -57,10 +57,12 @@ struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  RidgeStats ridge;                                    // surface_method 1 only
-  MeshVisibilityStats visibility;                      // surface_method 1 only
-  int64_t seeds = 0;                                   // voxels over the vote threshold (inside the box)
-  int64_t floor_band_dropped = 0;                      // ridge voxels dropped as floor (floor_band_mm)
+  RidgeStats ridge;                 // surface_method 1 only
+  MeshVisibilityStats visibility;   // surface_method 1 only
+  int64_t seeds = 0;                // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;   // ridge voxels dropped as floor (floor_band_mm)
+  int64_t voxels_without_mesh = 0;  // carved voxels dropped because the final mesh has no vertex near them
+                                    // (surface_method 1)
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
 };
@@ -70,7 +72,8 @@ struct FinalModel {
 // Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
 // views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
 // oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh
-// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces.
+// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces, and the
+// voxels keep only the surface the mesh kept (a mesh vertex within 1.5 voxels).
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
                            const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
 

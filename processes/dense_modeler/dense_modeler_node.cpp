@@ -534,7 +534,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped, " +
             std::to_string(model.visibility.vertices_removed) + " mesh vertices hidden in " +
-            std::to_string(model.visibility.views) + " views removed");
+            std::to_string(model.visibility.views) + " views removed, " + std::to_string(model.voxels_without_mesh) +
+            " voxels off the final mesh dropped");
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +

@@ -7,6 +7,7 @@
 #include <random>
 #include <unordered_set>
 
+#include "common/point_grid.h"
 #include "processes/dense_modeler/dense_model.h"
 #include "processes/dense_modeler/synthetic_scene.h"
 
@@ -71,6 +72,7 @@ struct RunResult {
   double mesh_p90 = 0;  // mm, mesh vertices distance to the sphere
   size_t mesh_triangles = 0;
   double color_err = 0;
+  size_t voxels_off_mesh = 0;  // final voxels with no mesh vertex within 1.5 voxels (the model keeps none)
 };
 
 // track_noise_px: Gaussian noise on the synthetic tracks (seeded); refine: 1-D epipolar refinement.
@@ -167,6 +169,11 @@ RunResult RunSphere(double track_noise_px, bool refine) {
   std::printf("mesh distance to the sphere p90 %.3f mm, max %.3f mm\n", result.mesh_p90,
               mesh_error.empty() ? 0.0 : mesh_error.back());
   result.color_err = color_err;
+  std::vector<Eigen::Vector3d> vertices;
+  for (const Eigen::Vector3f& m : model.mesh.vertices) vertices.push_back(m.cast<double>());
+  const PointGrid near_mesh(vertices, 3.0);
+  for (const CarvedVoxel& v : model.voxels)
+    result.voxels_off_mesh += near_mesh.Nearest(grid.CenterOf(v.ijk), 1) <= 3.0 ? 0 : 1;
   return result;
 }
 
@@ -178,6 +185,7 @@ TEST(DensePipeline, TexturedSphereFromRingExactTracks) {
   EXPECT_GT(r.mesh_triangles, 10000u);
   EXPECT_LE(r.mesh_p90, 1.0);
   EXPECT_LT(r.color_err, 25.0);
+  EXPECT_EQ(r.voxels_off_mesh, 0u);
 }
 
 TEST(DensePipeline, TexturedSphereFromRingNoisyTracks) {
