@@ -143,6 +143,7 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     // Sheets inside the object, under the surface other pairs built, are hidden from every view.
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
+    model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
     // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
     // no mesh vertex within 1.5 voxels were dropped with their mesh part (hidden, floor-facing or a small piece).

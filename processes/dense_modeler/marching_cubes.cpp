@@ -230,4 +230,56 @@ int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
   return dropped;
 }
 
+int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
+  if (rings <= 0 || mesh->triangles.empty()) return 0;
+  const size_t n = mesh->vertices.size();
+  std::vector<char> keep(mesh->triangles.size(), 1);
+  std::vector<char> border(n);
+  std::unordered_map<uint64_t, int> edge_use;
+  for (int ring = 0; ring < rings; ++ring) {
+    edge_use.clear();
+    for (size_t t = 0; t < keep.size(); ++t) {
+      if (!keep[t]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = static_cast<uint32_t>(mesh->triangles[t][k]);
+        const uint32_t b = static_cast<uint32_t>(mesh->triangles[t][(k + 1) % 3]);
+        ++edge_use[(static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b)];
+      }
+    }
+    std::fill(border.begin(), border.end(), 0);
+    bool any = false;
+    for (const auto& [edge, uses] : edge_use) {
+      if (uses != 1) continue;
+      border[edge >> 32] = border[edge & 0xFFFFFFFFu] = 1;
+      any = true;
+    }
+    if (!any) break;
+    for (size_t t = 0; t < keep.size(); ++t)
+      if (keep[t] && (border[mesh->triangles[t][0]] || border[mesh->triangles[t][1]] || border[mesh->triangles[t][2]]))
+        keep[t] = 0;
+  }
+  int64_t dropped = 0;
+  std::vector<int32_t> new_index(n, -1);
+  TriangleMesh out;
+  for (size_t t = 0; t < keep.size(); ++t) {
+    if (!keep[t]) {
+      ++dropped;
+      continue;
+    }
+    std::array<int32_t, 3> u;
+    for (int k = 0; k < 3; ++k) {
+      const int32_t v = mesh->triangles[t][k];
+      if (new_index[v] < 0) {
+        new_index[v] = static_cast<int32_t>(out.vertices.size());
+        out.vertices.push_back(mesh->vertices[v]);
+        if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[v]);
+      }
+      u[k] = new_index[v];
+    }
+    out.triangles.push_back(u);
+  }
+  if (dropped > 0) *mesh = std::move(out);
+  return dropped;
+}
+
 }  // namespace objscan

@@ -49,4 +49,9 @@ bool IsClosedOrientedMesh(const TriangleMesh& mesh);
 // (unused ones dropped). Returns the triangles dropped; min_fraction <= 0: unchanged.
 int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction);
 
+// Peels `rings` rings of triangles off the open borders of the mesh (each ring: the triangles touching a vertex on an
+// edge used by one triangle), renumbering the vertices like RemoveSmallMeshPieces. A closed mesh is unchanged.
+// Returns the triangles dropped; rings <= 0: unchanged.
+int64_t TrimMeshBorder(TriangleMesh* mesh, int rings);
+
 }  // namespace objscan

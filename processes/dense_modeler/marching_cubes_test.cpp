@@ -121,6 +121,41 @@ TEST(MarchingCubes, SmallMeshPiecesRemoved) {
   EXPECT_EQ(RemoveSmallMeshPieces(&again, 1e-4), 0);
 }
 
+// The upper half of a sphere (open along its equator): each ring peeled off its border lowers the rim by about a
+// triangle; a closed sphere has no border and stays as it is.
+TEST(MarchingCubes, TrimMeshBorderPeelsRingsOffOpenBordersOnly) {
+  const double spacing = 2.0, radius = 25.0;
+  const Eigen::Vector3d center(31.3, 30.7, 32.1);
+  ScalarVolume vol = SphereVolume(33, spacing, center, radius);
+  TriangleMesh closed = ExtractIsosurface(vol, 0.f);
+  const size_t closed_triangles = closed.triangles.size();
+  EXPECT_EQ(TrimMeshBorder(&closed, 3), 0);
+  EXPECT_EQ(closed.triangles.size(), closed_triangles);
+  for (int z = 0; z < vol.nz; ++z)
+    for (int y = 0; y < vol.ny; ++y)
+      for (int x = 0; x < vol.nx; ++x)
+        if (z * spacing < center.z()) vol.values[vol.Index(x, y, z)] = std::numeric_limits<float>::quiet_NaN();
+  const TriangleMesh open = ExtractIsosurface(vol, 0.f);
+  auto lowest = [](const TriangleMesh& m) {
+    float z = 1e9f;
+    for (const auto& v : m.vertices) z = std::min(z, v.z());
+    return z;
+  };
+  TriangleMesh one = open, three = open;
+  const int64_t dropped_one = TrimMeshBorder(&one, 1), dropped_three = TrimMeshBorder(&three, 3);
+  EXPECT_GT(dropped_one, 0);
+  EXPECT_GT(dropped_three, 2 * dropped_one);
+  EXPECT_EQ(one.triangles.size() + static_cast<size_t>(dropped_one), open.triangles.size());
+  EXPECT_GT(lowest(one), lowest(open));
+  EXPECT_GT(lowest(three), lowest(one) + 1.0f);
+  EXPECT_EQ(one.bgr.size(), one.vertices.size());
+  for (const auto& t : three.triangles)
+    for (int k = 0; k < 3; ++k) ASSERT_LT(static_cast<size_t>(t[k]), three.vertices.size());
+  TriangleMesh untouched = open;
+  EXPECT_EQ(TrimMeshBorder(&untouched, 0), 0);
+  EXPECT_EQ(untouched.triangles.size(), open.triangles.size());
+}
+
 TEST(MarchingCubes, EmptyAndDegenerateInput) {
   EXPECT_TRUE(MeshFromVoxels({}, 2.0).triangles.empty());
   ScalarVolume bad;

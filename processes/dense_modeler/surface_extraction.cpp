@@ -76,6 +76,7 @@ bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   if (o.min_component_voxels < 0) e << "min_component_voxels must be >= 0; ";
   if (!(o.min_component_fraction >= 0 && o.min_component_fraction < 1))
     e << "min_component_fraction must be in [0, 1); ";
+  if (o.border_rings < 0 || o.border_rings > 10) e << "ridge border_rings must be in 0..10; ";
   if (!(o.smoothing_radius == 0 || (o.smoothing_radius >= 1 && o.smoothing_radius <= 12)))
     e << "ridge smoothing_radius must be 0 or in [1, 12]; ";
   if (why) *why = e.str();
