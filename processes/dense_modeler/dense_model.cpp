@@ -138,8 +138,9 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
       s.voxel.bgr = it->second->bgr;
       kept.push_back(s);
     }
-    model.mesh = MeshFromSurfacePoints(SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius),
-                                       grid.voxel_size());
+    model.mesh = MeshFromSurfacePoints(
+        SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
+        grid.voxel_size());
     // Sheets inside the object, under the surface other pairs built, are hidden from every view.
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.

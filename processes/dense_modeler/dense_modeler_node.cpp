@@ -77,6 +77,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("ridge-min-component", &m->ridge.min_component_voxels, "voxels, smaller ridge fragments are dropped");
   p.Add("ridge-min-component-fraction", &m->ridge.min_component_fraction,
         "ridge fragments smaller than this fraction of the largest are dropped");
+  p.Add("ridge-smoothing-min-normal-cos", &m->ridge.smoothing_min_normal_cos,
+        "surface fit neighbours need normals within acos(this) of the point's own");
   p.Add("ridge-border-rings", &m->ridge.border_rings, "rings of triangles peeled off the mesh's open borders");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");

@@ -77,6 +77,8 @@ bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   if (!(o.min_component_fraction >= 0 && o.min_component_fraction < 1))
     e << "min_component_fraction must be in [0, 1); ";
   if (o.border_rings < 0 || o.border_rings > 10) e << "ridge border_rings must be in 0..10; ";
+  if (!(o.smoothing_min_normal_cos >= -1 && o.smoothing_min_normal_cos < 1))
+    e << "ridge smoothing_min_normal_cos must be in [-1, 1); ";
   if (!(o.smoothing_radius == 0 || (o.smoothing_radius >= 1 && o.smoothing_radius <= 12)))
     e << "ridge smoothing_radius must be 0 or in [1, 12]; ";
   if (why) *why = e.str();
@@ -190,11 +192,10 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
 }
 
 std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size,
-                                              double radius_voxels) {
+                                              double radius_voxels, double min_normal_cos) {
   std::vector<SurfaceVoxel> out = surface;
   if (surface.empty() || !(voxel_size > 0) || !(radius_voxels > 0)) return out;
   const double radius = radius_voxels * voxel_size, sigma = 0.5 * radius;
-  const double min_normal_cos = 0.5;
   // Cells of side radius: the neighbours of a point are in its cell's 27-neighbourhood.
   auto cell_of = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector3d g = p / radius;

@@ -37,10 +37,13 @@ struct RidgeOptions {
   double min_component_fraction = 0.01;  // fragments with fewer voxels than this fraction of the largest one are
                                          // dropped, and after carving mesh pieces with fewer triangles than this
                                          // fraction of the largest (0 = off), [0, 1)
-  int border_rings = 0;                  // rings of triangles peeled off the mesh's open borders, where the surface
+  int border_rings = 1;                  // rings of triangles peeled off the mesh's open borders, where the surface
                                          // points of a hole's rim bend off the surface (0 = off), 0..10
   double smoothing_radius = 8.0;         // voxels, radius of the vote-weighted local surface fit of SmoothSurfacePoints
                                          // (0 = off), 0 or [1, 12]
+  double smoothing_min_normal_cos = 0.9;  // neighbours of the surface fit need normals within acos(this) of the
+                                          // point's own: 0.9 (26 deg) keeps the faces of a crease apart (0.5 rounded
+                                          // the box's edges over ~6 mm), [-1, 1)
 };
 
 bool ValidateRidgeOptions(const RidgeOptions& options, std::string* why);
@@ -66,13 +69,13 @@ std::vector<SurfaceVoxel> ExtractVoteRidge(const VoxelVoteGrid& grid, const std:
                                            const RidgeOptions& options, RidgeStats* stats = nullptr);
 
 // Vote-weighted local surface fit (see the top): for every point, the ridge points within radius_voxels whose
-// normals agree with its own (angle < 60 deg), weighted by votes x exp(-d^2 / (2 (radius/2)^2)), give a weighted
-// centroid and covariance, whose smallest principal axis is the plane normal n; with >= 12 neighbours a weighted
-// quadratic height field h(u, v) over the point's tangent plane is fitted and the point moves to h(0, 0) along n,
-// taking the field's normal there (else onto the plane, taking n). Normals stay oriented like the old ones. Points
-// keep their voxel. radius_voxels <= 0: unchanged.
+// normals agree with its own (cosine >= min_normal_cos; 0.5 = 60 deg), weighted by votes x exp(-d^2 / (2
+// (radius/2)^2)), give a weighted centroid and covariance, whose smallest principal axis is the plane normal n; with >=
+// 12 neighbours a weighted quadratic height field h(u, v) over the point's tangent plane is fitted and the point moves
+// to h(0, 0) along n, taking the field's normal there (else onto the plane, taking n). Normals stay oriented like the
+// old ones. Points keep their voxel. radius_voxels <= 0: unchanged.
 std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& surface, double voxel_size_mm,
-                                              double radius_voxels);
+                                              double radius_voxels, double min_normal_cos = 0.5);
 
 // Mesh through oriented surface points: the signed distance n . (x - p), averaged with Gaussian weights
 // (sigma = voxel_size_mm) over the points within 2 voxels, is sampled on a grid of spacing voxel_size_mm; samples
