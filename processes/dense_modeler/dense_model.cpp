@@ -1,6 +1,7 @@
 #include "processes/dense_modeler/dense_model.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -71,6 +72,9 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views, const DenseModelOptions& o,
                            const RegionOfInterest& region) {
   FinalModel model;
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  Clock::time_point t0 = Clock::now();
   const bool ridge = o.surface_method == 1;
   std::vector<VoxelRecord> seeds = grid.Extract(o.vote_threshold);
   {
@@ -114,6 +118,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
       normals.push_back(s.normal);
     }
   }
+  model.times.surface_s = since(t0);
+  t0 = Clock::now();
   if (o.carve) {
     model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving, ridge ? &normals : nullptr);
   } else {
@@ -126,6 +132,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     }
     model.carving.seeds = model.carving.kept = static_cast<int64_t>(seeds.size());
   }
+  model.times.carving_s = since(t0);
+  t0 = Clock::now();
   if (ridge) {
     // Mesh through the surface points of the voxels that survived carving, coloured as carved.
     std::unordered_map<uint64_t, const CarvedVoxel*> alive;
@@ -142,7 +150,11 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
         SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
         grid.voxel_size());
     // Sheets inside the object, under the surface other pairs built, are hidden from every view.
+    model.times.meshing_s = since(t0);
+    t0 = Clock::now();
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
+    model.times.visibility_s = since(t0);
+    t0 = Clock::now();
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
@@ -166,7 +178,10 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     model.voxels.swap(supported);
   } else {
     model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
+    model.times.meshing_s = since(t0);
+    t0 = Clock::now();
   }
+  model.times.clean_up_s = since(t0);
   if (!model.voxels.empty()) {
     Eigen::Vector3i lo = model.voxels[0].ijk, hi = lo;
     for (const CarvedVoxel& v : model.voxels) {

@@ -53,14 +53,24 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
                                     const TrackFrame& frame,
                                     const std::unordered_map<int64_t, Eigen::Vector3d>& landmarks, int* count);
 
+// Wall time of the final phase's stages (s; for logs and benchmarks, never part of the model).
+struct FinalPhaseTimes {
+  double surface_s = 0;     // seeds and vote ridge (or shell thinning)
+  double carving_s = 0;     // photometric space carving
+  double meshing_s = 0;     // surface fit and mesh
+  double visibility_s = 0;  // hidden mesh parts (mesh_visibility.h)
+  double clean_up_s = 0;    // border rings, small pieces, voxels off the mesh
+};
+
 struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  RidgeStats ridge;                 // surface_method 1 only
-  MeshVisibilityStats visibility;   // surface_method 1 only
-  int64_t seeds = 0;                // voxels over the vote threshold (inside the box)
-  int64_t floor_band_dropped = 0;   // ridge voxels dropped as floor (floor_band_mm)
+  RidgeStats ridge;                // surface_method 1 only
+  MeshVisibilityStats visibility;  // surface_method 1 only
+  int64_t seeds = 0;               // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;  // ridge voxels dropped as floor (floor_band_mm)
+  FinalPhaseTimes times;
   int64_t voxels_without_mesh = 0;  // carved voxels dropped because the final mesh has no vertex near them
                                     // (surface_method 1)
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -135,6 +136,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("carve-max-color-stddev", &c->max_color_stddev, "gray levels, voxels with a larger colour std-dev are carved");
   p.Add("carve-min-views", &c->min_views, "views a voxel needs before it can be carved");
   p.Add("carve-max-iterations", &c->max_iterations, "carving passes at most");
+  p.Add("carve-min-removed-fraction", &c->min_removed_fraction,
+        "carving stops after a pass that removes fewer than this fraction of the seeds (0 = until none)");
   p.Add("carve-depth-tolerance", &c->depth_tolerance_voxels, "voxels behind the z-buffer still visible");
   p.Add("carve-footprint-scale", &c->footprint_scale, "z-buffer splat size factor");
   p.Add("carve-use-normals", &c->use_normals, "require the voxel normal to face the camera");
@@ -543,6 +546,15 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
           std::to_string(model.mesh.triangles.size()) + " triangles");
+  std::string per_pass;
+  for (int64_t r : model.carving.removed_per_iteration) per_pass += (per_pass.empty() ? "" : " ") + std::to_string(r);
+  LogInfo("carving: " + std::to_string(model.carving.iterations) + " passes, removed per pass: " + per_pass);
+  char times[200];
+  std::snprintf(times, sizeof(times),
+                "final phase times: surface %.2f s, carving %.2f s, meshing %.2f s, visibility %.2f s, clean-up %.2f s",
+                model.times.surface_s, model.times.carving_s, model.times.meshing_s, model.times.visibility_s,
+                model.times.clean_up_s);
+  LogInfo(times);
   ModelPaths paths;
   if (!options_.output_dir.empty()) {
     std::string error;

@@ -23,6 +23,7 @@ bool ValidateSpaceCarvingOptions(const SpaceCarvingOptions& o, std::string* why)
   if (!(o.max_color_stddev > 0)) e << "max color stddev must be > 0; ";
   if (o.min_views < 2) e << "min views must be >= 2; ";
   if (o.max_iterations < 1) e << "max iterations must be >= 1; ";
+  if (!(o.min_removed_fraction >= 0 && o.min_removed_fraction < 1)) e << "min removed fraction must be in [0, 1); ";
   if (!(o.depth_tolerance_voxels > 0)) e << "depth tolerance must be > 0; ";
   if (!(o.footprint_scale > 0)) e << "footprint scale must be > 0; ";
   if (!(o.min_normal_cos >= -1 && o.min_normal_cos < 1)) e << "min normal cos must be in [-1, 1); ";
@@ -192,7 +193,7 @@ std::vector<CarvedVoxel> CarveVoxels(const std::vector<VoxelRecord>& seeds, doub
     stats.iterations = iter + 1;
     stats.removed_per_iteration.push_back(removed);
     stats.removed += removed;
-    if (removed == 0) break;
+    if (removed == 0 || removed < o.min_removed_fraction * static_cast<double>(stats.seeds)) break;
   }
   std::vector<CarvedVoxel> out;
   out.reserve(voxels.size());

@@ -95,6 +95,17 @@ TEST(SpaceCarving, RemovesInconsistentVoxelsKeepsSurfaceAndOccluded) {
       EXPECT_EQ(v.views, 0);
       EXPECT_EQ(v.bgr[0], 128);
     }
+  // Passes stop once one removes less than min_removed_fraction of the seeds; 0 runs until a pass removes nothing.
+  o.min_removed_fraction = 0;
+  SpaceCarvingStats until_none;
+  CarveVoxels(seeds, size, views, o, &until_none);
+  ASSERT_FALSE(until_none.removed_per_iteration.empty());
+  EXPECT_EQ(until_none.removed_per_iteration.back(), 0);
+  o.min_removed_fraction = 0.999;
+  SpaceCarvingStats one_pass;
+  CarveVoxels(seeds, size, views, o, &one_pass);
+  EXPECT_EQ(one_pass.iterations, 1);
+  EXPECT_EQ(one_pass.removed, until_none.removed_per_iteration.front());
 }
 
 TEST(SpaceCarving, NoViewsOrBadOptionsKeepEverything) {
