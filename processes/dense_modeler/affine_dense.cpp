@@ -6,6 +6,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
@@ -191,6 +194,42 @@ inline float SampleAt(const uchar* data, size_t step, double x, double y) {
   return (1 - fv) * ((1 - fu) * r0[0] + fu * r0[1]) + fv * ((1 - fu) * r1[0] + fu * r1[1]);
 }
 
+// Implementations of the window NCC sampling and of the refinement's search scores, all bit-identical
+// (AffineDenseOptions::refine_kernel): auto = AVX2 where available, else the reference; reference = one WindowNcc per
+// search step, windows sampled with SSE2 (the SSE2 batched over steps was measured slower); portable = scalar
+// sampling, steps batched; AVX2 = steps batched, windows sampled with AVX2.
+enum SearchKernel : int { kSearchAuto = 0, kSearchReference = 1, kSearchPortable = 2, kSearchAvx2 = 3 };
+constexpr int kSearchLanes = 8;  // search lanes are padded to a multiple of this (the widest kernel's)
+
+#if defined(__x86_64__) && defined(__GNUC__)
+bool CpuHasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+
+// The pixel pairs (base[k], base[k + 1]) of k = k0, k1, k2, k3 (p0 p1 of k0, of k1 | of k2, of k3; 8-byte loads
+// through __m64, which may alias float).
+__attribute__((target("avx2"))) inline __m256 PixelPairs4(const float* base, int32_t k0, int32_t k1, int32_t k2,
+                                                          int32_t k3) {
+  const __m128 lo = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(base + k0)),
+                                 reinterpret_cast<const __m64*>(base + k1));
+  const __m128 hi = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(base + k2)),
+                                 reinterpret_cast<const __m64*>(base + k3));
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+}
+#else
+bool CpuHasAvx2() { return false; }
+#endif
+
+// The kernel to run for a requested one (AVX2 falls back to the reference without AVX2; the AVX2 code indexes gray B
+// with int32).
+int ResolveKernel(int kernel, const cv::Mat& gray_b) {
+  if (kernel == kSearchAuto) kernel = kSearchAvx2;
+  if (kernel == kSearchAvx2 && (!CpuHasAvx2() || gray_b.step[0] / sizeof(float) * (gray_b.rows + 1.0) > 2e9))
+    kernel = kSearchReference;
+  return kernel;
+}
+
 // The window samples of B at q + J·d in raster order (q passed the reach test: every sample lies inside B).
 void SampleWindowPortable(const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q, float* vb) {
   const int side = 2 * w.h + 1;
@@ -253,32 +292,269 @@ void SampleWindowSse2(const WindowWarp& w, const cv::Mat& gray_b, const Eigen::V
 }
 #endif
 
-// NCC of window A and gray B at q + J·d (bilinear); -2 when a window leaves an image. Bit-identical to the plain
-// interleaved loop (each sum is accumulated in the same order). Samples lie at x, y >= 0 once q passed the reach
-// test, so truncation is floor. portable = the scalar sampling path (for the test of the SIMD one).
-double WindowNcc(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q,
-                 double* stddev_a, double* stddev_b, bool portable = false) {
-  if (!wa.inside || !Inside(gray_b, q, w.reach + 1)) return -2.0;
-  const int side = 2 * w.h + 1;
-  float vb[kMaxSide * kMaxSide];
-#if defined(__SSE2__)
-  if (!portable)
-    SampleWindowSse2(w, gray_b, q, vb);
-  else
-#endif
-    SampleWindowPortable(w, gray_b, q, vb);
-  const int n = side * side;
-  double sb = 0, sbb = 0, sab = 0;
-  for (int i = 0; i < n; ++i) {
-    const double b = vb[i];
-    sb += b, sbb += b * b, sab += static_cast<double>(wa.value[i]) * b;
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same samples, eight at a time with AVX2 (the same per-sample operations; no FMA, nothing contracted).
+__attribute__((target("avx2"))) void SampleWindowAvx2(const WindowWarp& w, const cv::Mat& gray_b,
+                                                      const Eigen::Vector2d& q, float* vb) {
+  const int side = 2 * w.h + 1, n = side * side;
+  alignas(32) double xs[kMaxSide * kMaxSide + 7], ys[kMaxSide * kMaxSide + 7];
+  for (int iy = 0, i = 0; iy < side; ++iy) {
+    const double ox = w.x_dy[iy], oy = w.y_dy[iy];
+    for (int ix = 0; ix < side; ++ix, ++i) {
+      xs[i] = q.x() + w.x_dx[ix] + ox;
+      ys[i] = q.y() + w.y_dx[ix] + oy;
+    }
   }
+  const float* row0 = reinterpret_cast<const float*>(gray_b.data);
+  const float* row1 = reinterpret_cast<const float*>(gray_b.data + gray_b.step[0]);
+  const __m256d stride = _mm256_set1_pd(static_cast<double>(gray_b.step[0] / sizeof(float)));
+  const __m256 one = _mm256_set1_ps(1.0f);
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const __m256d x0 = _mm256_load_pd(xs + i), x1 = _mm256_load_pd(xs + i + 4);
+    const __m256d y0 = _mm256_load_pd(ys + i), y1 = _mm256_load_pd(ys + i + 4);
+    const __m256d xt0 = _mm256_round_pd(x0, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+    const __m256d xt1 = _mm256_round_pd(x1, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+    const __m256d yt0 = _mm256_round_pd(y0, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+    const __m256d yt1 = _mm256_round_pd(y1, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+    const __m256 fu = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm256_cvtpd_ps(_mm256_sub_pd(x0, xt0))),
+                                           _mm256_cvtpd_ps(_mm256_sub_pd(x1, xt1)), 1);
+    const __m256 fv = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm256_cvtpd_ps(_mm256_sub_pd(y0, yt0))),
+                                           _mm256_cvtpd_ps(_mm256_sub_pd(y1, yt1)), 1);
+    alignas(32) int32_t k[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(k),
+                       _mm256_set_m128i(_mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt1, stride), xt1)),
+                                        _mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt0, stride), xt0))));
+    const __m256 ta = PixelPairs4(row0, k[0], k[1], k[4], k[5]), tb = PixelPairs4(row0, k[2], k[3], k[6], k[7]);
+    const __m256 ba = PixelPairs4(row1, k[0], k[1], k[4], k[5]), bb = PixelPairs4(row1, k[2], k[3], k[6], k[7]);
+    const __m256 p00 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m256 p01 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(3, 1, 3, 1));
+    const __m256 p10 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m256 p11 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(3, 1, 3, 1));
+    const __m256 gu = _mm256_sub_ps(one, fu), gv = _mm256_sub_ps(one, fv);
+    const __m256 top = _mm256_add_ps(_mm256_mul_ps(gu, p00), _mm256_mul_ps(fu, p01));
+    const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(gu, p10), _mm256_mul_ps(fu, p11));
+    _mm256_storeu_ps(vb + i, _mm256_add_ps(_mm256_mul_ps(gv, top), _mm256_mul_ps(fv, bottom)));
+  }
+  for (; i < n; ++i) vb[i] = SampleAt(gray_b.data, gray_b.step[0], xs[i], ys[i]);
+}
+#endif
+
+// The NCC of window A (n samples) and B from B's sums: sum, sum of squares and sum of products with A.
+inline double NccFromSums(const WindowA& wa, int n, double sb, double sbb, double sab, double* stddev_a,
+                          double* stddev_b) {
   const double ma = wa.sum / n, mb = sb / n;
   const double va = std::max(0.0, wa.sum_sq / n - ma * ma), vbv = std::max(0.0, sbb / n - mb * mb);
   if (stddev_a) *stddev_a = std::sqrt(va);
   if (stddev_b) *stddev_b = std::sqrt(vbv);
   if (va <= 1e-9 || vbv <= 1e-9) return 0.0;
   return (sab / n - ma * mb) / std::sqrt(va * vbv);
+}
+
+// NCC of window A and gray B at q + J·d (bilinear); -2 when a window leaves an image. Bit-identical to the plain
+// interleaved loop (each sum is accumulated in the same order). Samples lie at x, y >= 0 once q passed the reach
+// test, so truncation is floor. kernel: the sampling path (a SearchKernel; the reference samples with SSE2).
+double WindowNcc(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q,
+                 double* stddev_a, double* stddev_b, int kernel = kSearchAuto) {
+  if (!wa.inside || !Inside(gray_b, q, w.reach + 1)) return -2.0;
+  const int side = 2 * w.h + 1;
+  float vb[kMaxSide * kMaxSide];
+  switch (ResolveKernel(kernel, gray_b)) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    case kSearchAvx2:
+      SampleWindowAvx2(w, gray_b, q, vb);
+      break;
+#endif
+#if defined(__SSE2__)
+    case kSearchReference:
+      SampleWindowSse2(w, gray_b, q, vb);
+      break;
+#endif
+    default:
+      SampleWindowPortable(w, gray_b, q, vb);
+  }
+  const int n = side * side;
+  double sb = 0, sbb = 0, sab = 0;
+  for (int i = 0; i < n; ++i) {
+    const double b = vb[i];
+    sb += b, sbb += b * b, sab += static_cast<double>(wa.value[i]) * b;
+  }
+  return NccFromSums(wa, n, sb, sbb, sab, stddev_a, stddev_b);
+}
+
+// The 1-D refinement search's NCC scores, all steps of one pixel at once (SearchScores below): WindowNcc at
+// q_s = q0 + (s·step)·dir for s = -n..n into scores[s + n], bit-identical to one WindowNcc(wa, w, gray_b, q_s) per
+// step (the reference). The steps are the SIMD lanes: every lane does the sample's operations of WindowNcc (the same
+// double positions, truncation, float bilinear expression) and accumulates its sums in the same order, so only the
+// work is shared (the window offsets, the loop, the setup), never an operation reordered.
+struct SearchScratch {
+  std::vector<double> qx, qy, sb, sbb, sab;  // per lane (padded): position of the window centre in B, B's sums
+  std::vector<char> inside;                  // per step: the window lies inside B
+  std::vector<float> fu, fv;                 // AVX2 kernel: per window sample and lane, the bilinear fractions
+  std::vector<int32_t> index;                // and the float index of the top-left pixel in B
+  std::vector<double> value_a;               // and window A's values in double
+};
+
+// B's sums of every lane (lanes: a multiple of kSearchLanes; every lane's window inside B).
+void SearchSumsPortable(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, int lanes, SearchScratch* sc) {
+  const int side = 2 * w.h + 1;
+  const uchar* data = gray_b.data;
+  const size_t step = gray_b.step[0];
+  for (int k = 0; k < lanes; ++k) {
+    double sb = 0, sbb = 0, sab = 0;
+    const double qx = sc->qx[k], qy = sc->qy[k];
+    for (int iy = 0, i = 0; iy < side; ++iy) {
+      const double ox = w.x_dy[iy], oy = w.y_dy[iy];
+      for (int ix = 0; ix < side; ++ix, ++i) {
+        const double b = SampleAt(data, step, qx + w.x_dx[ix] + ox, qy + w.y_dx[ix] + oy);
+        sb += b, sbb += b * b, sab += static_cast<double>(wa.value[i]) * b;
+      }
+    }
+    sc->sb[k] = sb, sc->sbb[k] = sbb, sc->sab[k] = sab;
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+// Eight lanes at a time with AVX2: the same per-lane operations (FMA is not enabled: nothing is contracted). Two
+// passes per group of eight lanes: the sample positions' fractions and pixel indices of the whole window, then the
+// bilinear samples and the sums (short dependency chains, and the indices are read back as scalars).
+__attribute__((target("avx2"))) void SearchSumsAvx2(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b,
+                                                    int lanes, SearchScratch* sc) {
+  const int side = 2 * w.h + 1, n = side * side;
+  const float* row0 = reinterpret_cast<const float*>(gray_b.data);
+  const float* row1 = reinterpret_cast<const float*>(gray_b.data + gray_b.step[0]);
+  const __m256d stride = _mm256_set1_pd(static_cast<double>(gray_b.step[0] / sizeof(float)));
+  const __m256 one = _mm256_set1_ps(1.0f);
+  sc->fu.resize(8 * n), sc->fv.resize(8 * n), sc->index.resize(8 * n), sc->value_a.resize(n);
+  float* fus = sc->fu.data();
+  float* fvs = sc->fv.data();
+  int32_t* indices = sc->index.data();
+  double* value_a = sc->value_a.data();
+  for (int i = 0; i < n; ++i) value_a[i] = static_cast<double>(wa.value[i]);
+  for (int c = 0; c < lanes; c += 8) {
+    const __m256d qx0 = _mm256_loadu_pd(&sc->qx[c]), qx1 = _mm256_loadu_pd(&sc->qx[c + 4]);
+    const __m256d qy0 = _mm256_loadu_pd(&sc->qy[c]), qy1 = _mm256_loadu_pd(&sc->qy[c + 4]);
+    // (q + J·dx) per column, then + J·dy per sample: the reference's summation order.
+    __m256d col_x[2 * kMaxSide], col_y[2 * kMaxSide];
+    for (int ix = 0; ix < side; ++ix) {
+      const __m256d dx = _mm256_set1_pd(w.x_dx[ix]), dy = _mm256_set1_pd(w.y_dx[ix]);
+      col_x[2 * ix] = _mm256_add_pd(qx0, dx), col_x[2 * ix + 1] = _mm256_add_pd(qx1, dx);
+      col_y[2 * ix] = _mm256_add_pd(qy0, dy), col_y[2 * ix + 1] = _mm256_add_pd(qy1, dy);
+    }
+    for (int iy = 0, i = 0; iy < side; ++iy) {
+      const __m256d ox = _mm256_set1_pd(w.x_dy[iy]), oy = _mm256_set1_pd(w.y_dy[iy]);
+      for (int ix = 0; ix < side; ++ix, ++i) {
+        const __m256d x0 = _mm256_add_pd(col_x[2 * ix], ox), x1 = _mm256_add_pd(col_x[2 * ix + 1], ox);
+        const __m256d y0 = _mm256_add_pd(col_y[2 * ix], oy), y1 = _mm256_add_pd(col_y[2 * ix + 1], oy);
+        // Truncation (x, y >= 0: the int conversion's) and the exact fractions; the index in double is exact too.
+        const __m256d xt0 = _mm256_round_pd(x0, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+        const __m256d xt1 = _mm256_round_pd(x1, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+        const __m256d yt0 = _mm256_round_pd(y0, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+        const __m256d yt1 = _mm256_round_pd(y1, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+        _mm256_storeu_ps(fus + 8 * i,
+                         _mm256_insertf128_ps(_mm256_castps128_ps256(_mm256_cvtpd_ps(_mm256_sub_pd(x0, xt0))),
+                                              _mm256_cvtpd_ps(_mm256_sub_pd(x1, xt1)), 1));
+        _mm256_storeu_ps(fvs + 8 * i,
+                         _mm256_insertf128_ps(_mm256_castps128_ps256(_mm256_cvtpd_ps(_mm256_sub_pd(y0, yt0))),
+                                              _mm256_cvtpd_ps(_mm256_sub_pd(y1, yt1)), 1));
+        const __m128i k0 = _mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt0, stride), xt0));
+        const __m128i k1 = _mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt1, stride), xt1));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(indices + 8 * i), _mm256_set_m128i(k1, k0));
+      }
+    }
+    __m256d sb0 = _mm256_setzero_pd(), sb1 = sb0, sbb0 = sb0, sbb1 = sb0, sab0 = sb0, sab1 = sb0;
+    for (int i = 0; i < n; ++i) {
+      // The pixel pairs of lanes (0, 1, 4, 5) and (2, 3, 6, 7): the shuffles give every lane its own in lane order.
+      const int32_t* k = indices + 8 * i;
+      const __m256 ta = PixelPairs4(row0, k[0], k[1], k[4], k[5]), tb = PixelPairs4(row0, k[2], k[3], k[6], k[7]);
+      const __m256 ba = PixelPairs4(row1, k[0], k[1], k[4], k[5]), bb = PixelPairs4(row1, k[2], k[3], k[6], k[7]);
+      const __m256 p00 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(2, 0, 2, 0));
+      const __m256 p01 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(3, 1, 3, 1));
+      const __m256 p10 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(2, 0, 2, 0));
+      const __m256 p11 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(3, 1, 3, 1));
+      const __m256 fu = _mm256_loadu_ps(fus + 8 * i), fv = _mm256_loadu_ps(fvs + 8 * i);
+      const __m256 gu = _mm256_sub_ps(one, fu), gv = _mm256_sub_ps(one, fv);
+      const __m256 top = _mm256_add_ps(_mm256_mul_ps(gu, p00), _mm256_mul_ps(fu, p01));
+      const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(gu, p10), _mm256_mul_ps(fu, p11));
+      const __m256 val = _mm256_add_ps(_mm256_mul_ps(gv, top), _mm256_mul_ps(fv, bottom));
+      const __m256d b0 = _mm256_cvtps_pd(_mm256_castps256_ps128(val));
+      const __m256d b1 = _mm256_cvtps_pd(_mm256_extractf128_ps(val, 1));
+      const __m256d av = _mm256_broadcast_sd(value_a + i);
+      sb0 = _mm256_add_pd(sb0, b0), sb1 = _mm256_add_pd(sb1, b1);
+      sbb0 = _mm256_add_pd(sbb0, _mm256_mul_pd(b0, b0)), sbb1 = _mm256_add_pd(sbb1, _mm256_mul_pd(b1, b1));
+      sab0 = _mm256_add_pd(sab0, _mm256_mul_pd(av, b0)), sab1 = _mm256_add_pd(sab1, _mm256_mul_pd(av, b1));
+    }
+    _mm256_storeu_pd(&sc->sb[c], sb0), _mm256_storeu_pd(&sc->sb[c + 4], sb1);
+    _mm256_storeu_pd(&sc->sbb[c], sbb0), _mm256_storeu_pd(&sc->sbb[c + 4], sbb1);
+    _mm256_storeu_pd(&sc->sab[c], sab0), _mm256_storeu_pd(&sc->sab[c + 4], sab1);
+  }
+}
+
+// NccFromSums of lanes [0, count) into scores (lanes whose window leaves B get -2), four at a time: the same IEEE
+// operations (division and square root are correctly rounded; max(x, 0) picks 0 exactly when std::max(0.0, x) does).
+__attribute__((target("avx2"))) void FinishScoresAvx2(const WindowA& wa, int n, int count, const SearchScratch& sc,
+                                                      double* scores) {
+  const double ma = wa.sum / n;
+  const double va = std::max(0.0, wa.sum_sq / n - ma * ma);
+  const __m256d nd = _mm256_set1_pd(static_cast<double>(n)), ma4 = _mm256_set1_pd(ma), va4 = _mm256_set1_pd(va);
+  const __m256d zero = _mm256_setzero_pd(), flat = _mm256_set1_pd(1e-9);
+  const bool flat_a = va <= 1e-9;
+  for (int k = 0; k < count; k += 4) {
+    const __m256d mb = _mm256_div_pd(_mm256_loadu_pd(&sc.sb[k]), nd);
+    const __m256d vbv =
+        _mm256_max_pd(_mm256_sub_pd(_mm256_div_pd(_mm256_loadu_pd(&sc.sbb[k]), nd), _mm256_mul_pd(mb, mb)), zero);
+    const __m256d num = _mm256_sub_pd(_mm256_div_pd(_mm256_loadu_pd(&sc.sab[k]), nd), _mm256_mul_pd(ma4, mb));
+    __m256d r = _mm256_div_pd(num, _mm256_sqrt_pd(_mm256_mul_pd(va4, vbv)));
+    r = flat_a ? zero : _mm256_blendv_pd(r, zero, _mm256_cmp_pd(vbv, flat, _CMP_LE_OQ));
+    alignas(32) double out[4];
+    _mm256_store_pd(out, r);
+    for (int l = 0; l < 4 && k + l < count; ++l) scores[k + l] = sc.inside[k + l] ? out[l] : -2.0;
+  }
+}
+#endif
+
+// scores[s + n] for s = -n..n (see above); kernel: a SearchKernel.
+void SearchScores(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q0,
+                  const Eigen::Vector2d& dir, double step, int n_steps, int kernel, SearchScratch* sc, double* scores) {
+  const int count = 2 * n_steps + 1;
+  kernel = ResolveKernel(kernel, gray_b);
+  if (kernel == kSearchReference) {
+    for (int s = -n_steps; s <= n_steps; ++s)
+      scores[s + n_steps] = WindowNcc(wa, w, gray_b, q0 + (s * step) * dir, nullptr, nullptr, kSearchReference);
+    return;
+  }
+  std::fill(scores, scores + count, -2.0);
+  if (!wa.inside) return;
+  const int lanes = (count + kSearchLanes - 1) / kSearchLanes * kSearchLanes;
+  sc->qx.resize(lanes), sc->qy.resize(lanes), sc->sb.resize(lanes), sc->sbb.resize(lanes), sc->sab.resize(lanes);
+  sc->inside.resize(count);
+  double* qx = sc->qx.data();
+  double* qy = sc->qy.data();
+  char* inside = sc->inside.data();
+  int any = -1;
+  // The reference's q0 + (s * step) * dir and Inside(gray_b, q, w.reach + 1), spelled out.
+  const double margin = w.reach + 1, x_end = gray_b.cols - 1 - margin, y_end = gray_b.rows - 1 - margin;
+  for (int s = -n_steps; s <= n_steps; ++s) {
+    const double t = s * step, x = q0.x() + t * dir.x(), y = q0.y() + t * dir.y();
+    const int k = s + n_steps;
+    const bool in = x >= margin && y >= margin && x < x_end && y < y_end;
+    qx[k] = x, qy[k] = y, inside[k] = in;
+    if (in && any < 0) any = k;
+  }
+  if (any < 0) return;
+  // Lanes whose window leaves B (and the padding) sample the window of an inside lane instead; their score stays -2.
+  for (int k = 0; k < lanes; ++k)
+    if (k >= count || !inside[k]) qx[k] = qx[any], qy[k] = qy[any];
+  const int n = (2 * w.h + 1) * (2 * w.h + 1);
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (kernel == kSearchAvx2) {
+    SearchSumsAvx2(wa, w, gray_b, lanes, sc);
+    return FinishScoresAvx2(wa, n, count, *sc, scores);
+  }
+#endif
+  SearchSumsPortable(wa, w, gray_b, lanes, sc);
+  for (int k = 0; k < count; ++k)
+    if (sc->inside[k]) scores[k] = NccFromSums(wa, n, sc->sb[k], sc->sbb[k], sc->sab[k], nullptr, nullptr);
 }
 
 // Points of one image in a uniform grid of cells at least `radius` wide, for "is an earlier point closer than
@@ -336,6 +612,7 @@ struct PairScratch {
   cv::Mat1b visited;
   std::vector<DensePoint> points;
   std::vector<double> scores;
+  SearchScratch search;
 };
 
 // GrayFloat into a reused buffer (the same conversion).
@@ -364,6 +641,7 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (!(o.junction_floor_min_separation_px >= 0)) e << "junction-floor-min-separation must be >= 0 px; ";
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
+  if (o.refine_kernel < 0 || o.refine_kernel > 3) e << "refine-kernel must be in [0, 3]; ";
   if (!(o.max_triangle_edge_px > 0)) e << "max-triangle-edge must be > 0; ";
   if (!(o.max_vertex_depth_ratio >= 1)) e << "max-vertex-depth-ratio must be >= 1; ";
   if (!(o.max_triangle_slant_deg > 0 && o.max_triangle_slant_deg <= 90)) e << "max-triangle-slant must be in (0, 90]; ";
@@ -422,7 +700,7 @@ double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const 
                          const Eigen::Vector2d& q, const Eigen::Matrix2d& jacobian, int h, double* stddev_a,
                          double* stddev_b) {
   if (h < 0 || h > kMaxHalfWindow) return -2.0;
-  return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b, true);
+  return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b, kSearchPortable);
 }
 
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
@@ -646,11 +924,10 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
           const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
           int best = -1;
-          for (int s = -n_steps; s <= n_steps; ++s) {
-            scores[s + n_steps] =
-                WindowNcc(window_a, warp, gray_b, q0 + (s * o.refine_step_px) * dir, nullptr, nullptr);
-            if (best < 0 || scores[s + n_steps] > scores[best]) best = s + n_steps;
-          }
+          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, o.refine_kernel, &scratch.search,
+                       scores.data());
+          for (int k = 0; k <= 2 * n_steps; ++k)
+            if (best < 0 || scores[k] > scores[best]) best = k;
           if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
             ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here
             continue;
@@ -684,7 +961,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
         if (h > 0) {
           double sd_a = 0, sd_b = 0;
           if (!window_a_set) window_a.Set(gray_a, p, h);
-          const double ncc = WindowNcc(window_a, warp, gray_b, q, &sd_a, &sd_b);
+          const double ncc = WindowNcc(window_a, warp, gray_b, q, &sd_a, &sd_b, o.refine_kernel);
           if (ncc < -1.5 || (sd_a >= o.min_window_stddev && sd_b >= o.min_window_stddev && ncc < o.min_ncc)) {
             ++stats.rejected_ncc;
             continue;
@@ -707,8 +984,9 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
               Eigen::Vector2d q_floor;
               if (cam_b.Project(b_from_world * x_floor, &q_floor) &&
                   ((q_floor - q).norm() < o.junction_floor_min_separation_px ||
-                   (Inside(b.image, q_floor, h + 1) && WindowNcc(window_a, warp, gray_b, q_floor, nullptr, nullptr) >=
-                                                           ncc - o.junction_floor_ncc_margin))) {
+                   (Inside(b.image, q_floor, h + 1) &&
+                    WindowNcc(window_a, warp, gray_b, q_floor, nullptr, nullptr, o.refine_kernel) >=
+                        ncc - o.junction_floor_ncc_margin))) {
                 ++stats.rejected_floor_ambiguous;
                 continue;
               }

@@ -72,6 +72,11 @@ struct AffineDenseOptions {
   bool reject_refine_at_border = true;   // drop P when the refinement's best NCC is at either end of the search:
                                          // the true match lies farther than refine_search_px from the affine
                                          // prediction (a triangle across a crease or a depth change)
+  int refine_kernel = 0;                 // implementation of the window NCCs, all bit-identical (for tests and
+                                         // benchmarks): 0 = AVX2 where the CPU has it, else 1; 1 = the reference
+                                         // (one window NCC per search step, SSE2 sampling); 2 = portable scalar
+                                         // sampling, the search's steps batched; 3 = AVX2, steps batched (1 without
+                                         // AVX2)
   double min_triangle_area_px2 = 4.0;    // px², smaller triangles are skipped
   double max_triangle_edge_px = 80.0;    // px, triangles with a longer edge in A or B are skipped
   double min_triangle_angle_deg = 10.0;  // deg, thinner triangles (smallest angle in A) are skipped
@@ -145,7 +150,7 @@ bool TriangulateMidpoint(const Eigen::Vector3d& origin_a, const Eigen::Vector3d&
 
 // NCC between the window of gray image A (CV_32FC1) around p (offsets d in [-h, h]², h = half_window in [0, 10])
 // and gray image B at q + J·d (bilinear). Returns -2 when a window leaves an image (or h is out of range).
-// *stddev_a/*stddev_b (optional) get the window std-devs. Samples B with SIMD where available (SSE2).
+// *stddev_a/*stddev_b (optional) get the window std-devs. Samples B with SIMD where available (AVX2, else SSE2).
 double WarpedNcc(const cv::Mat& gray_a, const Eigen::Vector2d& p, const cv::Mat& gray_b, const Eigen::Vector2d& q,
                  const Eigen::Matrix2d& jacobian, int half_window, double* stddev_a = nullptr,
                  double* stddev_b = nullptr);

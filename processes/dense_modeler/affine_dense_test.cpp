@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 #include <random>
+#include <string>
 
 #include "processes/dense_modeler/synthetic_scene.h"
 
@@ -287,6 +289,113 @@ TEST(AffineDense, WarpedNccSimdPathBitIdenticalToPortableAndCorrect) {
   }
   EXPECT_GT(valid, 1000);
   EXPECT_LT(valid, compared);  // some windows left the images
+}
+
+// Every output field and counter equal (bit-identical doubles and floats).
+void ExpectSamePoints(const std::vector<DensePoint>& x, const DensePairStats& sx, const std::vector<DensePoint>& y,
+                      const DensePairStats& sy, const std::string& what) {
+  ASSERT_EQ(x.size(), y.size()) << what;
+  size_t differ = 0;
+  for (size_t i = 0; i < x.size(); ++i)
+    differ += !(x[i].point_in_world == y[i].point_in_world && x[i].bgr == y[i].bgr && x[i].pixel_a == y[i].pixel_a &&
+                x[i].pixel_b == y[i].pixel_b && x[i].toward_camera == y[i].toward_camera);
+  EXPECT_EQ(differ, 0u) << what;
+  EXPECT_EQ(sx.pixels, sy.pixels) << what;
+  EXPECT_EQ(sx.accepted, sy.accepted) << what;
+  EXPECT_EQ(sx.rejected_outside, sy.rejected_outside) << what;
+  EXPECT_EQ(sx.rejected_color, sy.rejected_color) << what;
+  EXPECT_EQ(sx.rejected_ncc, sy.rejected_ncc) << what;
+  EXPECT_EQ(sx.rejected_refine_border, sy.rejected_refine_border) << what;
+  EXPECT_EQ(sx.rejected_triangulation, sy.rejected_triangulation) << what;
+  EXPECT_EQ(sx.mean_refine_shift_px, sy.mean_refine_shift_px) << what;
+}
+
+TEST(AffineDense, RefinementKernelsBitIdentical) {
+  // The batched search (portable and AVX2, with AVX2 window sampling) against the reference (one SSE2 window NCC per
+  // step): a tilted plane (a non-trivial window warp), vertices off along and across the epipolar line (shifts,
+  // border rejections), windows leaving B near its edges (a long search), several window sizes and step counts
+  // (padded lanes), BGR and gray images and float gray levels that are not integers.
+  PlaneScene scene{Eigen::Vector3d(0.25, -0.15, 1).normalized(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(140, 25, 0);
+  pb.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> off(-2.5, 2.5);
+  auto matches = scene.Matches(pa, pb, 37);
+  // And vertices seen 4 px from B's left and right edges (search windows near them leave B).
+  for (int v = 10; v < scene.camera.height - 10; v += 23) {
+    bool left = false, right = false;
+    for (double u = 0; u < scene.camera.width; u += 0.25) {
+      Eigen::Vector3d x;
+      Eigen::Vector2d q;
+      if (!scene.Intersect(pa, Eigen::Vector2d(u, v), &x) || !scene.camera.Project(pb.inverse() * x, &q)) continue;
+      if ((!left && q.x() >= 4.0) || (!right && q.x() >= scene.camera.width - 5.0)) {
+        matches.push_back({Eigen::Vector2d(u, v), q});
+        (left ? right : left) = true;
+      }
+    }
+  }
+  for (auto& m : matches) m.b += Eigen::Vector2d(off(rng), 0.3 * off(rng));
+  struct Case {
+    int h;
+    double search, step;
+    int image;       // 0 = BGR, 1 = gray, 2 = float gray levels with fractions
+    int pixel_step;  // (a sparser sample of pixels keeps the test short)
+  };
+  const Case cases[] = {{2, 3.0, 0.5, 0, 1}, {2, 3.0, 0.5, 1, 3}, {2, 3.0, 0.5, 2, 3}, {1, 2.2, 0.3, 0, 3},
+                        {4, 9.0, 0.5, 0, 3}, {3, 0.5, 0.5, 0, 3}, {2, 6.0, 0.25, 2, 3}};
+  int checked = 0;
+  int64_t border = 0;
+  for (const Case& c : cases) {
+    DenseView va = a, vb = b;
+    if (c.image >= 1) {
+      cv::cvtColor(a.image, va.image, cv::COLOR_BGR2GRAY);
+      cv::cvtColor(b.image, vb.image, cv::COLOR_BGR2GRAY);
+    }
+    if (c.image == 2) {
+      va.gray = GrayFloat(va.image) * 0.7 + 3.3;
+      vb.gray = GrayFloat(vb.image) * 0.7 + 3.3;
+    }
+    AffineDenseOptions o;
+    o.ncc_half_window = c.h;
+    o.refine_search_px = c.search;
+    o.refine_step_px = c.step;
+    o.min_ncc = 0.5;
+    o.pixel_step = c.pixel_step;
+    DensePairStats ref_stats;
+    o.refine_kernel = 1;
+    const auto ref = ComputeDensePair(va, vb, matches, o, &ref_stats);
+    EXPECT_GT(ref.size(), 1000u);
+    border += ref_stats.rejected_refine_border;
+    // Points whose search reached past the left or right edge of B (the epipolar lines are nearly horizontal): some
+    // of their search windows left B.
+    int near_edge = 0;
+    for (const DensePoint& p : ref)
+      near_edge += std::min(p.pixel_b.x(), scene.camera.width - 1 - p.pixel_b.x()) < c.search + 2 * c.h + 1;
+    std::printf(
+        "h %d search %.2f step %.2f image %d: %zu points (%d with search windows leaving B), %lld at the "
+        "search border\n",
+        c.h, c.search, c.step, c.image, ref.size(), near_edge,
+        static_cast<long long>(ref_stats.rejected_refine_border));
+    if (c.search > 5) EXPECT_GT(near_edge, 20);
+    for (const int kernel : {0, 2, 3}) {
+      o.refine_kernel = kernel;
+      DensePairStats st;
+      const auto pts = ComputeDensePair(va, vb, matches, o, &st);
+      ExpectSamePoints(ref, ref_stats, pts, st,
+                       "kernel " + std::to_string(kernel) + " h " + std::to_string(c.h) + " search " +
+                           std::to_string(c.search) + " step " + std::to_string(c.step) + " image " +
+                           std::to_string(c.image));
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 21);
+  EXPECT_GT(border, 1000);
+  AffineDenseOptions bad;
+  bad.refine_kernel = 4;
+  EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
 }
 
 TEST(AffineDense, FeatureDeduplicationKeepsTheFirstOfCloseMatches) {

@@ -46,6 +46,19 @@ void BM_DensePairSphere(benchmark::State& state) {
 }
 BENCHMARK(BM_DensePairSphere)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The refinement with each implementation of the window NCCs (AffineDenseOptions::refine_kernel; all bit-identical):
+// 1 = one window NCC per search step (reference), 2 = portable, steps batched, 3 = AVX2, steps batched.
+void BM_DensePairSphereRefineKernel(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  AffineDenseOptions o;
+  o.refine_kernel = static_cast<int>(state.range(0));
+  DensePairStats st;
+  for (auto _ : state) benchmark::DoNotOptimize(ComputeDensePair(d.a, d.b, d.matches, o, &st));
+  state.counters["pixels"] = static_cast<double>(st.pixels);
+  state.counters["points"] = static_cast<double>(st.accepted);
+}
+BENCHMARK(BM_DensePairSphereRefineKernel)->DenseRange(1, 3)->Unit(benchmark::kMillisecond);
+
 void BM_VotePair(benchmark::State& state) {
   const PairData& d = SpherePair();
   const auto points = ComputeDensePair(d.a, d.b, d.matches, AffineDenseOptions());
