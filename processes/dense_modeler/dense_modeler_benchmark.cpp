@@ -1,4 +1,5 @@
-// Speed figures: one dense pair at 640x480, voting one pair, carving ~60 000 voxels x 200 views.
+// Speed figures: one dense pair at 640x480, voting one pair, carving ~60 000 voxels x 200 views, the final phase's
+// surface steps and the hidden-part removal of the final mesh.
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -69,7 +70,8 @@ void BM_VotePair(benchmark::State& state) {
 }
 BENCHMARK(BM_VotePair)->Unit(benchmark::kMillisecond);
 
-void BM_Carve60kVoxels200Views(benchmark::State& state) {
+// 200 views of the sphere on the 800 mm ring, downsampled by 2 like the node's carving views.
+const std::vector<CarvingView>& RingCarvingViews() {
   static const std::vector<CarvingView> views = [] {
     SphereScene scene;
     std::vector<CarvingView> v;
@@ -79,6 +81,11 @@ void BM_Carve60kVoxels200Views(benchmark::State& state) {
     }
     return v;
   }();
+  return views;
+}
+
+void BM_Carve60kVoxels200Views(benchmark::State& state) {
+  const std::vector<CarvingView>& views = RingCarvingViews();
   SphereScene scene;
   std::vector<VoxelRecord> seeds;
   const double size = 2.0;
@@ -139,6 +146,24 @@ void BM_MeshFromSurfacePoints(benchmark::State& state) {
   state.counters["triangles"] = static_cast<double>(triangles);
 }
 BENCHMARK(BM_MeshFromSurfacePoints)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// The final mesh's hidden-part removal (mesh_visibility.h) as the node runs it: the sphere's mesh through its vote
+// ridge (~120 000 vertices, like the sim orbit's) against 50 of the 200 ring views.
+void BM_MeshVisibility(benchmark::State& state) {
+  const VoxelVoteGrid& grid = NoisySphereGrid();
+  const TriangleMesh mesh =
+      MeshFromSurfacePoints(ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions()), grid.voxel_size());
+  const std::vector<CarvingView>& views = RingCarvingViews();
+  MeshVisibilityStats st;
+  for (auto _ : state) {
+    TriangleMesh copy = mesh;
+    st = RemoveOccludedMeshParts(&copy, views, MeshVisibilityOptions());
+  }
+  state.counters["vertices"] = static_cast<double>(mesh.vertices.size());
+  state.counters["views"] = st.views;
+  state.counters["removed"] = static_cast<double>(st.vertices_removed);
+}
+BENCHMARK(BM_MeshVisibility)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 }  // namespace objscan
