@@ -217,6 +217,23 @@ __attribute__((target("avx2"))) inline __m256 PixelPairs4(const float* base, int
                                  reinterpret_cast<const __m64*>(base + k3));
   return _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
 }
+
+// Bilinear samples of eight positions: k[l] = float index of lane l's top-left pixel, (fu, fv) its fractions; the
+// scalar SampleAt's float expression per lane.
+__attribute__((target("avx2"))) inline __m256 BilinearAvx2(const float* row0, const float* row1, const int32_t* k,
+                                                           __m256 fu, __m256 fv) {
+  const __m256 one = _mm256_set1_ps(1.0f);
+  const __m256 ta = PixelPairs4(row0, k[0], k[1], k[4], k[5]), tb = PixelPairs4(row0, k[2], k[3], k[6], k[7]);
+  const __m256 ba = PixelPairs4(row1, k[0], k[1], k[4], k[5]), bb = PixelPairs4(row1, k[2], k[3], k[6], k[7]);
+  const __m256 p00 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(2, 0, 2, 0));
+  const __m256 p01 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(3, 1, 3, 1));
+  const __m256 p10 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(2, 0, 2, 0));
+  const __m256 p11 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(3, 1, 3, 1));
+  const __m256 gu = _mm256_sub_ps(one, fu), gv = _mm256_sub_ps(one, fv);
+  const __m256 top = _mm256_add_ps(_mm256_mul_ps(gu, p00), _mm256_mul_ps(fu, p01));
+  const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(gu, p10), _mm256_mul_ps(fu, p11));
+  return _mm256_add_ps(_mm256_mul_ps(gv, top), _mm256_mul_ps(fv, bottom));
+}
 #else
 bool CpuHasAvx2() { return false; }
 #endif
@@ -308,7 +325,6 @@ __attribute__((target("avx2"))) void SampleWindowAvx2(const WindowWarp& w, const
   const float* row0 = reinterpret_cast<const float*>(gray_b.data);
   const float* row1 = reinterpret_cast<const float*>(gray_b.data + gray_b.step[0]);
   const __m256d stride = _mm256_set1_pd(static_cast<double>(gray_b.step[0] / sizeof(float)));
-  const __m256 one = _mm256_set1_ps(1.0f);
   int i = 0;
   for (; i + 8 <= n; i += 8) {
     const __m256d x0 = _mm256_load_pd(xs + i), x1 = _mm256_load_pd(xs + i + 4);
@@ -325,16 +341,7 @@ __attribute__((target("avx2"))) void SampleWindowAvx2(const WindowWarp& w, const
     _mm256_store_si256(reinterpret_cast<__m256i*>(k),
                        _mm256_set_m128i(_mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt1, stride), xt1)),
                                         _mm256_cvttpd_epi32(_mm256_add_pd(_mm256_mul_pd(yt0, stride), xt0))));
-    const __m256 ta = PixelPairs4(row0, k[0], k[1], k[4], k[5]), tb = PixelPairs4(row0, k[2], k[3], k[6], k[7]);
-    const __m256 ba = PixelPairs4(row1, k[0], k[1], k[4], k[5]), bb = PixelPairs4(row1, k[2], k[3], k[6], k[7]);
-    const __m256 p00 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(2, 0, 2, 0));
-    const __m256 p01 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(3, 1, 3, 1));
-    const __m256 p10 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(2, 0, 2, 0));
-    const __m256 p11 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(3, 1, 3, 1));
-    const __m256 gu = _mm256_sub_ps(one, fu), gv = _mm256_sub_ps(one, fv);
-    const __m256 top = _mm256_add_ps(_mm256_mul_ps(gu, p00), _mm256_mul_ps(fu, p01));
-    const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(gu, p10), _mm256_mul_ps(fu, p11));
-    _mm256_storeu_ps(vb + i, _mm256_add_ps(_mm256_mul_ps(gv, top), _mm256_mul_ps(fv, bottom)));
+    _mm256_storeu_ps(vb + i, BilinearAvx2(row0, row1, k, fu, fv));
   }
   for (; i < n; ++i) vb[i] = SampleAt(gray_b.data, gray_b.step[0], xs[i], ys[i]);
 }
@@ -424,7 +431,6 @@ __attribute__((target("avx2"))) void SearchSumsAvx2(const WindowA& wa, const Win
   const float* row0 = reinterpret_cast<const float*>(gray_b.data);
   const float* row1 = reinterpret_cast<const float*>(gray_b.data + gray_b.step[0]);
   const __m256d stride = _mm256_set1_pd(static_cast<double>(gray_b.step[0] / sizeof(float)));
-  const __m256 one = _mm256_set1_ps(1.0f);
   sc->fu.resize(8 * n), sc->fv.resize(8 * n), sc->index.resize(8 * n), sc->value_a.resize(n);
   float* fus = sc->fu.data();
   float* fvs = sc->fv.data();
@@ -464,19 +470,8 @@ __attribute__((target("avx2"))) void SearchSumsAvx2(const WindowA& wa, const Win
     }
     __m256d sb0 = _mm256_setzero_pd(), sb1 = sb0, sbb0 = sb0, sbb1 = sb0, sab0 = sb0, sab1 = sb0;
     for (int i = 0; i < n; ++i) {
-      // The pixel pairs of lanes (0, 1, 4, 5) and (2, 3, 6, 7): the shuffles give every lane its own in lane order.
-      const int32_t* k = indices + 8 * i;
-      const __m256 ta = PixelPairs4(row0, k[0], k[1], k[4], k[5]), tb = PixelPairs4(row0, k[2], k[3], k[6], k[7]);
-      const __m256 ba = PixelPairs4(row1, k[0], k[1], k[4], k[5]), bb = PixelPairs4(row1, k[2], k[3], k[6], k[7]);
-      const __m256 p00 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(2, 0, 2, 0));
-      const __m256 p01 = _mm256_shuffle_ps(ta, tb, _MM_SHUFFLE(3, 1, 3, 1));
-      const __m256 p10 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(2, 0, 2, 0));
-      const __m256 p11 = _mm256_shuffle_ps(ba, bb, _MM_SHUFFLE(3, 1, 3, 1));
-      const __m256 fu = _mm256_loadu_ps(fus + 8 * i), fv = _mm256_loadu_ps(fvs + 8 * i);
-      const __m256 gu = _mm256_sub_ps(one, fu), gv = _mm256_sub_ps(one, fv);
-      const __m256 top = _mm256_add_ps(_mm256_mul_ps(gu, p00), _mm256_mul_ps(fu, p01));
-      const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(gu, p10), _mm256_mul_ps(fu, p11));
-      const __m256 val = _mm256_add_ps(_mm256_mul_ps(gv, top), _mm256_mul_ps(fv, bottom));
+      const __m256 val =
+          BilinearAvx2(row0, row1, indices + 8 * i, _mm256_loadu_ps(fus + 8 * i), _mm256_loadu_ps(fvs + 8 * i));
       const __m256d b0 = _mm256_cvtps_pd(_mm256_castps256_ps128(val));
       const __m256d b1 = _mm256_cvtps_pd(_mm256_extractf128_ps(val, 1));
       const __m256d av = _mm256_broadcast_sd(value_a + i);
