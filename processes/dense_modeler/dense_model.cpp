@@ -149,17 +149,18 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     model.mesh = MeshFromSurfacePoints(
         SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
         grid.voxel_size());
-    // Sheets inside the object, under the surface other pairs built, are hidden from every view.
     model.times.meshing_s = since(t0);
     t0 = Clock::now();
+    // Sheets inside the object, under the surface other pairs built, are hidden from most views.
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     model.times.visibility_s = since(t0);
     t0 = Clock::now();
-    // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
+    // The rims of holes bend off the surface.
     model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
+    // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
     // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
-    // no mesh vertex within 1.5 voxels were dropped with their mesh part (hidden, floor-facing or a small piece).
+    // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a border ring or in a small piece).
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(model.mesh.vertices.size());
     for (const Eigen::Vector3f& v : model.mesh.vertices) vertices.push_back(v.cast<double>());
@@ -168,9 +169,7 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     std::vector<CarvedVoxel> supported;
     supported.reserve(model.voxels.size());
     for (const CarvedVoxel& v : model.voxels) {
-      bool found = false;
-      near_mesh.ForEachWithin(grid.CenterOf(v.ijk), reach, [&found](int) { found = true; });
-      if (found)
+      if (near_mesh.Nearest(grid.CenterOf(v.ijk), 1) <= reach)  // cells of size reach: one ring covers it
         supported.push_back(v);
       else
         ++model.voxels_without_mesh;
