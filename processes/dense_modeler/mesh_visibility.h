@@ -2,15 +2,16 @@
 // Dense points from triangles across a crease (a cylinder's rim, a box edge) or seen at grazing angles (the top of an
 // object seen from the orbit) can form a second sheet a few millimetres *inside* the object, under the true surface
 // that other pairs reconstructed. Such a sheet is hidden from every camera by the model's own surface. The mesh's
-// depth is rendered into every view (z-buffer of its triangles, perspective-correct, the view's camera as stored, so
-// downsampled carving views work), and a vertex counts as seen by a view when it faces the camera (its area-weighted
-// normal within acos(min_facing_cos) of the ray to the camera centre), projects into the image and lies no more than
-// depth_tolerance_mm behind the rendered depth around its pixel (the largest depth of the 2 x 2 pixel centres around
-// it, so a vertex on the surface is never occluded by its own neighbourhood, even at grazing angles). A vertex is
-// removed with its triangles when fewer than min_seen_views views see it, or fewer than min_seen_fraction of the
-// views it faces (in front, in the image): an inner sheet is seen only through the holes of the surface above it. Wrong
-// sheets *in front of* the surface are not found this way (they would hide the surface, not be hidden), nor dents where
-// no true surface was built. Units: mm (world), px. Never throws; views with an invalid camera are skipped.
+// depth is rendered into the views (at most max_views, evenly spread; z-buffer of its triangles, perspective-correct,
+// the view's camera as stored, so downsampled carving views work), and a vertex counts as seen by a view when it faces
+// the camera (its area-weighted normal within acos(min_facing_cos) of the ray to the camera centre), projects into the
+// image and lies no more than depth_tolerance_mm behind the rendered depth around its pixel (the largest depth of the 2
+// x 2 pixel centres around it, so a vertex on the surface is never occluded by its own neighbourhood, even at grazing
+// angles). A vertex is removed with its triangles when fewer than min_seen_views views see it, or fewer than
+// min_seen_fraction of the views it faces (in front, in the image): an inner sheet is seen only through the holes of
+// the surface above it. Wrong sheets *in front of* the surface are not found this way (they would hide the surface, not
+// be hidden), nor dents where no true surface was built. Units: mm (world), px. Never throws; views with an invalid
+// camera are skipped.
 #pragma once
 
 #include <cstdint>
