@@ -600,6 +600,13 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_ms", (MonotonicMicros() - start_us) * 1e-3);
   status_.SetValue("final_voxels", static_cast<double>(model.voxels.size()));
   status_.SetValue("final_seeds", static_cast<double>(model.seeds));
+  status_.SetValue("final_triangles", static_cast<double>(model.mesh.triangles.size()));
+  status_.SetValue("final_floor_band_dropped", static_cast<double>(model.floor_band_dropped));
+  status_.SetValue("final_carved", static_cast<double>(model.carving.removed));
+  status_.SetValue("final_hidden_vertices", static_cast<double>(model.visibility.vertices_removed));
+  status_.SetValue("final_voxels_off_mesh", static_cast<double>(model.voxels_without_mesh));
+  status_.SetValue("final_carving_s", model.times.carving_s);
+  status_.SetValue("final_visibility_s", model.times.visibility_s);
   status_.SetState(+process_status_t::STATE_FINISHED, "model written");
   status_.PublishIfDue(WallTimeMicros(), true);
 }

@@ -11,6 +11,7 @@
 #include "common/bus.h"
 #include "common/geometry.h"
 #include "objscan/model_t.hpp"
+#include "objscan/process_status_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 #include "processes/dense_modeler/synthetic_scene.h"
 
@@ -23,7 +24,15 @@ struct Collected {
   std::vector<voxel_map_t> maps;
   std::vector<model_t> models;
   std::vector<control_t> controls;
+  std::vector<process_status_t> statuses;
 };
+
+// The named value of a status message (NaN when absent).
+double StatusValue(const process_status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_values; ++i)
+    if (s.value_name[i] == name) return s.value[i];
+  return std::nan("");
+}
 
 class NodeFixture : public ::testing::Test {
  protected:
@@ -35,6 +44,8 @@ class NodeFixture : public ::testing::Test {
     bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
       if (m.sender == "dense_modeler") out_.controls.push_back(m);
     });
+    bus_->SubscribeMessage<process_status_t>(
+        "PROCESS_STATUS", [this](const process_status_t& m, const RawMessage&) { out_.statuses.push_back(m); });
     dir_ = (std::filesystem::temp_directory_path() / ("dense_node_test_" + std::to_string(::getpid()))).string();
     options_.output_dir = dir_;
     options_.pair_gap = 1;
@@ -137,6 +148,14 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_EQ(out_.controls[0].command, +control_t::COMMAND_FINISHED);
   EXPECT_EQ(out_.controls[0].last_seq, n);
   EXPECT_EQ(node.status().rejected_total(), 0);
+  // The last status carries the final phase's figures.
+  ASSERT_FALSE(out_.statuses.empty());
+  const process_status_t& last = out_.statuses.back();
+  EXPECT_EQ(StatusValue(last, "final_voxels"), m.num_voxels);
+  EXPECT_EQ(StatusValue(last, "final_triangles"), m.num_mesh_triangles);
+  for (const char* name : {"final_floor_band_dropped", "final_carved", "final_hidden_vertices", "final_voxels_off_mesh",
+                           "final_carving_s", "final_visibility_s"})
+    EXPECT_GE(StatusValue(last, name), 0.0) << name;
   // Snapshot on request, loadable, same content.
   PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer", dir_ + "/snap.bin");
   VoxelVoteGrid loaded;
