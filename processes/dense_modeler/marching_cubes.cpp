@@ -186,6 +186,31 @@ bool IsClosedOrientedMesh(const TriangleMesh& mesh) {
   return !mesh.triangles.empty();
 }
 
+int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep) {
+  std::vector<int32_t> new_index(mesh->vertices.size(), -1);
+  TriangleMesh out;
+  int64_t dropped = 0;
+  for (size_t t = 0; t < mesh->triangles.size(); ++t) {
+    if (!keep[t]) {
+      ++dropped;
+      continue;
+    }
+    std::array<int32_t, 3> u;
+    for (int k = 0; k < 3; ++k) {
+      const int32_t v = mesh->triangles[t][k];
+      if (new_index[v] < 0) {
+        new_index[v] = static_cast<int32_t>(out.vertices.size());
+        out.vertices.push_back(mesh->vertices[v]);
+        if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[v]);
+      }
+      u[k] = new_index[v];
+    }
+    out.triangles.push_back(u);
+  }
+  if (dropped > 0) *mesh = std::move(out);
+  return dropped;
+}
+
 int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
   if (min_fraction <= 0 || mesh->triangles.empty()) return 0;
   const int n = static_cast<int>(mesh->vertices.size());
@@ -206,28 +231,10 @@ int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
   for (const auto& t : mesh->triangles) ++piece_triangles[find(t[0])];
   const int64_t largest = *std::max_element(piece_triangles.begin(), piece_triangles.end());
   const double keep_from = min_fraction * static_cast<double>(largest);
-  std::vector<int32_t> new_index(n, -1);
-  TriangleMesh out;
-  int64_t dropped = 0;
-  for (const auto& t : mesh->triangles) {
-    if (static_cast<double>(piece_triangles[find(t[0])]) < keep_from) {
-      ++dropped;
-      continue;
-    }
-    std::array<int32_t, 3> u;
-    for (int k = 0; k < 3; ++k) {
-      if (new_index[t[k]] < 0) {
-        new_index[t[k]] = static_cast<int32_t>(out.vertices.size());
-        out.vertices.push_back(mesh->vertices[t[k]]);
-        if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[t[k]]);
-      }
-      u[k] = new_index[t[k]];
-    }
-    out.triangles.push_back(u);
-  }
-  if (dropped == 0) return 0;
-  *mesh = std::move(out);
-  return dropped;
+  std::vector<char> keep(mesh->triangles.size());
+  for (size_t t = 0; t < keep.size(); ++t)
+    keep[t] = static_cast<double>(piece_triangles[find(mesh->triangles[t][0])]) >= keep_from;
+  return KeepMeshTriangles(mesh, keep);
 }
 
 int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
@@ -258,28 +265,7 @@ int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
       if (keep[t] && (border[mesh->triangles[t][0]] || border[mesh->triangles[t][1]] || border[mesh->triangles[t][2]]))
         keep[t] = 0;
   }
-  int64_t dropped = 0;
-  std::vector<int32_t> new_index(n, -1);
-  TriangleMesh out;
-  for (size_t t = 0; t < keep.size(); ++t) {
-    if (!keep[t]) {
-      ++dropped;
-      continue;
-    }
-    std::array<int32_t, 3> u;
-    for (int k = 0; k < 3; ++k) {
-      const int32_t v = mesh->triangles[t][k];
-      if (new_index[v] < 0) {
-        new_index[v] = static_cast<int32_t>(out.vertices.size());
-        out.vertices.push_back(mesh->vertices[v]);
-        if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[v]);
-      }
-      u[k] = new_index[v];
-    }
-    out.triangles.push_back(u);
-  }
-  if (dropped > 0) *mesh = std::move(out);
-  return dropped;
+  return KeepMeshTriangles(mesh, keep);
 }
 
 }  // namespace objscan

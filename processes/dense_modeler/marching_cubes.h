@@ -44,6 +44,10 @@ TriangleMesh MeshFromVoxels(const std::vector<CarvedVoxel>& voxels, double voxel
 // True when every undirected edge is used by exactly two triangles with opposite directions (closed, oriented).
 bool IsClosedOrientedMesh(const TriangleMesh& mesh);
 
+// Keeps the triangles t with keep[t] (one flag per triangle), in their order, and the vertices they use, renumbered
+// in the order the kept triangles first use them. Returns the triangles dropped; the mesh is unchanged when none is.
+int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep);
+
 // Drops the connected pieces of the mesh (triangles sharing vertices) with fewer triangles than min_fraction of the
 // largest piece. When any is dropped, the vertices are renumbered in the order the kept triangles first use them
 // (unused ones dropped). Returns the triangles dropped; min_fraction <= 0: unchanged.

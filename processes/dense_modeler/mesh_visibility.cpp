@@ -1,7 +1,6 @@
 #include "processes/dense_modeler/mesh_visibility.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -133,28 +132,13 @@ MeshVisibilityStats RemoveOccludedMeshParts(TriangleMesh* mesh, const std::vecto
     if (!keep[i]) ++stats.vertices_removed;
   }
   if (stats.vertices_removed == 0) return stats;
-  // Triangles of seen vertices only; vertices no kept triangle uses go too (kept ones keep their order).
-  std::vector<char> used(mesh->vertices.size(), 0);
-  std::vector<std::array<int32_t, 3>> triangles;
-  for (const auto& t : mesh->triangles) {
-    if (!keep[t[0]] || !keep[t[1]] || !keep[t[2]]) {
-      ++stats.triangles_removed;
-      continue;
-    }
-    triangles.push_back(t);
-    for (int k = 0; k < 3; ++k) used[t[k]] = 1;
+  // Triangles of seen vertices only (KeepMeshTriangles drops the vertices no kept triangle uses).
+  std::vector<char> keep_triangle(mesh->triangles.size());
+  for (size_t t = 0; t < keep_triangle.size(); ++t) {
+    const auto& tri = mesh->triangles[t];
+    keep_triangle[t] = keep[tri[0]] && keep[tri[1]] && keep[tri[2]];
   }
-  std::vector<int32_t> new_index(mesh->vertices.size(), -1);
-  TriangleMesh out;
-  for (size_t i = 0; i < used.size(); ++i) {
-    if (!used[i]) continue;
-    new_index[i] = static_cast<int32_t>(out.vertices.size());
-    out.vertices.push_back(mesh->vertices[i]);
-    if (!mesh->bgr.empty()) out.bgr.push_back(mesh->bgr[i]);
-  }
-  for (auto& t : triangles) t = {new_index[t[0]], new_index[t[1]], new_index[t[2]]};
-  out.triangles = std::move(triangles);
-  *mesh = std::move(out);
+  stats.triangles_removed = KeepMeshTriangles(mesh, keep_triangle);
   return stats;
 }
 

@@ -50,7 +50,7 @@ std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::v
                                           const MeshVisibilityOptions& options, int* views_used = nullptr);
 
 // Removes the vertices seen by too few views (see the top), the triangles using them and the vertices no kept
-// triangle uses (the others keep their order). No-op when both limits are 0 or there are no views.
+// triangle uses (renumbered as KeepMeshTriangles does). No-op when both limits are 0 or there are no views.
 MeshVisibilityStats RemoveOccludedMeshParts(TriangleMesh* mesh, const std::vector<CarvingView>& views,
                                             const MeshVisibilityOptions& options);
 
