@@ -155,7 +155,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
     model.times.visibility_s = since(t0);
     t0 = Clock::now();
-    // The rims of holes bend off the surface.
+    // The rims of holes bend off the surface: curled ones by up to max_rings rings, then all by border_rings.
+    model.ridge.curled_triangles_dropped = TrimCurledBorders(&model.mesh, o.ridge.curled_borders);
     model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);

@@ -81,6 +81,14 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("ridge-smoothing-min-normal-cos", &m->ridge.smoothing_min_normal_cos,
         "surface fit neighbours need normals within acos(this) of the point's own");
   p.Add("ridge-border-rings", &m->ridge.border_rings, "rings of triangles peeled off the mesh's open borders");
+  CurledBorderOptions* cb = &m->ridge.curled_borders;
+  p.Add("curl-max-rings", &cb->max_rings, "passes peeling curled rims off the mesh's open borders at most (0 = off)");
+  p.Add("curl-max-angle", &cb->max_angle_deg,
+        "deg, a border vertex whose normal is farther than this from every interior normal near it is curled");
+  p.Add("curl-radius", &cb->radius_mm, "mm, radius of the interior vertices a border vertex is compared with");
+  p.Add("curl-interior-rings", &cb->interior_rings, "rings from the border beyond which a mesh vertex is interior");
+  p.Add("curl-min-offset", &cb->min_offset_mm,
+        "mm, a curled border triangle also lies this far off the nearest interior vertex's tangent plane");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
   p.Add("floor-band", &m->floor_band_mm,
@@ -539,6 +547,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
             std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped, " +
+            std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +
+            std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
             std::to_string(model.visibility.vertices_removed) + " mesh vertices hidden in " +
             std::to_string(model.visibility.views) + " views removed, " + std::to_string(model.voxels_without_mesh) +
             " voxels off the final mesh dropped");
@@ -604,6 +614,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_floor_band_dropped", static_cast<double>(model.floor_band_dropped));
   status_.SetValue("final_carved", static_cast<double>(model.carving.removed));
   status_.SetValue("final_hidden_vertices", static_cast<double>(model.visibility.vertices_removed));
+  status_.SetValue("final_curled_triangles", static_cast<double>(model.ridge.curled_triangles_dropped));
   status_.SetValue("final_voxels_off_mesh", static_cast<double>(model.voxels_without_mesh));
   status_.SetValue("final_carving_s", model.times.carving_s);
   status_.SetValue("final_visibility_s", model.times.visibility_s);

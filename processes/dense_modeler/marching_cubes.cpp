@@ -7,6 +7,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "common/point_grid.h"
+
 namespace objscan {
 namespace {
 
@@ -237,33 +239,158 @@ int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
   return KeepMeshTriangles(mesh, keep);
 }
 
+namespace {
+
+// border[v] = 1 for the vertices on an edge that exactly one kept triangle uses; false when there is none. The edges
+// are bucketed by their lower vertex (counting sort) and each bucket sorted: no hash map for the ~10^6 edges.
+bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep, std::vector<char>* border) {
+  const size_t n = mesh.vertices.size();
+  std::vector<int32_t> first(n + 1, 0), upper;
+  for (size_t t = 0; t < keep.size(); ++t)
+    if (keep[t])
+      for (int k = 0; k < 3; ++k) ++first[std::min(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]) + 1];
+  for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  upper.resize(first[n]);
+  std::vector<int32_t> fill(first.begin(), first.end() - 1);
+  for (size_t t = 0; t < keep.size(); ++t)
+    if (keep[t])
+      for (int k = 0; k < 3; ++k) {
+        const int32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+        upper[fill[std::min(a, b)]++] = std::max(a, b);
+      }
+  border->assign(n, 0);
+  bool any = false;
+  for (size_t v = 0; v < n; ++v) {
+    std::sort(upper.begin() + first[v], upper.begin() + first[v + 1]);
+    for (int32_t i = first[v]; i < first[v + 1];) {
+      int32_t j = i + 1;
+      while (j < first[v + 1] && upper[j] == upper[i]) ++j;
+      if (j - i == 1) {
+        (*border)[v] = (*border)[upper[i]] = 1;
+        any = true;
+      }
+      i = j;
+    }
+  }
+  return any;
+}
+
+// Drops the kept triangles touching a flagged vertex.
+void DropTrianglesAt(const TriangleMesh& mesh, const std::vector<char>& flagged, std::vector<char>* keep) {
+  for (size_t t = 0; t < keep->size(); ++t)
+    if ((*keep)[t] && (flagged[mesh.triangles[t][0]] || flagged[mesh.triangles[t][1]] || flagged[mesh.triangles[t][2]]))
+      (*keep)[t] = 0;
+}
+
+}  // namespace
+
 int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
   if (rings <= 0 || mesh->triangles.empty()) return 0;
-  const size_t n = mesh->vertices.size();
   std::vector<char> keep(mesh->triangles.size(), 1);
-  std::vector<char> border(n);
-  std::unordered_map<uint64_t, int> edge_use;
+  std::vector<char> border;
   for (int ring = 0; ring < rings; ++ring) {
-    edge_use.clear();
+    if (!MarkBorderVertices(*mesh, keep, &border)) break;
+    DropTrianglesAt(*mesh, border, &keep);
+  }
+  return KeepMeshTriangles(mesh, keep);
+}
+
+bool ValidateCurledBorderOptions(const CurledBorderOptions& o, std::string* why) {
+  std::string e;
+  if (o.max_rings < 0 || o.max_rings > 50) e += "curl max_rings must be in 0..50; ";
+  if (!(o.max_angle_deg > 0 && o.max_angle_deg < 90)) e += "curl max_angle_deg must be in (0, 90); ";
+  if (!(o.radius_mm > 0) || !std::isfinite(o.radius_mm)) e += "curl radius_mm must be > 0; ";
+  if (o.interior_rings < 1 || o.interior_rings > 50) e += "curl interior_rings must be in 1..50; ";
+  if (!(o.min_offset_mm >= 0) || !std::isfinite(o.min_offset_mm)) e += "curl min_offset_mm must be >= 0; ";
+  if (why) *why = e;
+  return e.empty();
+}
+
+int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
+  if (o.max_rings <= 0 || mesh->triangles.empty()) return 0;
+  const size_t n = mesh->vertices.size();
+  const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * M_PI / 180.0));
+  std::vector<char> keep(mesh->triangles.size(), 1), border, used(n);
+  std::vector<int> ring_of(n);
+  std::vector<Eigen::Vector3f> normal(n);
+  std::vector<int32_t> first(n + 1), adjacent, frontier, next;  // vertex adjacency of the kept triangles (CSR)
+  for (int pass = 0; pass < o.max_rings; ++pass) {
+    if (!MarkBorderVertices(*mesh, keep, &border)) break;
+    std::fill(normal.begin(), normal.end(), Eigen::Vector3f::Zero());
+    std::fill(used.begin(), used.end(), 0);
+    std::fill(first.begin(), first.end(), 0);
     for (size_t t = 0; t < keep.size(); ++t) {
       if (!keep[t]) continue;
+      const auto& tri = mesh->triangles[t];
+      const Eigen::Vector3f area_normal =
+          (mesh->vertices[tri[1]] - mesh->vertices[tri[0]]).cross(mesh->vertices[tri[2]] - mesh->vertices[tri[0]]);
       for (int k = 0; k < 3; ++k) {
-        const uint32_t a = static_cast<uint32_t>(mesh->triangles[t][k]);
-        const uint32_t b = static_cast<uint32_t>(mesh->triangles[t][(k + 1) % 3]);
-        ++edge_use[(static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b)];
+        normal[tri[k]] += area_normal;
+        used[tri[k]] = 1;
+        first[tri[k] + 1] += 2;
       }
     }
-    std::fill(border.begin(), border.end(), 0);
+    for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+    adjacent.resize(first[n]);
+    std::vector<int32_t> fill(first.begin(), first.end() - 1);
+    for (size_t t = 0; t < keep.size(); ++t) {
+      if (!keep[t]) continue;
+      const auto& tri = mesh->triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        adjacent[fill[tri[k]]++] = tri[(k + 1) % 3];
+        adjacent[fill[tri[k]]++] = tri[(k + 2) % 3];
+      }
+    }
+    // Rings from the border, breadth first, up to interior_rings (unreached = interior).
+    std::fill(ring_of.begin(), ring_of.end(), o.interior_rings);
+    frontier.clear();
+    for (size_t v = 0; v < n; ++v)
+      if (border[v]) {
+        ring_of[v] = 0;
+        frontier.push_back(static_cast<int32_t>(v));
+      }
+    for (int r = 1; r < o.interior_rings && !frontier.empty(); ++r) {
+      next.clear();
+      for (const int32_t v : frontier)
+        for (int32_t i = first[v]; i < first[v + 1]; ++i)
+          if (ring_of[adjacent[i]] > r) {
+            ring_of[adjacent[i]] = r;
+            next.push_back(adjacent[i]);
+          }
+      frontier.swap(next);
+    }
+    std::vector<Eigen::Vector3d> interior;
+    std::vector<Eigen::Vector3f> interior_normal;
+    for (size_t v = 0; v < n; ++v)
+      if (used[v] && ring_of[v] >= o.interior_rings && normal[v].squaredNorm() > 0) {
+        interior.push_back(mesh->vertices[v].cast<double>());
+        interior_normal.push_back(normal[v].normalized());
+      }
+    const PointGrid grid(interior, o.radius_mm);
     bool any = false;
-    for (const auto& [edge, uses] : edge_use) {
-      if (uses != 1) continue;
-      border[edge >> 32] = border[edge & 0xFFFFFFFFu] = 1;
-      any = true;
+    for (size_t t = 0; t < keep.size(); ++t) {
+      const auto& tri = mesh->triangles[t];
+      if (!keep[t] || !(border[tri[0]] || border[tri[1]] || border[tri[2]])) continue;
+      const Eigen::Vector3f& p0 = mesh->vertices[tri[0]];
+      const Eigen::Vector3f face = (mesh->vertices[tri[1]] - p0).cross(mesh->vertices[tri[2]] - p0);
+      if (face.squaredNorm() == 0) continue;
+      const Eigen::Vector3f nf = face.normalized();
+      const Eigen::Vector3d centroid = ((p0 + mesh->vertices[tri[1]] + mesh->vertices[tri[2]]) / 3.0f).cast<double>();
+      bool agrees = false;  // some interior vertex within the radius has a normal near the triangle's
+      int nearest = -1;     // the nearest interior vertex
+      double nearest_d2 = 0;
+      grid.ForEachWithin(centroid, o.radius_mm, [&](int i) {
+        agrees = agrees || interior_normal[i].dot(nf) >= min_cos;
+        const double d2 = (interior[i] - centroid).squaredNorm();
+        if (nearest < 0 || d2 < nearest_d2) nearest = i, nearest_d2 = d2;
+      });
+      if (nearest >= 0 && !agrees &&
+          std::abs(interior_normal[nearest].cast<double>().dot(centroid - interior[nearest])) >= o.min_offset_mm) {
+        keep[t] = 0;
+        any = true;
+      }
     }
     if (!any) break;
-    for (size_t t = 0; t < keep.size(); ++t)
-      if (keep[t] && (border[mesh->triangles[t][0]] || border[mesh->triangles[t][1]] || border[mesh->triangles[t][2]]))
-        keep[t] = 0;
   }
   return KeepMeshTriangles(mesh, keep);
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "processes/dense_modeler/space_carving.h"
@@ -57,5 +58,29 @@ int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction);
 // edge used by one triangle), renumbering the vertices like RemoveSmallMeshPieces. A closed mesh is unchanged.
 // Returns the triangles dropped; rings <= 0: unchanged.
 int64_t TrimMeshBorder(TriangleMesh* mesh, int rings);
+
+// The rim of a hole where the surface points run out often bends off the surface (a flap of a few mm, folded by
+// 30-90 deg: the last points' normals are poorly determined). A border triangle (touching a vertex on an edge used
+// by one triangle) is curled when no interior vertex (at least interior_rings rings from every border) within
+// radius_mm of its centroid has a normal within max_angle_deg of the triangle's; one with no interior vertex that
+// near (a strip) is left alone. Triangles, not vertices, are tested so that a crease reaching a border (whose
+// vertex normals are the mean of both faces) stays.
+struct CurledBorderOptions {
+  int max_rings = 10;           // passes at most; each drops the curled border triangles (0 = off), 0..50
+  double max_angle_deg = 20.0;  // deg, a border triangle whose normal is farther than this from every interior
+                                // normal near it is curled, (0, 90)
+  double radius_mm = 16.0;      // mm, interior vertices this close count (> 0)
+  int interior_rings = 8;       // rings from the border beyond which a vertex is interior: longer than a flap, 1..50
+  double min_offset_mm = 1.5;   // mm, and whose centroid lies at least this far off the tangent plane of the
+                                // nearest interior vertex (a strip on the other face of a crease lies near it), >= 0
+};
+
+bool ValidateCurledBorderOptions(const CurledBorderOptions& options, std::string* why);
+
+// Peels curled rims off the open borders (see CurledBorderOptions), pass after pass until no border triangle is
+// curled or max_rings passes ran, renumbering the vertices like RemoveSmallMeshPieces. Vertex normals are the
+// area-weighted normals of the kept triangles. Returns the triangles dropped; max_rings <= 0 or a closed mesh:
+// unchanged.
+int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& options);
 
 }  // namespace objscan

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace objscan {
 namespace {
@@ -154,6 +156,73 @@ TEST(MarchingCubes, TrimMeshBorderPeelsRingsOffOpenBordersOnly) {
   TriangleMesh untouched = open;
   EXPECT_EQ(TrimMeshBorder(&untouched, 0), 0);
   EXPECT_EQ(untouched.triangles.size(), open.triangles.size());
+}
+
+// A sheet over a (columns + 1) x (rows + 1) grid of 1 mm steps, vertex (i, j) at place(i, j); triangles oriented
+// like the +z normal of a flat sheet in the xy plane.
+template <class Place>
+TriangleMesh GridSheet(int columns, int rows, Place place) {
+  TriangleMesh m;
+  for (int j = 0; j <= rows; ++j)
+    for (int i = 0; i <= columns; ++i) {
+      m.vertices.push_back(place(i, j).template cast<float>());
+      m.bgr.push_back({{100, 100, 100}});
+    }
+  auto at = [columns](int i, int j) { return j * (columns + 1) + i; };
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) {
+      m.triangles.push_back({{at(i, j), at(i + 1, j), at(i + 1, j + 1)}});
+      m.triangles.push_back({{at(i, j), at(i + 1, j + 1), at(i, j + 1)}});
+    }
+  return m;
+}
+
+// A flat sheet whose last 8 mm fold down by 60 deg (the curled rim of a hole): the flap goes, the flat part stays;
+// a flat sheet and a 90 deg crease reaching the border (an L of two wide faces) lose nothing.
+TEST(MarchingCubes, TrimCurledBordersPeelsFlapsOnly) {
+  const double fold = 60 * M_PI / 180;
+  TriangleMesh flap = GridSheet(48, 40, [fold](int i, int j) {
+    const double s = std::max(0, i - 40);
+    return Eigen::Vector3d(std::min(i, 40) + s * std::cos(fold), j, -s * std::sin(fold));
+  });
+  const CurledBorderOptions o;  // defaults: 20 deg, 1.5 mm off the tangent plane, 10 passes
+  std::string why;
+  ASSERT_TRUE(ValidateCurledBorderOptions(o, &why)) << why;
+  const size_t before = flap.triangles.size();
+  const int64_t dropped = TrimCurledBorders(&flap, o);
+  EXPECT_EQ(flap.triangles.size() + static_cast<size_t>(dropped), before);
+  int flat_kept = 0;
+  float lowest = 0;
+  for (const Eigen::Vector3f& v : flap.vertices) {
+    lowest = std::min(lowest, v.z());
+    flat_kept += v.z() == 0 && v.x() <= 38;
+  }
+  EXPECT_GT(lowest, -2.0f);        // the flap reached 6.9 mm down; what is left lies within 2 mm of the sheet
+  EXPECT_EQ(flat_kept, 39 * 41);   // every vertex of the flat part up to 2 mm from the fold
+  EXPECT_GE(dropped, 2 * 40 * 6);  // at least six of the flap's eight rows of cells
+  for (const auto& t : flap.triangles)
+    for (int k = 0; k < 3; ++k) ASSERT_LT(static_cast<size_t>(t[k]), flap.vertices.size());
+
+  TriangleMesh flat = GridSheet(40, 40, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
+  EXPECT_EQ(TrimCurledBorders(&flat, o), 0);
+  TriangleMesh crease = GridSheet(
+      80, 40, [](int i, int j) { return i <= 40 ? Eigen::Vector3d(i, j, 0) : Eigen::Vector3d(40, j, -(i - 40)); });
+  EXPECT_EQ(TrimCurledBorders(&crease, o), 0);
+  TriangleMesh off = GridSheet(48, 40, [fold](int i, int j) {
+    const double s = std::max(0, i - 40);
+    return Eigen::Vector3d(std::min(i, 40) + s * std::cos(fold), j, -s * std::sin(fold));
+  });
+  CurledBorderOptions none = o;
+  none.max_rings = 0;
+  EXPECT_EQ(TrimCurledBorders(&off, none), 0);
+
+  CurledBorderOptions bad = o;
+  bad.max_angle_deg = 90;
+  bad.radius_mm = 0;
+  bad.min_offset_mm = -1;
+  EXPECT_FALSE(ValidateCurledBorderOptions(bad, &why));
+  for (const char* field : {"max_angle_deg", "radius_mm", "min_offset_mm"})
+    EXPECT_NE(why.find(field), std::string::npos) << why;
 }
 
 TEST(MarchingCubes, EmptyAndDegenerateInput) {

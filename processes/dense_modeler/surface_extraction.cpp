@@ -77,6 +77,8 @@ bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   if (!(o.min_component_fraction >= 0 && o.min_component_fraction < 1))
     e << "min_component_fraction must be in [0, 1); ";
   if (o.border_rings < 0 || o.border_rings > 10) e << "ridge border_rings must be in 0..10; ";
+  std::string curl_why;
+  if (!ValidateCurledBorderOptions(o.curled_borders, &curl_why)) e << curl_why;
   if (!(o.smoothing_min_normal_cos >= -1 && o.smoothing_min_normal_cos < 1))
     e << "ridge smoothing_min_normal_cos must be in [-1, 1); ";
   if (!(o.smoothing_radius == 0 || (o.smoothing_radius >= 1 && o.smoothing_radius <= 12)))

@@ -37,6 +37,7 @@ struct RidgeOptions {
   double min_component_fraction = 0.01;  // fragments with fewer voxels than this fraction of the largest one are
                                          // dropped, and after carving mesh pieces with fewer triangles than this
                                          // fraction of the largest (0 = off), [0, 1)
+  CurledBorderOptions curled_borders;    // curled rims peeled off the mesh's open borders first (marching_cubes.h)
   int border_rings = 1;                  // rings of triangles peeled off the mesh's open borders, where the surface
                                          // points of a hole's rim bend off the surface (0 = off), 0..10
   double smoothing_radius = 8.0;         // voxels, radius of the vote-weighted local surface fit of SmoothSurfacePoints
@@ -60,6 +61,7 @@ struct RidgeStats {
   int64_t fragments_dropped = 0;         // voxels in dropped fragments
   int64_t mesh_triangles_dropped = 0;    // triangles of mesh pieces under min_component_fraction of the largest
                                          // (BuildFinalModel, after carving)
+  int64_t curled_triangles_dropped = 0;  // triangles of curled rims peeled off the open borders (BuildFinalModel)
   int64_t border_triangles_dropped = 0;  // triangles peeled off the mesh's open borders (BuildFinalModel)
   int64_t kept = 0;
 };
