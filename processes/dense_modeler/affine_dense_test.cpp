@@ -379,7 +379,9 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
         "search border\n",
         c.h, c.search, c.step, c.image, ref.size(), near_edge,
         static_cast<long long>(ref_stats.rejected_refine_border));
-    if (c.search > 5) EXPECT_GT(near_edge, 20);
+    if (c.search > 5) {
+      EXPECT_GT(near_edge, 20);
+    }
     for (const int kernel : {0, 2, 3}) {
       o.refine_kernel = kernel;
       DensePairStats st;

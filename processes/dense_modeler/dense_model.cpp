@@ -161,7 +161,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
     // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
-    // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a border ring or in a small piece).
+    // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a curled rim or a border ring, or in a
+    // small piece).
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(model.mesh.vertices.size());
     for (const Eigen::Vector3f& v : model.mesh.vertices) vertices.push_back(v.cast<double>());

@@ -84,8 +84,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   CurledBorderOptions* cb = &m->ridge.curled_borders;
   p.Add("curl-max-rings", &cb->max_rings, "passes peeling curled rims off the mesh's open borders at most (0 = off)");
   p.Add("curl-max-angle", &cb->max_angle_deg,
-        "deg, a border vertex whose normal is farther than this from every interior normal near it is curled");
-  p.Add("curl-radius", &cb->radius_mm, "mm, radius of the interior vertices a border vertex is compared with");
+        "deg, a border triangle whose normal is farther than this from every interior normal near it is curled");
+  p.Add("curl-radius", &cb->radius_mm, "mm, interior vertices within this of a border triangle's centroid count");
   p.Add("curl-interior-rings", &cb->interior_rings, "rings from the border beyond which a mesh vertex is interior");
   p.Add("curl-min-offset", &cb->min_offset_mm,
         "mm, a curled border triangle also lies this far off the nearest interior vertex's tangent plane");
@@ -545,13 +545,13 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
-            std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
-            std::to_string(model.ridge.mesh_triangles_dropped) + " triangles in small mesh pieces dropped, " +
+            std::to_string(model.ridge.fragments_dropped) +
+            " in small fragments dropped; mesh: " + std::to_string(model.visibility.vertices_removed) +
+            " vertices hidden in " + std::to_string(model.visibility.views) + " views removed, " +
             std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
-            std::to_string(model.visibility.vertices_removed) + " mesh vertices hidden in " +
-            std::to_string(model.visibility.views) + " views removed, " + std::to_string(model.voxels_without_mesh) +
-            " voxels off the final mesh dropped");
+            std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
+            std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +

@@ -33,8 +33,8 @@
 // pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
 // target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
 // final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_carved,
-// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s. Handlers run inside
-// Bus::Handle() on the caller's thread; not thread-safe.
+// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s.
+// Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>

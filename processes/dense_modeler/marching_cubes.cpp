@@ -300,7 +300,7 @@ bool ValidateCurledBorderOptions(const CurledBorderOptions& o, std::string* why)
   if (o.max_rings < 0 || o.max_rings > 50) e += "curl max_rings must be in 0..50; ";
   if (!(o.max_angle_deg > 0 && o.max_angle_deg < 90)) e += "curl max_angle_deg must be in (0, 90); ";
   if (!(o.radius_mm > 0) || !std::isfinite(o.radius_mm)) e += "curl radius_mm must be > 0; ";
-  if (o.interior_rings < 1 || o.interior_rings > 50) e += "curl interior_rings must be in 1..50; ";
+  if (o.interior_rings < 2 || o.interior_rings > 50) e += "curl interior_rings must be in 2..50; ";
   if (!(o.min_offset_mm >= 0) || !std::isfinite(o.min_offset_mm)) e += "curl min_offset_mm must be >= 0; ";
   if (why) *why = e;
   return e.empty();
@@ -382,7 +382,10 @@ int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
       grid.ForEachWithin(centroid, o.radius_mm, [&](int i) {
         agrees = agrees || interior_normal[i].dot(nf) >= min_cos;
         const double d2 = (interior[i] - centroid).squaredNorm();
-        if (nearest < 0 || d2 < nearest_d2) nearest = i, nearest_d2 = d2;
+        if (nearest < 0 || d2 < nearest_d2) {
+          nearest = i;
+          nearest_d2 = d2;
+        }
       });
       if (nearest >= 0 && !agrees &&
           std::abs(interior_normal[nearest].cast<double>().dot(centroid - interior[nearest])) >= o.min_offset_mm) {

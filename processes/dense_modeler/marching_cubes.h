@@ -61,18 +61,23 @@ int64_t TrimMeshBorder(TriangleMesh* mesh, int rings);
 
 // The rim of a hole where the surface points run out often bends off the surface (a flap of a few mm, folded by
 // 30-90 deg: the last points' normals are poorly determined). A border triangle (touching a vertex on an edge used
-// by one triangle) is curled when no interior vertex (at least interior_rings rings from every border) within
-// radius_mm of its centroid has a normal within max_angle_deg of the triangle's; one with no interior vertex that
-// near (a strip) is left alone. Triangles, not vertices, are tested so that a crease reaching a border (whose
-// vertex normals are the mean of both faces) stays.
+// by one triangle) is curled when (1) no interior vertex (at least interior_rings rings from every border) within
+// radius_mm of its centroid has a normal within max_angle_deg of the triangle's, and (2) its centroid lies at least
+// min_offset_mm off the tangent plane of the nearest of those interior vertices. A border triangle with no interior
+// vertex that near (a strip) is left alone, and so is one of zero area (its neighbours' fate decides; the border
+// ring and small-piece filters take what is left). Normals are signed: the mesh must be consistently oriented, and a
+// rim folded back by more than 90 deg counts as curled. Triangles, not vertices, are tested so that a crease reaching
+// a border (whose vertex normals are the mean of both faces) stays; the offset keeps most of a narrow strip between
+// a crease and a hole, which lies near the other face's tangent plane. Rings count mesh edges while radius_mm is a
+// length: radius_mm must exceed interior_rings rings at the mesh's edge length (~1 mm at 2 mm voxels).
 struct CurledBorderOptions {
   int max_rings = 10;           // passes at most; each drops the curled border triangles (0 = off), 0..50
-  double max_angle_deg = 20.0;  // deg, a border triangle whose normal is farther than this from every interior
-                                // normal near it is curled, (0, 90)
-  double radius_mm = 16.0;      // mm, interior vertices this close count (> 0)
-  int interior_rings = 8;       // rings from the border beyond which a vertex is interior: longer than a flap, 1..50
-  double min_offset_mm = 1.5;   // mm, and whose centroid lies at least this far off the tangent plane of the
-                                // nearest interior vertex (a strip on the other face of a crease lies near it), >= 0
+  double max_angle_deg = 20.0;  // deg, (1): a border triangle's normal farther than this from every interior
+                                // normal near it, (0, 90)
+  double radius_mm = 16.0;      // mm, interior vertices within this distance of the triangle's centroid count (> 0)
+  int interior_rings = 8;       // rings from the border beyond which a vertex is interior: longer than a flap, 2..50
+  double min_offset_mm = 1.5;   // mm, (2): the centroid's distance off the nearest interior vertex's tangent plane,
+                                // >= 0
 };
 
 bool ValidateCurledBorderOptions(const CurledBorderOptions& options, std::string* why);

@@ -180,6 +180,10 @@ TEST(SurfaceExtractionTest, EmptyInputAndOptions) {
   bad_smoothing.smoothing_radius = 0.5;
   EXPECT_FALSE(ValidateRidgeOptions(bad_smoothing, &why));
   EXPECT_NE(why.find("smoothing_radius"), std::string::npos);
+  RidgeOptions bad_curl;
+  bad_curl.curled_borders.max_angle_deg = 0;
+  EXPECT_FALSE(ValidateRidgeOptions(bad_curl, &why));
+  EXPECT_NE(why.find("curl max_angle_deg"), std::string::npos);
   EXPECT_TRUE(SmoothSurfacePoints({}, 2.0, 4.0).empty());
 }
 
