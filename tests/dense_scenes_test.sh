@@ -46,9 +46,11 @@ scene() {
   check "$name mesh completeness" "$(value completeness "$d/mesh.txt")" ">=" 0.95 target
 }
 
-# Measured (seed 1, 200 frames) since 1 Dec, evening (curled hole rims peeled, marching_cubes.h): box mesh p90 0.966,
-# max 4.14, voxels 1.26, completeness 0.953 / 0.924; cylinder 0.965, 6.69, 1.29, 0.970 / 0.943; mesh (blob) 0.905,
-# 5.32, 1.29, 0.911 / 0.898. Before (hidden mesh parts removed, floor clearance 4 mm with the floor band,
+# Measured (seed 1, 200 frames) since 1 Dec, evening (curled hole rims peeled, marching_cubes.h; votes recomputed
+# with the final poses): box mesh p90 0.962, max 5.78, voxels 1.26, completeness 0.952 / 0.923; cylinder 0.959,
+# 6.72, 1.27, 0.970 / 0.944; mesh (blob) 0.904, 5.23, 1.28, 0.914 / 0.900. Without the re-vote: box 0.966, 4.14
+# (the re-vote lets a 19-vertex piece 5.8 mm inside one wall through), 1.26, 0.953 / 0.924; cylinder 0.965, 6.69,
+# 1.29, 0.970 / 0.943; blob 0.905, 5.32, 1.29, 0.911 / 0.898. Before (hidden mesh parts removed, floor clearance 4 mm with the floor band,
 # floor hypothesis in junction triangles, voxels follow the mesh, crease-preserving surface fit, one border ring
 # peeled): box mesh p90 0.971, max 4.13, voxels 1.26, completeness 0.956 / 0.925; cylinder 0.972, 6.68, 1.29,
 # 0.972 / 0.943; mesh (blob) 0.907, 9.88, 1.29, 0.911 / 0.897. Before the surface fit and border peeling: box 1.035,
@@ -65,7 +67,7 @@ scene() {
 # cylinder 2.21, 1.52; blob 2.48, 1.44.) The box's and cylinder's largest errors are points inside the object near
 # its creases (box edges, cylinder rim: triangles spanning a crease put points on the chord), the blob's are under
 # its overhang next to the floor.
-scene box 1.3 6.0 1.5 0.92 0.90
+scene box 1.3 7.0 1.5 0.92 0.90
 scene cylinder 1.25 8.0 1.5 0.94 0.92
 scene mesh 1.2 7.0 1.5 0.89 0.87
 

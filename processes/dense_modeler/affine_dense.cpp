@@ -1023,4 +1023,43 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   return finish();
 }
 
+std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& cam_a, const Eigen::Isometry3d& world_from_a,
+                                                const PinholeCamera& cam_b, const Eigen::Isometry3d& world_from_b,
+                                                const std::vector<DenseMatch>& matches, const AffineDenseOptions& o,
+                                                int64_t* rejected) {
+  std::vector<DensePoint> points;
+  if (rejected) *rejected = static_cast<int64_t>(matches.size());
+  const Eigen::Vector3d center_a = world_from_a.translation(), center_b = world_from_b.translation();
+  if (!cam_a.IsValid() || !cam_b.IsValid() || (center_a - center_b).norm() < 1e-9) return points;
+  const Eigen::Matrix3d rwa = world_from_a.linear(), rwb = world_from_b.linear();
+  const Eigen::Isometry3d a_from_world = world_from_a.inverse(), b_from_world = world_from_b.inverse();
+  const AngleLimit angle_limit(o.min_triangulation_angle_deg * kDegToRad);
+  const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
+  points.reserve(matches.size());
+  for (const DenseMatch& m : matches) {
+    const Eigen::Vector2d p = m.pixel_a.cast<double>(), q = m.pixel_b.cast<double>();
+    const Eigen::Vector3d da = (rwa * cam_a.Unproject(p).homogeneous()).normalized();
+    const Eigen::Vector3d db = (rwb * cam_b.Unproject(q).homogeneous()).normalized();
+    Eigen::Vector3d x;
+    double cos_angle = 0;
+    Eigen::Vector2d pa_re, pb_re;
+    if (!MidpointCos(center_a, da, center_b, db, &x, &cos_angle) || angle_limit.Below(cos_angle) ||
+        !cam_a.Project(a_from_world * x, &pa_re) || !cam_b.Project(b_from_world * x, &pb_re) ||
+        (pa_re - p).norm() > o.max_reprojection_px || (pb_re - q).norm() > o.max_reprojection_px)
+      continue;
+    if ((o.use_world_box && !((x.array() >= o.box_min.array()).all() && (x.array() <= o.box_max.array()).all())) ||
+        !o.region.Contains(x))
+      continue;
+    DensePoint dp;
+    dp.point_in_world = x;
+    dp.pixel_a = m.pixel_a;
+    dp.pixel_b = m.pixel_b;
+    dp.toward_camera = (cameras_mid - x).normalized().cast<float>();
+    dp.bgr = m.bgr;
+    points.push_back(dp);
+  }
+  if (rejected) *rejected = static_cast<int64_t>(matches.size() - points.size());
+  return points;
+}
+
 }  // namespace objscan

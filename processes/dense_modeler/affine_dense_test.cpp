@@ -224,6 +224,57 @@ TEST(AffineDense, MatchesBeyondTheRefinementSearchAreRejected) {
   EXPECT_LT(exact.rejected_refine_border, 0.02 * static_cast<double>(kept_exact.size()));
 }
 
+// The pixel pairs of a dense pair triangulated again: with the same poses they give the same points; with both
+// poses scaled about the origin (the same epipolar geometry) the points scale alike and none is rejected; with B moved
+// 3 mm sideways the new epipolar geometry no longer explains the matches and the reprojection check rejects them.
+TEST(AffineDense, TriangulateDenseMatchesWithOtherPoses) {
+  PlaneScene scene{Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 900.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.linear() = Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  pb.translation() = Eigen::Vector3d(110, 10, 5);
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const AffineDenseOptions o;
+  const std::vector<DensePoint> pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
+  ASSERT_GT(pts.size(), 50000u);
+  std::vector<DenseMatch> matches;
+  for (const DensePoint& p : pts) matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+  int64_t rejected = -1;
+  const std::vector<DensePoint> same =
+      TriangulateDenseMatches(scene.camera, pa, scene.camera, pb, matches, o, &rejected);
+  EXPECT_EQ(rejected, 0);
+  ASSERT_EQ(same.size(), pts.size());
+  double worst = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    worst = std::max(worst, (same[i].point_in_world - pts[i].point_in_world).norm());
+    ASSERT_EQ(same[i].bgr, pts[i].bgr);
+    ASSERT_EQ(same[i].pixel_a, pts[i].pixel_a);
+  }
+  EXPECT_LT(worst, 1e-3);  // mm; the kept pixels are floats (ComputeDensePair triangulated the double ones)
+
+  Eigen::Isometry3d sa = pa, sb = pb;
+  sa.translation() *= 1.03;
+  sb.translation() *= 1.03;
+  const std::vector<DensePoint> scaled =
+      TriangulateDenseMatches(scene.camera, sa, scene.camera, sb, matches, o, &rejected);
+  EXPECT_EQ(rejected, 0);
+  ASSERT_EQ(scaled.size(), pts.size());
+  worst = 0;
+  for (size_t i = 0; i < pts.size(); ++i)
+    worst = std::max(worst, (scaled[i].point_in_world - 1.03 * pts[i].point_in_world).norm());
+  EXPECT_LT(worst, 1e-3);
+
+  Eigen::Isometry3d moved = pb;
+  moved.translation().y() += 3.0;  // perpendicular to the baseline: the epipolar lines move by ~3 px
+  const std::vector<DensePoint> off =
+      TriangulateDenseMatches(scene.camera, pa, scene.camera, moved, matches, o, &rejected);
+  EXPECT_EQ(static_cast<size_t>(rejected) + off.size(), matches.size());
+  EXPECT_LT(off.size(), matches.size() / 10);
+
+  EXPECT_TRUE(TriangulateDenseMatches(scene.camera, pa, scene.camera, pa, matches, o, &rejected).empty());
+  EXPECT_EQ(rejected, static_cast<int64_t>(matches.size()));
+}
+
 TEST(AffineDense, TriangulateMidpointAndDegenerateInput) {
   Eigen::Vector3d x;
   ASSERT_TRUE(TriangulateMidpoint(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(100, 0, 0),

@@ -42,6 +42,10 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "px, skip pairs whose median landmark reprojection error exceeds this (0 = off)");
   p.Add("voxel-map-every", &o->voxel_map_every, "pairs between VOXEL_MAP publications");
   p.Add("max-map-voxels", &o->max_map_voxels, "voxels per VOXEL_MAP message at most");
+  p.Add("revote-final-poses", &o->revote_final_poses,
+        "final phase: triangulate every pair's pixel matches again with the final poses and vote them anew");
+  p.Add("max-stored-matches", &o->max_stored_matches,
+        "pixel matches kept for the re-vote at most (20 bytes each; beyond, the live votes are kept)");
   p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
   p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
@@ -173,6 +177,7 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.voxel_map_every < 1) e << "voxel-map-every must be >= 1; ";
   if (o.max_map_voxels < 1) e << "max-map-voxels must be >= 1; ";
   if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving-downsample must be in [1, 8]; ";
+  if (o.max_stored_matches < 0) e << "max-stored-matches must be >= 0; ";
   if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
   {
@@ -469,6 +474,24 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       ComputeDensePair(a, b, MatchTracks(*pa.tracks, *slot.tracks), DenseOptionsForNow(), &stats);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
+  if (options_.revote_final_poses && stored_complete_) {
+    if (stored_matches_ + static_cast<int64_t>(points.size()) > options_.max_stored_matches) {
+      stored_complete_ = false;
+      std::vector<StoredPair>().swap(stored_pairs_);
+      LogWarning("more than " + std::to_string(options_.max_stored_matches) +
+                 " pixel matches (max-stored-matches): the final phase will keep the live votes");
+    } else {
+      StoredPair sp;
+      sp.seq_a = a.seq;
+      sp.seq_b = b.seq;
+      sp.world_from_a = a.world_from_camera;
+      sp.world_from_b = b.world_from_camera;
+      sp.matches.reserve(points.size());
+      for (const DensePoint& p : points) sp.matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+      stored_matches_ += static_cast<int64_t>(points.size());
+      stored_pairs_.push_back(std::move(sp));
+    }
+  }
   const int64_t end_us = MonotonicMicros();
   ++pairs_done_;
   dense_points_ += static_cast<int64_t>(points.size());
@@ -515,6 +538,36 @@ void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final
     LogWarning("publishing on " + options_.voxel_map_channel + " failed");
 }
 
+void DenseModelerNode::RevoteWithFinalPoses() {
+  if (!options_.revote_final_poses || !camera_ || final_poses_.empty()) return;
+  if (!stored_complete_) {
+    LogWarning("final votes: the live ones (the pairs' matches exceeded max-stored-matches)");
+    return;
+  }
+  VoxelVoteGrid fresh(options_.model.votes);
+  const AffineDenseOptions dense = DenseOptionsForNow();
+  int64_t with_final = 0, points = 0, rejected = 0;
+  for (const StoredPair& sp : stored_pairs_) {
+    auto fa = final_poses_.find(sp.seq_a), fb = final_poses_.find(sp.seq_b);
+    const bool final_pair = fa != final_poses_.end() && fb != final_poses_.end();
+    int64_t pair_rejected = 0;
+    const std::vector<DensePoint> pts =
+        TriangulateDenseMatches(*camera_, final_pair ? fa->second : sp.world_from_a, *camera_,
+                                final_pair ? fb->second : sp.world_from_b, sp.matches, dense, &pair_rejected);
+    fresh.AddPoints(pts);
+    with_final += final_pair;
+    points += static_cast<int64_t>(pts.size());
+    rejected += pair_rejected;
+  }
+  LogInfo("final votes: " + std::to_string(stored_pairs_.size()) + " pairs triangulated again (" +
+          std::to_string(with_final) + " with final poses), " + std::to_string(points) + " points, " +
+          std::to_string(rejected) + " matches the new poses reject; live grid " + std::to_string(grid_.total_votes()) +
+          " votes, new " + std::to_string(fresh.total_votes()));
+  status_.SetValue("final_revoted_pairs", static_cast<double>(with_final));
+  status_.SetValue("final_revote_rejected", static_cast<double>(rejected));
+  grid_ = std::move(fresh);
+}
+
 void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (finished_) return;
   const int64_t start_us = MonotonicMicros();
@@ -541,6 +594,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   } else {
     LogWarning("no region of interest: the model is not restricted");
   }
+  RevoteWithFinalPoses();
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +

@@ -16,12 +16,14 @@
 // (at most max_carving_views; when full, every second one is dropped, deterministic).
 // Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at most max_map_voxels, strongest
 // first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and control_t COMMAND_FINISHED.
-// Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed at this process):
-// seeds = voxels over the threshold (inside the target box when known), space carving with the stored views,
-// using the final poses of CAMERA_POSE_FINAL where they arrived (votes are NOT recomputed with final poses: the
-// full-resolution images are gone by then), marching tetrahedra mesh, files written to output_dir (when set).
-// COMMAND_SNAPSHOT writes the vote grid to control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown
-// saves output_dir/votes_snapshot.bin when output_dir is set.
+// Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed at this process): with
+// revote_final_poses and any CAMERA_POSE_FINAL pose, every pair's pixel matches (kept, 20 bytes each, up to
+// max_stored_matches) are triangulated again with the final poses (a pair lacking one keeps its live poses) and
+// voted into a fresh grid, which replaces the live one; seeds = voxels over the threshold (inside the target box
+// when known), space carving with the stored views, using the final poses where they arrived, marching tetrahedra
+// mesh, files written to output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the
+// re-voted one) to control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves
+// output_dir/votes_snapshot.bin when output_dir is set.
 // Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated",
 // adapter reasons for images/camera info/tracks/poses, "image: no camera_info yet", "image: wrong size" (differs from
 // camera_info), "tracks: malformed", "pose: malformed", "final pose: malformed", "pose: unknown frame" (no image
@@ -33,7 +35,8 @@
 // pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
 // target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
 // final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_carved,
-// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s.
+// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,
+// final_revoted_pairs and final_revote_rejected (pairs triangulated with final poses, matches they rejected).
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
@@ -86,6 +89,10 @@ struct DenseModelerNodeOptions {
                                                          // error in either frame exceeds this (stale pose; 0 = off)
   int voxel_map_every = 10;                              // pairs between VOXEL_MAP publications (>= 1)
   int max_map_voxels = 200000;                           // voxels per VOXEL_MAP message at most (>= 1)
+  bool revote_final_poses = true;                        // final phase: triangulate every pair's pixel matches again
+                                                         // with the final poses and vote them into a fresh grid
+  int max_stored_matches = 8000000;                      // pixel matches kept for that at most (20 bytes each; when
+                                                         // exceeded, the final phase keeps the live votes), >= 0
   int carving_downsample = 2;                            // integer downsampling of the images kept for carving (>= 1)
   int max_carving_views = 200;                           // images kept for carving at most (>= 2)
   bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
@@ -138,6 +145,12 @@ class DenseModelerNode : public Node {
     int64_t seq = 0;
     CarvingView view;
   };
+  struct StoredPair {  // a dense pair's pixel matches, for the final phase's re-triangulation
+    int64_t seq_a = 0, seq_b = 0;
+    Eigen::Isometry3d world_from_a = Eigen::Isometry3d::Identity();  // mm, the live poses it was matched with
+    Eigen::Isometry3d world_from_b = Eigen::Isometry3d::Identity();
+    std::vector<DenseMatch> matches;
+  };
 
   void OnImage(const image_t& msg);
   void OnCameraInfo(const camera_info_t& msg);
@@ -151,6 +164,9 @@ class DenseModelerNode : public Node {
   FrameSlot& Slot(int64_t seq);
   void TryProcess(int64_t seq);
   void PublishVoxelMap(int64_t utime, int64_t seq, bool is_final, const std::vector<VoxelRecord>* final_voxels);
+  // Final phase: replaces grid_ by the stored pairs' matches triangulated with the final poses (the live ones for
+  // frames without) when revote_final_poses is set and every pair was stored.
+  void RevoteWithFinalPoses();
   bool SaveSnapshot(const std::string& path);
   AffineDenseOptions DenseOptionsForNow() const;
 
@@ -161,6 +177,9 @@ class DenseModelerNode : public Node {
   std::optional<PinholeCamera> camera_;
   std::map<int64_t, FrameSlot> frames_;
   std::vector<StoredView> carving_views_;
+  std::vector<StoredPair> stored_pairs_;  // every pair so far while stored_complete_
+  int64_t stored_matches_ = 0;
+  bool stored_complete_ = true;  // false once max_stored_matches was exceeded (stored_pairs_ freed)
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
   bool have_box_ = false;  // confirmed TARGET box
   Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();
