@@ -1035,11 +1035,15 @@ std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& cam_a, cons
   const Eigen::Isometry3d a_from_world = world_from_a.inverse(), b_from_world = world_from_b.inverse();
   const AngleLimit angle_limit(o.min_triangulation_angle_deg * kDegToRad);
   const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
+  const Eigen::Matrix3d essential = EssentialMatrix(world_from_a, world_from_b);
   points.reserve(matches.size());
   for (const DenseMatch& m : matches) {
     const Eigen::Vector2d p = m.pixel_a.cast<double>(), q = m.pixel_b.cast<double>();
-    const Eigen::Vector3d da = (rwa * cam_a.Unproject(p).homogeneous()).normalized();
-    const Eigen::Vector3d db = (rwb * cam_b.Unproject(q).homogeneous()).normalized();
+    const Eigen::Vector2d na = cam_a.Unproject(p), nb = cam_b.Unproject(q);
+    const Eigen::Vector3d nb_line = essential * na.homogeneous();
+    if (EpipolarFar(nb_line, std::abs(nb_line.dot(nb.homogeneous())), cam_b.fx, o.epipolar_threshold_px)) continue;
+    const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();
+    const Eigen::Vector3d db = (rwb * nb.homogeneous()).normalized();
     Eigen::Vector3d x;
     double cos_angle = 0;
     Eigen::Vector2d pa_re, pb_re;

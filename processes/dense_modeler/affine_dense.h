@@ -136,7 +136,7 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* 
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
                                          const AffineDenseOptions& options, DensePairStats* stats = nullptr);
 
-// The pixel pair of a dense point, kept to triangulate it again later (20 bytes instead of DensePoint's 64).
+// The pixel pair of a dense point, kept to triangulate it again later (20 bytes instead of DensePoint's 56).
 struct DenseMatch {
   Eigen::Vector2f pixel_a = Eigen::Vector2f::Zero();  // px, P in A
   Eigen::Vector2f pixel_b = Eigen::Vector2f::Zero();  // px, Q in B
@@ -144,10 +144,10 @@ struct DenseMatch {
 };
 
 // The dense points of matches (ComputeDensePair's pixel pairs) triangulated with other poses of the same two views,
-// e.g. the pose solver's final poses: ray midpoint and ComputeDensePair's checks after matching (triangulation angle,
-// reprojection error in A and B, which also rejects pairs the new poses' epipolar geometry no longer explains, world
-// box, region). Output in input order; *rejected (optional) gets the number dropped. Empty for coincident centres or
-// invalid cameras. Never throws.
+// e.g. the pose solver's final poses: ComputeDensePair's geometric checks with the new poses (Q within
+// epipolar_threshold_px of P's epipolar line, triangulation angle, reprojection error in A and B, world box, region;
+// the radiance checks belong to the images and are not redone). Output in input order; *rejected (optional) gets the
+// number dropped. Empty for coincident centres or invalid cameras. Never throws.
 std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& camera_a, const Eigen::Isometry3d& world_from_a,
                                                 const PinholeCamera& camera_b, const Eigen::Isometry3d& world_from_b,
                                                 const std::vector<DenseMatch>& matches,

@@ -474,7 +474,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       ComputeDensePair(a, b, MatchTracks(*pa.tracks, *slot.tracks), DenseOptionsForNow(), &stats);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
-  if (options_.revote_final_poses && stored_complete_) {
+  if (options_.revote_final_poses && !options_.final_pose_channel.empty() && stored_complete_) {
     if (stored_matches_ + static_cast<int64_t>(points.size()) > options_.max_stored_matches) {
       stored_complete_ = false;
       std::vector<StoredPair>().swap(stored_pairs_);
@@ -484,6 +484,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       StoredPair sp;
       sp.seq_a = a.seq;
       sp.seq_b = b.seq;
+      sp.camera = *camera_;
       sp.world_from_a = a.world_from_camera;
       sp.world_from_b = b.world_from_camera;
       sp.matches.reserve(points.size());
@@ -539,33 +540,52 @@ void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final
 }
 
 void DenseModelerNode::RevoteWithFinalPoses() {
-  if (!options_.revote_final_poses || !camera_ || final_poses_.empty()) return;
+  status_.SetValue("final_revoted_pairs", 0);
+  status_.SetValue("final_revote_rejected", 0);
+  status_.SetValue("final_revote_s", 0);
+  if (!options_.revote_final_poses || options_.final_pose_channel.empty()) return;
   if (!stored_complete_) {
     LogWarning("final votes: the live ones (the pairs' matches exceeded max-stored-matches)");
     return;
   }
+  const int64_t start_us = MonotonicMicros();
+  std::vector<StoredPair> pairs;
+  pairs.swap(stored_pairs_);  // freed on return
   VoxelVoteGrid fresh(options_.model.votes);
   const AffineDenseOptions dense = DenseOptionsForNow();
   int64_t with_final = 0, points = 0, rejected = 0;
-  for (const StoredPair& sp : stored_pairs_) {
+  for (const StoredPair& sp : pairs) {
     auto fa = final_poses_.find(sp.seq_a), fb = final_poses_.find(sp.seq_b);
     const bool final_pair = fa != final_poses_.end() && fb != final_poses_.end();
     int64_t pair_rejected = 0;
     const std::vector<DensePoint> pts =
-        TriangulateDenseMatches(*camera_, final_pair ? fa->second : sp.world_from_a, *camera_,
+        TriangulateDenseMatches(sp.camera, final_pair ? fa->second : sp.world_from_a, sp.camera,
                                 final_pair ? fb->second : sp.world_from_b, sp.matches, dense, &pair_rejected);
     fresh.AddPoints(pts);
     with_final += final_pair;
     points += static_cast<int64_t>(pts.size());
     rejected += pair_rejected;
   }
-  LogInfo("final votes: " + std::to_string(stored_pairs_.size()) + " pairs triangulated again (" +
-          std::to_string(with_final) + " with final poses), " + std::to_string(points) + " points, " +
-          std::to_string(rejected) + " matches the new poses reject; live grid " + std::to_string(grid_.total_votes()) +
-          " votes, new " + std::to_string(fresh.total_votes()));
-  status_.SetValue("final_revoted_pairs", static_cast<double>(with_final));
+  const double seconds = (MonotonicMicros() - start_us) * 1e-6;
+  const std::string counts = std::to_string(pairs.size()) + " pairs, " + std::to_string(with_final) +
+                             " with final poses: " + std::to_string(points) + " points, " + std::to_string(rejected) +
+                             " matches rejected (final region, epipolar, angle, reprojection); live grid " +
+                             std::to_string(grid_.total_votes()) + " votes, new " + std::to_string(fresh.total_votes());
   status_.SetValue("final_revote_rejected", static_cast<double>(rejected));
+  status_.SetValue("final_revote_s", seconds);
+  if (with_final == 0) {
+    LogInfo("final votes: the live ones (no pair has final poses)");
+    return;
+  }
+  if (2 * fresh.total_votes() < grid_.total_votes()) {
+    LogWarning("final votes: the live ones, the final poses keep too few (" + counts + ")");
+    return;
+  }
+  LogInfo("final votes recomputed in " + std::to_string(seconds) + " s: " + counts);
+  status_.SetValue("final_revoted_pairs", static_cast<double>(with_final));
   grid_ = std::move(fresh);
+  status_.SetValue("voxels", static_cast<double>(grid_.num_voxels()));
+  status_.SetValue("votes", static_cast<double>(grid_.total_votes()));
 }
 
 void DenseModelerNode::RunFinalPhase(int64_t utime) {

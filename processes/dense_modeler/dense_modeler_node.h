@@ -17,9 +17,11 @@
 // Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at most max_map_voxels, strongest
 // first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and control_t COMMAND_FINISHED.
 // Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed at this process): with
-// revote_final_poses and any CAMERA_POSE_FINAL pose, every pair's pixel matches (kept, 20 bytes each, up to
-// max_stored_matches) are triangulated again with the final poses (a pair lacking one keeps its live poses) and
-// voted into a fresh grid, which replaces the live one; seeds = voxels over the threshold (inside the target box
+// revote_final_poses and a final_pose_channel, every pair's pixel matches (kept, 20 bytes each, up to
+// max_stored_matches) are triangulated again with the final poses where both frames have one (else with the live
+// poses) and the geometric checks, the final region included, and voted into a fresh grid, which replaces the live
+// one unless no pair had final poses or it holds under half the live votes (then a warning; the live grid stays);
+// seeds = voxels over the threshold (inside the target box
 // when known), space carving with the stored views, using the final poses where they arrived, marching tetrahedra
 // mesh, files written to output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the
 // re-voted one) to control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves
@@ -36,7 +38,8 @@
 // target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
 // final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_carved,
 // final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,
-// final_revoted_pairs and final_revote_rejected (pairs triangulated with final poses, matches they rejected).
+// final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
+// (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s.
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
@@ -147,6 +150,7 @@ class DenseModelerNode : public Node {
   };
   struct StoredPair {  // a dense pair's pixel matches, for the final phase's re-triangulation
     int64_t seq_a = 0, seq_b = 0;
+    PinholeCamera camera;                                            // the intrinsics it was matched with
     Eigen::Isometry3d world_from_a = Eigen::Isometry3d::Identity();  // mm, the live poses it was matched with
     Eigen::Isometry3d world_from_b = Eigen::Isometry3d::Identity();
     std::vector<DenseMatch> matches;

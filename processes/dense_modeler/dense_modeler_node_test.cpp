@@ -208,6 +208,9 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
   double error_mm[2] = {0, 0};
   for (const bool revote : {true, false}) {
     out_ = Collected();
+    auto bus = MakeLcmBus("memq://");  // the bus cannot unsubscribe: a fresh one per node
+    bus_.swap(bus);
+    SetUp();
     DenseModelerNodeOptions options = options_;
     options.revote_final_poses = revote;
     DenseModelerNode node(*bus_, options);
@@ -293,8 +296,12 @@ TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
       PublishInfo();
       const auto features = scene_.SurfacePoints(1000);
       for (int i = 0; i < 6; ++i) PublishFrame(i, 24, features);
+      for (int i = 0; i < 4; ++i) PublishFinalPose(i, 24);  // re-vote: pairs 0-1 to 2-3 final, 3-4 and 4-5 live
+      Drain();
       PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
     }
+    ASSERT_FALSE(out_.statuses.empty());
+    EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revoted_pairs"), 3);
     for (const auto& m : out_.maps) {
       std::vector<uint8_t> buf(m.getEncodedSize());
       m.encode(buf.data(), 0, static_cast<int>(buf.size()));
