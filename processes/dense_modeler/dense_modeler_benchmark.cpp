@@ -60,6 +60,21 @@ void BM_DensePairSphereRefineKernel(benchmark::State& state) {
 }
 BENCHMARK(BM_DensePairSphereRefineKernel)->DenseRange(1, 3)->Unit(benchmark::kMillisecond);
 
+// The final phase's re-triangulation of one pair's kept matches with other poses (here: the same ones).
+void BM_TriangulateDenseMatchesPair(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  const AffineDenseOptions o;
+  std::vector<DenseMatch> matches;
+  for (const DensePoint& p : ComputeDensePair(d.a, d.b, d.matches, o)) matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+  size_t points = 0;
+  for (auto _ : state)
+    points = TriangulateDenseMatches(d.a.camera, d.a.world_from_camera, d.b.camera, d.b.world_from_camera, matches, o)
+                 .size();
+  state.counters["matches"] = static_cast<double>(matches.size());
+  state.counters["points"] = static_cast<double>(points);
+}
+BENCHMARK(BM_TriangulateDenseMatchesPair)->Unit(benchmark::kMillisecond);
+
 void BM_VotePair(benchmark::State& state) {
   const PairData& d = SpherePair();
   const auto points = ComputeDensePair(d.a, d.b, d.matches, AffineDenseOptions());
@@ -164,6 +179,39 @@ void BM_MeshVisibility(benchmark::State& state) {
   state.counters["removed"] = static_cast<double>(st.vertices_removed);
 }
 BENCHMARK(BM_MeshVisibility)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// Curled-rim peeling (marching_cubes.h) on the sphere's mesh with 80 holes of 4-8 mm punched into it and its lower
+// quarter cut off: the border test, the rings, the interior grid and the normal test of every border triangle,
+// pass after pass until none is curled (holes punched into a smooth surface have few curled triangles, so this is
+// close to the cost of the first passes; the sim orbit's meshes need up to 10).
+void BM_TrimCurledBorders(benchmark::State& state) {
+  const VoxelVoteGrid& grid = NoisySphereGrid();
+  TriangleMesh mesh =
+      MeshFromSurfacePoints(ExtractVoteRidge(grid, grid.Extract(16), RidgeOptions()), grid.voxel_size());
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<size_t> pick(0, mesh.vertices.size() - 1);
+  std::uniform_real_distribution<float> radius(4.f, 8.f);
+  std::vector<std::pair<Eigen::Vector3f, float>> holes;
+  for (int i = 0; i < 80; ++i) holes.emplace_back(mesh.vertices[pick(rng)], radius(rng));
+  std::vector<char> keep(mesh.triangles.size(), 1);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Eigen::Vector3f c = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
+                               mesh.vertices[mesh.triangles[t][2]]) /
+                              3.f;
+    if (c.z() < 50) keep[t] = 0;
+    for (const auto& [centre, r] : holes)
+      if ((c - centre).norm() < r) keep[t] = 0;
+  }
+  KeepMeshTriangles(&mesh, keep);
+  int64_t dropped = 0;
+  for (auto _ : state) {
+    TriangleMesh copy = mesh;
+    dropped = TrimCurledBorders(&copy, CurledBorderOptions());
+  }
+  state.counters["vertices"] = static_cast<double>(mesh.vertices.size());
+  state.counters["dropped"] = static_cast<double>(dropped);
+}
+BENCHMARK(BM_TrimCurledBorders)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 }  // namespace objscan
