@@ -128,6 +128,59 @@ inline bool EpipolarFar(const Eigen::Vector3d& line, double dot_abs, double fx, 
   return !(line_norm > 0) || dot_abs / line_norm * fx > threshold;
 }
 
+// Triangulation of a matched pixel pair of two posed views with the checks after matching (ComputeDensePair's and
+// TriangulateDenseMatches'): ray midpoint, triangulation angle, reprojection error in A and B, world box, region.
+class PairTriangulator {
+ public:
+  enum Result { kAccepted, kRejectedTriangulation, kRejectedBox };
+
+  PairTriangulator(const PinholeCamera& cam_a, const Eigen::Isometry3d& world_from_a, const PinholeCamera& cam_b,
+                   const Eigen::Isometry3d& world_from_b, const AffineDenseOptions& o)
+      : cam_a_(cam_a),
+        cam_b_(cam_b),
+        o_(o),
+        center_a_(world_from_a.translation()),
+        center_b_(world_from_b.translation()),
+        cameras_mid_(0.5 * (center_a_ + center_b_)),
+        rwa_(world_from_a.linear()),
+        rwb_(world_from_b.linear()),
+        a_from_world_(world_from_a.inverse()),
+        b_from_world_(world_from_b.inverse()),
+        angle_limit_(o.min_triangulation_angle_deg * kDegToRad) {}
+
+  // p in A, q in B (px) with na = cam_a.Unproject(p), nb = cam_b.Unproject(q); on acceptance sets out's point,
+  // pixels and toward_camera (not its colour).
+  Result Triangulate(const Eigen::Vector2d& p, const Eigen::Vector2d& na, const Eigen::Vector2d& q,
+                     const Eigen::Vector2d& nb, DensePoint* out) const {
+    const Eigen::Vector3d da = (rwa_ * na.homogeneous()).normalized();
+    const Eigen::Vector3d db = (rwb_ * nb.homogeneous()).normalized();
+    Eigen::Vector3d x;
+    double cos_angle = 0;
+    Eigen::Vector2d pa_re, pb_re;
+    if (!MidpointCos(center_a_, da, center_b_, db, &x, &cos_angle) || angle_limit_.Below(cos_angle) ||
+        !cam_a_.Project(a_from_world_ * x, &pa_re) || !cam_b_.Project(b_from_world_ * x, &pb_re) ||
+        (pa_re - p).norm() > o_.max_reprojection_px || (pb_re - q).norm() > o_.max_reprojection_px)
+      return kRejectedTriangulation;
+    if ((o_.use_world_box && !((x.array() >= o_.box_min.array()).all() && (x.array() <= o_.box_max.array()).all())) ||
+        !o_.region.Contains(x))
+      return kRejectedBox;
+    out->point_in_world = x;
+    out->pixel_a = p.cast<float>();
+    out->pixel_b = q.cast<float>();
+    out->toward_camera = (cameras_mid_ - x).normalized().cast<float>();
+    return kAccepted;
+  }
+
+ private:
+  const PinholeCamera& cam_a_;
+  const PinholeCamera& cam_b_;
+  const AffineDenseOptions& o_;
+  const Eigen::Vector3d center_a_, center_b_, cameras_mid_;
+  const Eigen::Matrix3d rwa_, rwb_;
+  const Eigen::Isometry3d a_from_world_, b_from_world_;
+  const AngleLimit angle_limit_;
+};
+
 constexpr int kMaxHalfWindow = 10;  // ValidateAffineDenseOptions' limit of ncc_half_window
 constexpr int kMaxSide = 2 * kMaxHalfWindow + 1;
 
@@ -784,8 +837,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   points.clear();
   const PinholeCamera& cam_a = a.camera;
   const PinholeCamera& cam_b = b.camera;
-  const AngleLimit angle_limit(min_angle);
-  const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
+  const PairTriangulator triangulator(cam_a, a.world_from_camera, cam_b, b.world_from_camera, o);
   const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
   WindowA window_a;
   std::vector<double>& scores = scratch.scores;
@@ -988,27 +1040,16 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
             }
           }
         }
-        const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();
-        const Eigen::Vector3d db = (rwb * cam_b.Unproject(q).homogeneous()).normalized();
-        Eigen::Vector3d x;
-        double cos_angle = 0;
-        Eigen::Vector2d pa_re, pb_re;
-        if (!MidpointCos(center_a, da, center_b, db, &x, &cos_angle) || angle_limit.Below(cos_angle) ||
-            !cam_a.Project(a_from_world * x, &pa_re) || !cam_b.Project(b_from_world * x, &pb_re) ||
-            (pa_re - p).norm() > o.max_reprojection_px || (pb_re - q).norm() > o.max_reprojection_px) {
+        DensePoint dp;
+        const PairTriangulator::Result result = triangulator.Triangulate(p, na, q, cam_b.Unproject(q), &dp);
+        if (result == PairTriangulator::kRejectedTriangulation) {
           ++stats.rejected_triangulation;
           continue;
         }
-        if ((o.use_world_box && !((x.array() >= o.box_min.array()).all() && (x.array() <= o.box_max.array()).all())) ||
-            !o.region.Contains(x)) {
+        if (result == PairTriangulator::kRejectedBox) {
           ++stats.rejected_box;
           continue;
         }
-        DensePoint dp;
-        dp.point_in_world = x;
-        dp.pixel_a = p.cast<float>();
-        dp.pixel_b = q.cast<float>();
-        dp.toward_camera = (cameras_mid - x).normalized().cast<float>();
         const uint8_t* pa = a.image.ptr<uint8_t>(v) + u * channels;
         for (int k = 0; k < 3; ++k) dp.bgr[k] = pa[channels == 3 ? k : 0];
         points.push_back(dp);
@@ -1029,12 +1070,9 @@ std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& cam_a, cons
                                                 int64_t* rejected) {
   std::vector<DensePoint> points;
   if (rejected) *rejected = static_cast<int64_t>(matches.size());
-  const Eigen::Vector3d center_a = world_from_a.translation(), center_b = world_from_b.translation();
-  if (!cam_a.IsValid() || !cam_b.IsValid() || (center_a - center_b).norm() < 1e-9) return points;
-  const Eigen::Matrix3d rwa = world_from_a.linear(), rwb = world_from_b.linear();
-  const Eigen::Isometry3d a_from_world = world_from_a.inverse(), b_from_world = world_from_b.inverse();
-  const AngleLimit angle_limit(o.min_triangulation_angle_deg * kDegToRad);
-  const Eigen::Vector3d cameras_mid = 0.5 * (center_a + center_b);
+  if (!cam_a.IsValid() || !cam_b.IsValid() || (world_from_a.translation() - world_from_b.translation()).norm() < 1e-9)
+    return points;
+  const PairTriangulator triangulator(cam_a, world_from_a, cam_b, world_from_b, o);
   const Eigen::Matrix3d essential = EssentialMatrix(world_from_a, world_from_b);
   points.reserve(matches.size());
   for (const DenseMatch& m : matches) {
@@ -1042,23 +1080,8 @@ std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& cam_a, cons
     const Eigen::Vector2d na = cam_a.Unproject(p), nb = cam_b.Unproject(q);
     const Eigen::Vector3d nb_line = essential * na.homogeneous();
     if (EpipolarFar(nb_line, std::abs(nb_line.dot(nb.homogeneous())), cam_b.fx, o.epipolar_threshold_px)) continue;
-    const Eigen::Vector3d da = (rwa * na.homogeneous()).normalized();
-    const Eigen::Vector3d db = (rwb * nb.homogeneous()).normalized();
-    Eigen::Vector3d x;
-    double cos_angle = 0;
-    Eigen::Vector2d pa_re, pb_re;
-    if (!MidpointCos(center_a, da, center_b, db, &x, &cos_angle) || angle_limit.Below(cos_angle) ||
-        !cam_a.Project(a_from_world * x, &pa_re) || !cam_b.Project(b_from_world * x, &pb_re) ||
-        (pa_re - p).norm() > o.max_reprojection_px || (pb_re - q).norm() > o.max_reprojection_px)
-      continue;
-    if ((o.use_world_box && !((x.array() >= o.box_min.array()).all() && (x.array() <= o.box_max.array()).all())) ||
-        !o.region.Contains(x))
-      continue;
     DensePoint dp;
-    dp.point_in_world = x;
-    dp.pixel_a = m.pixel_a;
-    dp.pixel_b = m.pixel_b;
-    dp.toward_camera = (cameras_mid - x).normalized().cast<float>();
+    if (triangulator.Triangulate(p, na, q, nb, &dp) != PairTriangulator::kAccepted) continue;
     dp.bgr = m.bgr;
     points.push_back(dp);
   }

@@ -86,6 +86,19 @@ Errors Check(const PlaneScene& scene, const Eigen::Isometry3d& pa, const Eigen::
   return e;
 }
 
+// A plane tilted against view A (identity pose) and view B rotated 0.12 rad about y and moved 110 mm.
+struct TiltedPlanePair {
+  PlaneScene scene{Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 900.0};
+  Eigen::Isometry3d pa = Eigen::Isometry3d::Identity(), pb = Eigen::Isometry3d::Identity();
+  DenseView a, b;
+  TiltedPlanePair() {
+    pb.linear() = Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    pb.translation() = Eigen::Vector3d(110, 10, 5);
+    a = View(scene.camera, pa, scene.Render(pa));
+    b = View(scene.camera, pb, scene.Render(pb));
+  }
+};
+
 TEST(AffineDense, AffineMapExactOnFrontoParallelPlane) {
   PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
   const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
@@ -106,12 +119,10 @@ TEST(AffineDense, AffineMapExactOnFrontoParallelPlane) {
 }
 
 TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
-  PlaneScene scene{Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 900.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.linear() = Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  pb.translation() = Eigen::Vector3d(110, 10, 5);
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const TiltedPlanePair t;
+  const PlaneScene& scene = t.scene;
+  const Eigen::Isometry3d &pa = t.pa, &pb = t.pb;
+  const DenseView &a = t.a, &b = t.b;
   AffineDenseOptions o;
   o.refine_along_epipolar = false;  // the raw mapping (refinement is tested on its own)
   o.mapping = static_cast<int>(DenseMapping::kPlane);
@@ -228,12 +239,10 @@ TEST(AffineDense, MatchesBeyondTheRefinementSearchAreRejected) {
 // poses scaled about the origin (the same epipolar geometry) the points scale alike and none is rejected; with B moved
 // 3 mm sideways the new epipolar geometry no longer explains the matches and the reprojection check rejects them.
 TEST(AffineDense, TriangulateDenseMatchesWithOtherPoses) {
-  PlaneScene scene{Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 900.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.linear() = Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  pb.translation() = Eigen::Vector3d(110, 10, 5);
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const TiltedPlanePair t;
+  const PlaneScene& scene = t.scene;
+  const Eigen::Isometry3d &pa = t.pa, &pb = t.pb;
+  const DenseView &a = t.a, &b = t.b;
   const AffineDenseOptions o;
   const std::vector<DensePoint> pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
   ASSERT_GT(pts.size(), 50000u);

@@ -133,12 +133,7 @@ class NodeFixture : public ::testing::Test {
 TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   DenseModelerNode node(*bus_, options_);
   PublishInfo();
-  target_t target{};
-  target.state = target_t::STATE_CONFIRMED;
-  target.frame = "world";
-  target.center_mm[2] = 100;
-  target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 200;
-  bus_->PublishMessage("TARGET", target);
+  PublishTarget();
   const int n = 16;
   const auto features = scene_.SurfacePoints(2000);
   for (int i = 0; i <= n; ++i) PublishFrame(i, n, features);  // frame n closes the ring (same pose as 0)
@@ -148,14 +143,7 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_GT(out_.maps.back().num_voxels, 1000);
   EXPECT_FALSE(node.Finished());
   // Final poses (here the same true poses) for half of the frames: used by the carving.
-  for (int i = 0; i <= n; i += 2) {
-    CameraPoseEstimate est;
-    est.seq = i;
-    est.utime = std::llround(i * 1e6 / 30);
-    est.world_from_camera = scene_.RingPose(i, n);
-    est.status = PoseStatus::kTracking;
-    bus_->PublishMessage("CAMERA_POSE_FINAL", PoseToMessage(est));
-  }
+  for (int i = 0; i <= n; i += 2) PublishFinalPose(i, n);
   Drain();
   PublishControl(+control_t::COMMAND_FINISHED, "tracker");  // not the awaited sender
   EXPECT_FALSE(node.final_phase_done());

@@ -295,6 +295,20 @@ int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
   return KeepMeshTriangles(mesh, keep);
 }
 
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh, const std::vector<char>* keep) {
+  std::vector<Eigen::Vector3f> normals(mesh.vertices.size(), Eigen::Vector3f::Zero());
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+    if (keep && !(*keep)[i]) continue;
+    const auto& t = mesh.triangles[i];
+    const Eigen::Vector3f n =
+        (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+  }
+  for (Eigen::Vector3f& n : normals)
+    if (n.squaredNorm() > 0) n.normalize();
+  return normals;
+}
+
 bool ValidateCurledBorderOptions(const CurledBorderOptions& o, std::string* why) {
   std::string e;
   if (o.max_rings < 0 || o.max_rings > 50) e += "curl max_rings must be in 0..50; ";
@@ -310,26 +324,16 @@ int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
   if (o.max_rings <= 0 || mesh->triangles.empty()) return 0;
   const size_t n = mesh->vertices.size();
   const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * M_PI / 180.0));
-  std::vector<char> keep(mesh->triangles.size(), 1), border, used(n);
+  std::vector<char> keep(mesh->triangles.size(), 1), border;
   std::vector<int> ring_of(n);
-  std::vector<Eigen::Vector3f> normal(n);
   std::vector<int32_t> first(n + 1), adjacent, frontier, next;  // vertex adjacency of the kept triangles (CSR)
   for (int pass = 0; pass < o.max_rings; ++pass) {
     if (!MarkBorderVertices(*mesh, keep, &border)) break;
-    std::fill(normal.begin(), normal.end(), Eigen::Vector3f::Zero());
-    std::fill(used.begin(), used.end(), 0);
+    const std::vector<Eigen::Vector3f> normal = VertexNormals(*mesh, &keep);  // zero for unused vertices
     std::fill(first.begin(), first.end(), 0);
-    for (size_t t = 0; t < keep.size(); ++t) {
-      if (!keep[t]) continue;
-      const auto& tri = mesh->triangles[t];
-      const Eigen::Vector3f area_normal =
-          (mesh->vertices[tri[1]] - mesh->vertices[tri[0]]).cross(mesh->vertices[tri[2]] - mesh->vertices[tri[0]]);
-      for (int k = 0; k < 3; ++k) {
-        normal[tri[k]] += area_normal;
-        used[tri[k]] = 1;
-        first[tri[k] + 1] += 2;
-      }
-    }
+    for (size_t t = 0; t < keep.size(); ++t)
+      if (keep[t])
+        for (int k = 0; k < 3; ++k) first[mesh->triangles[t][k] + 1] += 2;
     for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
     adjacent.resize(first[n]);
     std::vector<int32_t> fill(first.begin(), first.end() - 1);
@@ -362,9 +366,9 @@ int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
     std::vector<Eigen::Vector3d> interior;
     std::vector<Eigen::Vector3f> interior_normal;
     for (size_t v = 0; v < n; ++v)
-      if (used[v] && ring_of[v] >= o.interior_rings && normal[v].squaredNorm() > 0) {
+      if (ring_of[v] >= o.interior_rings && normal[v].squaredNorm() > 0) {
         interior.push_back(mesh->vertices[v].cast<double>());
-        interior_normal.push_back(normal[v].normalized());
+        interior_normal.push_back(normal[v]);
       }
     const PointGrid grid(interior, o.radius_mm);
     bool any = false;

@@ -45,6 +45,10 @@ TriangleMesh MeshFromVoxels(const std::vector<CarvedVoxel>& voxels, double voxel
 // True when every undirected edge is used by exactly two triangles with opposite directions (closed, oriented).
 bool IsClosedOrientedMesh(const TriangleMesh& mesh);
 
+// Area-weighted unit vertex normals of the triangles (of those t with (*keep)[t] when keep is given; triangles are
+// oriented inside -> outside); zero for vertices no such triangle uses (or whose triangles have zero area).
+std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh, const std::vector<char>* keep = nullptr);
+
 // Keeps the triangles t with keep[t] (one flag per triangle), in their order, and the vertices they use, renumbered
 // in the order the kept triangles first use them. Returns the triangles dropped; the mesh is unchanged when none is.
 int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep);

@@ -23,19 +23,6 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// Area-weighted vertex normals (triangles are oriented inside -> outside); zero for unused vertices.
-std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh) {
-  std::vector<Eigen::Vector3f> normals(mesh.vertices.size(), Eigen::Vector3f::Zero());
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3f n =
-        (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    for (int k = 0; k < 3; ++k) normals[t[k]] += n;
-  }
-  for (Eigen::Vector3f& n : normals)
-    if (n.squaredNorm() > 0) n.normalize();
-  return normals;
-}
-
 struct Projected {
   float u = 0, v = 0, z = -1;  // px, px, mm (z <= 0: not in front of the camera)
 };
