@@ -7,7 +7,9 @@
 //       --align first maps the model with the Sim(3) that aligns the estimated trajectory to the true one;
 //       --visible-from POSES.txt keeps only truth points seen by >= --min-views (2) of those cameras in the
 //       completeness set (--intrinsics fx,fy,cx,cy,w,h; default the sim's 800,800,319.5,239.5,640,480), so
-//       completeness is measured on the visible surface (needs truth normals). Accuracy is always against the whole
+//       completeness is measured on the visible surface (needs truth normals); a truth point hidden from a camera by
+//       other truth points (z-buffer, see VisibleSurfacePoints) does not count as seen by it (--no-occlusion: facing
+//       and in the image is enough, the figure before 1 Dec night; exact for convex objects only). Accuracy is always against the whole
 //       true surface (a model point on a part no camera saw is still on the surface); visible_accuracy_* repeat it
 //       against the completeness set only (the stricter figure the tests used before 29 Nov).
 //       --write-aligned FILE writes the model points as scored (after --align; "x y z" per line, truth frame) and
@@ -42,7 +44,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
-                 "[--align EST TRUTH] [--visible-from POSES] [--min-views N] [--intrinsics fx,fy,cx,cy,w,h]\n");
+                 "[--align EST TRUTH] [--visible-from POSES] [--min-views N] [--no-occlusion] [--intrinsics fx,fy,cx,cy,w,h]\n");
     return 2;
   }
   const std::string command = argv[1];
@@ -75,6 +77,7 @@ int main(int argc, char** argv) {
     std::string align_est, align_truth, visible_from, write_aligned, write_visible;
     ViewIntrinsics intrinsics;
     int min_views = 2;
+    bool occlusion = true;
     for (int i = 4; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--threshold" && i + 1 < argc)
@@ -85,6 +88,8 @@ int main(int argc, char** argv) {
         visible_from = argv[++i];
       else if (a == "--min-views" && i + 1 < argc)
         min_views = std::atoi(argv[++i]);
+      else if (a == "--no-occlusion")
+        occlusion = false;
       else if (a == "--intrinsics" && i + 1 < argc) {
         if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
                         &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
@@ -109,7 +114,7 @@ int main(int argc, char** argv) {
     } else {
       std::vector<StampedPose> views;
       if (!ReadTumTrajectory(visible_from, &views, &error)) return Fail(error);
-      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, 0.1);
+      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, 0.1, occlusion);
     }
     for (int i : candidates)
       if (truth[i].z() >= min_z) visible.push_back(truth[i]);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <unordered_map>
 
@@ -225,27 +226,51 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
 std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points,
                                       const std::vector<Eigen::Vector3d>& normals,
                                       const std::vector<StampedPose>& cameras, const ViewIntrinsics& intrinsics,
-                                      int min_views, double min_cos) {
+                                      int min_views, double min_cos, bool occlusion, double occlusion_tolerance) {
   std::vector<int> visible;
-  if (points.size() != normals.size()) return visible;
-  std::vector<Eigen::Isometry3d> camera_from_world;
-  camera_from_world.reserve(cameras.size());
-  for (const auto& c : cameras) camera_from_world.push_back(c.world_from_camera.inverse());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d n = normals[i].normalized();
-    int views = 0;
-    for (size_t k = 0; k < cameras.size() && views < min_views; ++k) {
-      const Eigen::Vector3d to_camera = cameras[k].world_from_camera.translation() - points[i];
-      if (n.dot(to_camera) < min_cos * to_camera.norm()) continue;
-      const Eigen::Vector3d p = camera_from_world[k] * points[i];
-      if (p.z() <= 0) continue;
+  if (points.size() != normals.size() || intrinsics.width <= 0 || intrinsics.height <= 0) return visible;
+  const int width = intrinsics.width, height = intrinsics.height;
+  std::vector<int> views(points.size(), 0);
+  std::vector<float> depth_buffer;
+  std::vector<int> pixel(points.size());
+  std::vector<double> depth(points.size());
+  for (const StampedPose& camera : cameras) {
+    const Eigen::Isometry3d camera_from_world = camera.world_from_camera.inverse();
+    const Eigen::Vector3d center = camera.world_from_camera.translation();
+    // Projections (nearest pixel) of every point in front of the camera and inside the image, and the z-buffer.
+    if (occlusion) depth_buffer.assign(static_cast<size_t>(width) * height, std::numeric_limits<float>::infinity());
+    for (size_t i = 0; i < points.size(); ++i) {
+      pixel[i] = -1;
+      const Eigen::Vector3d p = camera_from_world * points[i];
+      if (!(p.z() > 0)) continue;
       const double u = intrinsics.fx * p.x() / p.z() + intrinsics.cx;
       const double v = intrinsics.fy * p.y() / p.z() + intrinsics.cy;
-      if (u < 0 || v < 0 || u > intrinsics.width - 1 || v > intrinsics.height - 1) continue;
-      ++views;
+      if (!(u >= 0 && v >= 0 && u <= width - 1 && v <= height - 1)) continue;
+      pixel[i] = static_cast<int>(std::lround(v) * width + std::lround(u));
+      depth[i] = p.z();
+      if (occlusion) {
+        float& d = depth_buffer[static_cast<size_t>(pixel[i])];
+        d = std::min(d, static_cast<float>(p.z()));
+      }
     }
-    if (views >= min_views) visible.push_back(static_cast<int>(i));
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (pixel[i] < 0) continue;
+      const Eigen::Vector3d n = normals[i].normalized();
+      const Eigen::Vector3d to_camera = center - points[i];
+      const double cos_angle = n.dot(to_camera) / to_camera.norm();
+      if (!(cos_angle >= min_cos)) continue;
+      if (occlusion && cos_angle > 0) {  // (a point seen from behind, min_cos <= 0, has no footprint bound)
+        // Within one pixel a surface seen at angle θ from its normal spans footprint·tan θ of depth.
+        const double tan_angle = std::sqrt(std::max(0.0, 1 - cos_angle * cos_angle)) / cos_angle;
+        const double footprint = depth[i] / intrinsics.fx;  // units per pixel at the point's depth
+        const double tolerance = occlusion_tolerance + footprint * (1 + tan_angle);
+        if (depth[i] > depth_buffer[static_cast<size_t>(pixel[i])] + tolerance) continue;
+      }
+      ++views[i];
+    }
   }
+  for (size_t i = 0; i < points.size(); ++i)
+    if (views[i] >= min_views) visible.push_back(static_cast<int>(i));
   return visible;
 }
 

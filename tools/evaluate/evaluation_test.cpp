@@ -161,6 +161,53 @@ TEST(EvaluationTest, VisibleSurfacePointsKeepsTheCapFacingTheCameras) {
   std::vector<StampedPose> one(cameras.begin(), cameras.begin() + 1);
   EXPECT_TRUE(VisibleSurfacePoints(points, normals, one, intrinsics, 2, 0.1).empty());
   EXPECT_FALSE(VisibleSurfacePoints(points, normals, one, intrinsics, 1, 0.1).empty());
+  // Convex: no point hides another, so the occlusion test keeps exactly the facing set, up to grazing angles.
+  EXPECT_EQ(VisibleSurfacePoints(points, normals, cameras, intrinsics, 2, 0.1, false), visible);
+}
+
+// A grid of points facing the camera (a wall 1000 mm away, 0.5 mm spacing: denser than the pixels) with a
+// smaller plate 100 mm in front of its centre: the wall's points behind the plate are hidden, the rest of the wall
+// and the whole plate are seen; without the occlusion test everything facing the camera counts. A wall seen at 80°
+// (grazing) does not hide itself.
+TEST(EvaluationTest, VisibleSurfacePointsHidesPointsBehindOthers) {
+  std::vector<Eigen::Vector3d> points, normals;
+  std::vector<int> kind;  // 0 = wall behind the plate, 1 = wall elsewhere, 2 = plate, 3 = near the shadow's edge
+  for (double x = -150; x <= 150; x += 0.5)
+    for (double y = -100; y <= 100; y += 0.5) {
+      points.emplace_back(x, y, 1000);
+      normals.emplace_back(0, 0, -1);
+      // The plate's shadow on the wall: |x|, |y| < 40 mm; 2 mm either side of its edge are not scored (pixels).
+      const double r = std::max(std::abs(x), std::abs(y));
+      kind.push_back(r < 38 ? 0 : r > 42 ? 1 : 3);
+    }
+  for (double x = -36; x <= 36; x += 0.5)
+    for (double y = -36; y <= 36; y += 0.5) {
+      points.emplace_back(x, y, 900);
+      normals.emplace_back(0, 0, -1);
+      kind.push_back(2);
+    }
+  StampedPose camera;  // at the origin looking along +z
+  const std::vector<StampedPose> cameras{camera};
+  ViewIntrinsics intrinsics;
+  std::vector<int> count(4, 0), total(4, 0);
+  for (int k : kind) ++total[k];
+  for (int i : VisibleSurfacePoints(points, normals, cameras, intrinsics, 1, 0.1)) ++count[kind[i]];
+  EXPECT_EQ(count[0], 0);
+  EXPECT_EQ(count[1], total[1]);
+  EXPECT_EQ(count[2], total[2]);
+  EXPECT_EQ(VisibleSurfacePoints(points, normals, cameras, intrinsics, 1, 0.1, false).size(), points.size());
+
+  // The same wall turned by 80° about y (seen at 80° from its normal): all of it stays visible.
+  std::vector<Eigen::Vector3d> tilted, tilted_normals;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(80 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  for (double x = -150; x <= 150; x += 0.5)
+    for (double y = -100; y <= 100; y += 0.5) {
+      tilted.push_back(Eigen::Vector3d(0, 0, 1000) + turn * Eigen::Vector3d(x, y, 0));
+      tilted_normals.push_back(turn * Eigen::Vector3d(0, 0, -1));
+    }
+  const size_t facing = VisibleSurfacePoints(tilted, tilted_normals, cameras, intrinsics, 1, 0.1, false).size();
+  EXPECT_GT(facing, tilted.size() / 2);
+  EXPECT_EQ(VisibleSurfacePoints(tilted, tilted_normals, cameras, intrinsics, 1, 0.1).size(), facing);
 }
 
 }  // namespace
