@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
     } else {
       std::vector<StampedPose> views;
       if (!ReadTumTrajectory(visible_from, &views, &error)) return Fail(error);
-      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, 0.1, occlusion);
+      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, /*min_cos=*/0.1, occlusion);
     }
     for (int i : candidates)
       if (truth[i].z() >= min_z) visible.push_back(truth[i]);

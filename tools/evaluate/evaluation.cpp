@@ -230,41 +230,46 @@ std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points
   std::vector<int> visible;
   if (points.size() != normals.size() || intrinsics.width <= 0 || intrinsics.height <= 0) return visible;
   const int width = intrinsics.width, height = intrinsics.height;
+  constexpr double kMaxTanAngle = 10.0;  // the grazing term's bound (84.3 deg; also for points seen from behind)
+  const double min_focal = std::min(intrinsics.fx, intrinsics.fy);
   std::vector<int> views(points.size(), 0);
   std::vector<float> depth_buffer;
-  std::vector<int> pixel(points.size());
-  std::vector<double> depth(points.size());
+  std::vector<int> pixel_index(points.size());  // -1 = behind the camera or outside the image
+  std::vector<double> camera_depth(points.size());
   for (const StampedPose& camera : cameras) {
     const Eigen::Isometry3d camera_from_world = camera.world_from_camera.inverse();
     const Eigen::Vector3d center = camera.world_from_camera.translation();
     // Projections (nearest pixel) of every point in front of the camera and inside the image, and the z-buffer.
     if (occlusion) depth_buffer.assign(static_cast<size_t>(width) * height, std::numeric_limits<float>::infinity());
     for (size_t i = 0; i < points.size(); ++i) {
-      pixel[i] = -1;
+      pixel_index[i] = -1;
       const Eigen::Vector3d p = camera_from_world * points[i];
       if (!(p.z() > 0)) continue;
       const double u = intrinsics.fx * p.x() / p.z() + intrinsics.cx;
       const double v = intrinsics.fy * p.y() / p.z() + intrinsics.cy;
       if (!(u >= 0 && v >= 0 && u <= width - 1 && v <= height - 1)) continue;
-      pixel[i] = static_cast<int>(std::lround(v) * width + std::lround(u));
-      depth[i] = p.z();
+      pixel_index[i] = static_cast<int>(std::lround(v) * width + std::lround(u));
+      camera_depth[i] = p.z();
       if (occlusion) {
-        float& d = depth_buffer[static_cast<size_t>(pixel[i])];
+        float& d = depth_buffer[static_cast<size_t>(pixel_index[i])];
         d = std::min(d, static_cast<float>(p.z()));
       }
     }
     for (size_t i = 0; i < points.size(); ++i) {
-      if (pixel[i] < 0) continue;
+      if (pixel_index[i] < 0) continue;
       const Eigen::Vector3d n = normals[i].normalized();
       const Eigen::Vector3d to_camera = center - points[i];
       const double cos_angle = n.dot(to_camera) / to_camera.norm();
       if (!(cos_angle >= min_cos)) continue;
-      if (occlusion && cos_angle > 0) {  // (a point seen from behind, min_cos <= 0, has no footprint bound)
-        // Within one pixel a surface seen at angle θ from its normal spans footprint·tan θ of depth.
-        const double tan_angle = std::sqrt(std::max(0.0, 1 - cos_angle * cos_angle)) / cos_angle;
-        const double footprint = depth[i] / intrinsics.fx;  // units per pixel at the point's depth
-        const double tolerance = occlusion_tolerance + footprint * (1 + tan_angle);
-        if (depth[i] > depth_buffer[static_cast<size_t>(pixel[i])] + tolerance) continue;
+      if (occlusion) {
+        // Two points in one pixel are up to sqrt(2) footprints apart across the image; a surface seen at angle θ
+        // from its normal changes depth by tan θ per unit of that.
+        const double tan_angle =
+            cos_angle > 0 ? std::min(kMaxTanAngle, std::sqrt(std::max(0.0, 1 - cos_angle * cos_angle)) / cos_angle)
+                          : kMaxTanAngle;
+        const double footprint = camera_depth[i] / min_focal;  // units per pixel at the point's depth
+        const double tolerance = occlusion_tolerance + footprint * (1 + std::sqrt(2.0) * tan_angle);
+        if (camera_depth[i] > depth_buffer[static_cast<size_t>(pixel_index[i])] + tolerance) continue;
       }
       ++views[i];
     }

@@ -48,16 +48,15 @@ struct ViewIntrinsics {
 
 // Indices of the surface points (with outward normals) seen by at least min_views of the cameras: in front of the
 // camera, inside the image, facing it (cosine between normal and direction to the camera >= min_cos) and, with
-// occlusion on, not hidden by the other points: every camera gets a z-buffer of all points (nearest pixel, nearest
-// depth), and a point is hidden when its pixel holds a depth closer than its own by more than occlusion_tolerance
-// (units of the points, e.g. mm) + one pixel's footprint × (1 + tan θ), θ the angle between its normal and the
-// view ray (within one pixel a surface seen at a grazing angle spans that much depth: it must not hide itself; an
-// occluder that close in depth is missed, so the set stays an over-estimate at grazing angles). Tangent-plane
-// depths instead (the depth where the pixel's centre ray meets each point's plane) were tried: nearly edge-on planes
-// swing by centimetres within a pixel and hid 0.26 % of a convex sphere.
-// Needs points denser than the pixels for the z-buffer to be closed (else occluded points show through the gaps:
-// the visible set is over-estimated, completeness on it conservative). Without occlusion the set is exact only for
-// convex objects (sphere, box, cylinder).
+// occlusion on, not hidden by the other points. Every camera gets a z-buffer of all points (nearest pixel, nearest
+// camera-frame depth z); a point is hidden when its pixel holds a depth closer than its own by more than
+// occlusion_tolerance (units of the points; 1.0 = 1 mm for objscan) + footprint × (1 + √2 · min(tan θ, 10)), with
+// footprint = z / min(fx, fy) (a pixel's size at the point) and θ the angle between its normal and the direction to
+// the camera: within one pixel a surface seen at a grazing angle spans that much depth and must not hide itself
+// (points seen from behind, min_cos <= 0, get the bound 10). An occluder that close in depth is missed, and with
+// points sparser than the pixels occluded points show through the gaps: in both cases the visible set is an
+// over-estimate and completeness on it conservative. Without occlusion the set is exact only for convex objects.
+// Points or normals with NaN are never visible. Units: the points', poses world_from_camera, intrinsics in px.
 std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points,
                                       const std::vector<Eigen::Vector3d>& normals,
                                       const std::vector<StampedPose>& cameras, const ViewIntrinsics& intrinsics,
