@@ -889,7 +889,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
       const Eigen::Vector3d w0 = a.world_from_camera * vertex_in_a[idx[0]],
                             w1 = a.world_from_camera * vertex_in_a[idx[1]],
                             w2 = a.world_from_camera * vertex_in_a[idx[2]];
-      if (o.region.TriangleOutside(w0, w1, w2, o.region_slack_mm)) {
+      if (o.region.TriangleOutside(w0, w1, w2, o.region_slack_mm) ||
+          (o.skip_floor_triangles && o.region.TriangleOnFloor(w0, w1, w2))) {
         ++stats.triangles_skipped_region;
         continue;
       }

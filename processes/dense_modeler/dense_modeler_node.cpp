@@ -118,6 +118,7 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-refine", &d->refine_along_epipolar, "refine Q by a 1-D NCC search along the epipolar line");
   p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
   p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
+  p.Add("dense-skip-floor-triangles", &d->skip_floor_triangles, "skip triangles whose vertices all lie on the floor");
   p.Add("dense-reject-refine-at-border", &d->reject_refine_at_border,
         "drop pixels whose best refined match is at the end of the search");
   p.Add("dense-min-triangle-area", &d->min_triangle_area_px2, "px^2, smaller triangles are skipped");

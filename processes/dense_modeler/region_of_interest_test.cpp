@@ -215,6 +215,12 @@ TEST(RegionOfInterestTest, FloorJunctionTriangles) {
   EXPECT_TRUE(r.TriangleSpansFloorJunction(high, low, higher));    // order does not matter
   EXPECT_FALSE(r.TriangleSpansFloorJunction(high, higher, Eigen::Vector3d(1, 1, 12)));  // all on the object
   EXPECT_FALSE(r.TriangleSpansFloorJunction(floor, low, Eigen::Vector3d(1, 1, 8)));     // all low
+  // On the floor: every vertex less than half the clearance (5 mm) above it.
+  EXPECT_TRUE(r.TriangleOnFloor(floor, Eigen::Vector3d(10, 0, -1), Eigen::Vector3d(0, 10, 4.9)));
+  EXPECT_FALSE(r.TriangleOnFloor(floor, low, Eigen::Vector3d(0, 10, 5.1)));  // one vertex higher
+  EXPECT_FALSE(r.TriangleOnFloor(floor, high, higher));                     // a junction
+  r.has_floor = false;
+  EXPECT_FALSE(r.TriangleOnFloor(floor, floor, floor));  // no floor known
 }
 
 }  // namespace
