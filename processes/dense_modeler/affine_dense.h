@@ -102,9 +102,10 @@ struct AffineDenseOptions {
   // plane would put in the air):
   double junction_floor_ncc_margin = 0.1;         // NCC units, <= 2 (< 0 = off)
   double junction_floor_min_separation_px = 1.0;  // px, >= 0
-  bool skip_floor_triangles = true;     // triangles with every vertex on the floor (region with a floor: less than
-                                        // half the floor clearance above it) are skipped: their points would all
-                                        // fall under the clearance (half of a sim pair's pixels went that way)
+  bool skip_floor_triangles = true;     // triangles with every vertex on the floor (RegionOfInterest::
+                                        // TriangleOnFloor) are skipped: almost all their points fall under the
+                                        // clearance (half of a sim pair's pixels went that way), the rest are
+                                        // floor mismatches
   double region_slack_mm = 10.0;        // mm, a triangle is skipped only when its vertices are this far outside
   double region_image_margin_px = 8.0;  // px, margin around the region's projected box in A
 };
@@ -125,7 +126,7 @@ struct DensePairStats {
   int64_t rejected_triangulation = 0;    // small angle, behind a camera or reprojection error
   int64_t rejected_box = 0;              // outside the world box or the region
   int64_t rejected_floor_ambiguous = 0;  // floor-junction pixel that the floor plane explains as well
-  int triangles_skipped_region = 0;      // vertices surely outside the region
+  int triangles_skipped_region = 0;      // vertices surely outside the region, or all on the floor
   int64_t accepted = 0;
   double mean_refine_shift_px = 0;  // mean |Q_refined - Q| (refinement on)
 };

@@ -56,7 +56,7 @@ bool RegionOfInterest::TriangleOutside(const Eigen::Vector3d& p0, const Eigen::V
 
 bool RegionOfInterest::TriangleOnFloor(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                        const Eigen::Vector3d& p2) const {
-  if (!valid || !has_floor) return false;
+  if (!valid || !has_floor || !(floor_clearance_mm > 0)) return false;
   const double on_floor = 0.5 * floor_clearance_mm;
   return HeightAboveFloor(p0) < on_floor && HeightAboveFloor(p1) < on_floor && HeightAboveFloor(p2) < on_floor;
 }

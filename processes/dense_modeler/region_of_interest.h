@@ -47,10 +47,13 @@ struct RegionOfInterest {
   // invalid region.)
   bool TriangleOutside(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                        double slack_mm) const;
+  // True when every vertex lies on the floor: less than half the floor clearance above it (or below it), the floor
+  // vertex of TriangleSpansFloorJunction. False for an invalid region, without a floor or with a clearance <= 0
+  // (the floor is then kept).
+  bool TriangleOnFloor(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2) const;
   // True when the triangle joins the floor to the object: one vertex lies on the floor (less than half the floor
   // clearance above it) and another is above the clearance. Its interior is not a surface but the air of the
   // crevice between them (the affine map would put points there). False without a floor.
-  bool TriangleOnFloor(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2) const;
   bool TriangleSpansFloorJunction(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
                                   const Eigen::Vector3d& p2) const;
   // Pixel rectangle of the box seen by the camera (bounding rectangle of the projected corners, grown by

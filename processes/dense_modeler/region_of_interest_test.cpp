@@ -219,8 +219,14 @@ TEST(RegionOfInterestTest, FloorJunctionTriangles) {
   EXPECT_TRUE(r.TriangleOnFloor(floor, Eigen::Vector3d(10, 0, -1), Eigen::Vector3d(0, 10, 4.9)));
   EXPECT_FALSE(r.TriangleOnFloor(floor, low, Eigen::Vector3d(0, 10, 5.1)));  // one vertex higher
   EXPECT_FALSE(r.TriangleOnFloor(floor, high, higher));                     // a junction
+  r.floor_clearance_mm = 0;
+  EXPECT_FALSE(r.TriangleOnFloor(floor, Eigen::Vector3d(1, 0, -1), Eigen::Vector3d(0, 1, -1)));  // floor kept
+  r.floor_clearance_mm = 10;
   r.has_floor = false;
   EXPECT_FALSE(r.TriangleOnFloor(floor, floor, floor));  // no floor known
+  r.has_floor = true;
+  r.valid = false;
+  EXPECT_FALSE(r.TriangleOnFloor(floor, floor, floor));  // no region
 }
 
 }  // namespace
