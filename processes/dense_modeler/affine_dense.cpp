@@ -959,8 +959,9 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           continue;
         }
         const Eigen::Vector3d nb_line = essential * na.homogeneous();
-        if (EpipolarFar(nb_line, std::abs(nb_line.dot(cam_b.Unproject(q).homogeneous())), b.camera.fx,
-                        o.epipolar_threshold_px)) {
+        const Eigen::Vector2d nb = cam_b.Unproject(q);  // of the unrefined q
+        bool q_refined = false;
+        if (EpipolarFar(nb_line, std::abs(nb_line.dot(nb.homogeneous())), b.camera.fx, o.epipolar_threshold_px)) {
           ++stats.rejected_epipolar;
           continue;
         }
@@ -994,6 +995,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           refine_shift_sum += (qr - q).norm();
           ++refine_count;
           q = qr;
+          q_refined = true;
         }
         if (o.max_color_difference >= 0) {
           double cb[3];
@@ -1042,7 +1044,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
           }
         }
         DensePoint dp;
-        const PairTriangulator::Result result = triangulator.Triangulate(p, na, q, cam_b.Unproject(q), &dp);
+        const PairTriangulator::Result result =
+            triangulator.Triangulate(p, na, q, q_refined ? cam_b.Unproject(q) : nb, &dp);
         if (result == PairTriangulator::kRejectedTriangulation) {
           ++stats.rejected_triangulation;
           continue;
@@ -1063,6 +1066,13 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   // Triangles come from Subdiv2D in its own order; sort output into raster order of the source pixel is not
   // needed for determinism (Subdiv2D is deterministic for the same input), so keep the order as produced.
   return finish();
+}
+
+std::vector<DenseMatch> DenseMatchesOf(const std::vector<DensePoint>& points) {
+  std::vector<DenseMatch> matches;
+  matches.reserve(points.size());
+  for (const DensePoint& p : points) matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+  return matches;
 }
 
 std::vector<DensePoint> TriangulateDenseMatches(const PinholeCamera& cam_a, const Eigen::Isometry3d& world_from_a,

@@ -147,6 +147,9 @@ struct DenseMatch {
   std::array<uint8_t, 3> bgr{{0, 0, 0}};              // colour of P
 };
 
+// The pixel pairs and colours of dense points, in their order.
+std::vector<DenseMatch> DenseMatchesOf(const std::vector<DensePoint>& points);
+
 // The dense points of matches (ComputeDensePair's pixel pairs) triangulated with other poses of the same two views,
 // e.g. the pose solver's final poses: ComputeDensePair's geometric checks with the new poses (Q within
 // epipolar_threshold_px of P's epipolar line, triangulation angle, reprojection error in A and B, world box, region;

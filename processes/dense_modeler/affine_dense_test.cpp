@@ -246,8 +246,7 @@ TEST(AffineDense, TriangulateDenseMatchesWithOtherPoses) {
   const AffineDenseOptions o;
   const std::vector<DensePoint> pts = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o);
   ASSERT_GT(pts.size(), 50000u);
-  std::vector<DenseMatch> matches;
-  for (const DensePoint& p : pts) matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+  const std::vector<DenseMatch> matches = DenseMatchesOf(pts);
   int64_t rejected = -1;
   const std::vector<DensePoint> same =
       TriangulateDenseMatches(scene.camera, pa, scene.camera, pb, matches, o, &rejected);
@@ -496,19 +495,29 @@ TEST(AffineDense, FeatureDeduplicationKeepsTheFirstOfCloseMatches) {
   }
 }
 
-// Triangles on the floor are skipped before any pixel work: their points would fall under the floor clearance. A
-// floor alone: without the skip every pixel is visited and the few points that pass are wrong (above the clearance);
-// with it no pixel is visited. A plane 20 mm above the floor (above the clearance) gives the same points either way.
-TEST(AffineDense, FloorTrianglesAreSkipped) {
-  const Eigen::Isometry3d pa = testing_scene::LookAt({0, -700, 400}, {0, 0, 0});
+// Two views of the floor z = 0 from 700 mm away and 400 mm up, 10 deg apart about the origin, and options with a
+// region around it that knows that floor (4 mm clearance).
+Eigen::Isometry3d FloorViewA() { return testing_scene::LookAt({0, -700, 400}, {0, 0, 0}); }
+Eigen::Isometry3d FloorViewB() {
   const double a10 = 10 * M_PI / 180;
-  const Eigen::Isometry3d pb = testing_scene::LookAt({700 * std::sin(a10), -700 * std::cos(a10), 400}, {0, 0, 0});
+  return testing_scene::LookAt({700 * std::sin(a10), -700 * std::cos(a10), 400}, {0, 0, 0});
+}
+AffineDenseOptions FloorRegionOptions() {
   AffineDenseOptions o;
   o.region.valid = true;
   o.region.box_min = Eigen::Vector3d(-1000, -1000, -100);
   o.region.box_max = Eigen::Vector3d(1000, 1000, 300);
   o.region.has_floor = true;
   o.region.floor_clearance_mm = 4;
+  return o;
+}
+
+// Triangles on the floor are skipped before any pixel work: their points would fall under the floor clearance. A
+// floor alone: without the skip every pixel is visited and the few points that pass are wrong (above the clearance);
+// with it no pixel is visited. A plane 20 mm above the floor (above the clearance) gives the same points either way.
+TEST(AffineDense, FloorTrianglesAreSkipped) {
+  const Eigen::Isometry3d pa = FloorViewA(), pb = FloorViewB();
+  AffineDenseOptions o = FloorRegionOptions();
   for (const double height : {0.0, 20.0}) {
     PlaneScene plane{Eigen::Vector3d::UnitZ(), height};
     const DenseView a = View(plane.camera, pa, plane.Render(pa)), b = View(plane.camera, pb, plane.Render(pb));
@@ -519,9 +528,9 @@ TEST(AffineDense, FloorTrianglesAreSkipped) {
     o.skip_floor_triangles = true;
     DensePairStats skip_stats;
     const std::vector<DensePoint> skip = ComputeDensePair(a, b, matches, o, &skip_stats);
-    std::printf("plane %.0f mm above the floor: %lld / %lld pixels visited, %zu / %zu points (skip off / on)\n",
-                height, static_cast<long long>(all_stats.pixels), static_cast<long long>(skip_stats.pixels),
-                all.size(), skip.size());
+    std::printf("plane %.0f mm above the floor: %lld / %lld pixels visited, %zu / %zu points (skip off / on)\n", height,
+                static_cast<long long>(all_stats.pixels), static_cast<long long>(skip_stats.pixels), all.size(),
+                skip.size());
     if (height == 0) {
       // Without the skip a few pixels still pass, all of them wrong: more than the clearance above a floor at 0.
       EXPECT_GT(all_stats.pixels, 100000);
@@ -543,9 +552,7 @@ TEST(AffineDense, FloorJunctionPixelsThatTheFloorExplainsAreDropped) {
   // (like the lower rim of an object seen against the floor behind): triangles joining the two put their pixels, which
   // all see the floor, in the air - the crevice curtain. The floor hypothesis finds them out.
   PlaneScene floor{Eigen::Vector3d::UnitZ(), 0.0};
-  const Eigen::Isometry3d pa = testing_scene::LookAt({0, -700, 400}, {0, 0, 0});
-  const double a10 = 10 * M_PI / 180;
-  const Eigen::Isometry3d pb = testing_scene::LookAt({700 * std::sin(a10), -700 * std::cos(a10), 400}, {0, 0, 0});
+  const Eigen::Isometry3d pa = FloorViewA(), pb = FloorViewB();
   const DenseView a = View(floor.camera, pa, floor.Render(pa)), b = View(floor.camera, pb, floor.Render(pb));
   std::vector<PointMatch> matches;
   int k = 0;
@@ -561,12 +568,7 @@ TEST(AffineDense, FloorJunctionPixelsThatTheFloorExplainsAreDropped) {
     if (floor.camera.Project(pa.inverse() * lifted, &ua) && floor.camera.Project(pb.inverse() * lifted, &ub))
       matches.push_back({ua, ub});
   }
-  AffineDenseOptions o;
-  o.region.valid = true;
-  o.region.box_min = Eigen::Vector3d(-1000, -1000, -100);
-  o.region.box_max = Eigen::Vector3d(1000, 1000, 300);
-  o.region.has_floor = true;
-  o.region.floor_clearance_mm = 4;
+  AffineDenseOptions o = FloorRegionOptions();
   o.junction_min_window_stddev = 0;  // the smooth test texture: only the floor hypothesis decides here
   o.junction_min_ncc = 0.7;
   o.junction_floor_ncc_margin = -1;  // off

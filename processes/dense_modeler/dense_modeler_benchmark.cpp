@@ -64,8 +64,7 @@ BENCHMARK(BM_DensePairSphereRefineKernel)->DenseRange(1, 3)->Unit(benchmark::kMi
 void BM_TriangulateDenseMatchesPair(benchmark::State& state) {
   const PairData& d = SpherePair();
   const AffineDenseOptions o;
-  std::vector<DenseMatch> matches;
-  for (const DensePoint& p : ComputeDensePair(d.a, d.b, d.matches, o)) matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+  const std::vector<DenseMatch> matches = DenseMatchesOf(ComputeDensePair(d.a, d.b, d.matches, o));
   size_t points = 0;
   for (auto _ : state)
     points = TriangulateDenseMatches(d.a.camera, d.a.world_from_camera, d.b.camera, d.b.world_from_camera, matches, o)

@@ -475,7 +475,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       ComputeDensePair(a, b, MatchTracks(*pa.tracks, *slot.tracks), DenseOptionsForNow(), &stats);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
-  if (options_.revote_final_poses && !options_.final_pose_channel.empty() && stored_complete_) {
+  if (RevoteEnabled() && stored_complete_) {
     if (stored_matches_ + static_cast<int64_t>(points.size()) > options_.max_stored_matches) {
       stored_complete_ = false;
       std::vector<StoredPair>().swap(stored_pairs_);
@@ -488,8 +488,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       sp.camera = *camera_;
       sp.world_from_a = a.world_from_camera;
       sp.world_from_b = b.world_from_camera;
-      sp.matches.reserve(points.size());
-      for (const DensePoint& p : points) sp.matches.push_back({p.pixel_a, p.pixel_b, p.bgr});
+      sp.matches = DenseMatchesOf(points);
       stored_matches_ += static_cast<int64_t>(points.size());
       stored_pairs_.push_back(std::move(sp));
     }
@@ -544,7 +543,7 @@ void DenseModelerNode::RevoteWithFinalPoses() {
   status_.SetValue("final_revoted_pairs", 0);
   status_.SetValue("final_revote_rejected", 0);
   status_.SetValue("final_revote_s", 0);
-  if (!options_.revote_final_poses || options_.final_pose_channel.empty()) return;
+  if (!RevoteEnabled()) return;
   if (!stored_complete_) {
     LogWarning("final votes: the live ones (the pairs' matches exceeded max-stored-matches)");
     return;
@@ -552,6 +551,7 @@ void DenseModelerNode::RevoteWithFinalPoses() {
   const int64_t start_us = MonotonicMicros();
   std::vector<StoredPair> pairs;
   pairs.swap(stored_pairs_);  // freed on return
+  stored_matches_ = 0;
   VoxelVoteGrid fresh(options_.model.votes);
   const AffineDenseOptions dense = DenseOptionsForNow();
   int64_t with_final = 0, points = 0, rejected = 0;

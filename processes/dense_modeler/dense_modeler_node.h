@@ -171,6 +171,8 @@ class DenseModelerNode : public Node {
   // Final phase: replaces grid_ by the stored pairs' matches triangulated with the final poses (the live ones for
   // frames without) when revote_final_poses is set and every pair was stored.
   void RevoteWithFinalPoses();
+  // revote_final_poses is set and final poses can arrive (final_pose_channel): the pairs' matches are kept.
+  bool RevoteEnabled() const { return options_.revote_final_poses && !options_.final_pose_channel.empty(); }
   bool SaveSnapshot(const std::string& path);
   AffineDenseOptions DenseOptionsForNow() const;
 

@@ -275,6 +275,45 @@ bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep,
   return any;
 }
 
+// (*ring_of)[v] = edges on the kept triangles from v to the nearest border vertex (breadth first), max_ring for
+// vertices max_ring or more edges away and for unused ones.
+void RingsFromBorder(const TriangleMesh& mesh, const std::vector<char>& keep, const std::vector<char>& border,
+                     int max_ring, std::vector<int>* ring_of) {
+  const size_t n = mesh.vertices.size();
+  std::vector<int32_t> first(n + 1, 0), adjacent;  // vertex adjacency of the kept triangles (CSR)
+  for (size_t t = 0; t < keep.size(); ++t)
+    if (keep[t])
+      for (int k = 0; k < 3; ++k) first[mesh.triangles[t][k] + 1] += 2;
+  for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  adjacent.resize(first[n]);
+  std::vector<int32_t> fill(first.begin(), first.end() - 1);
+  for (size_t t = 0; t < keep.size(); ++t) {
+    if (!keep[t]) continue;
+    const auto& tri = mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      adjacent[fill[tri[k]]++] = tri[(k + 1) % 3];
+      adjacent[fill[tri[k]]++] = tri[(k + 2) % 3];
+    }
+  }
+  ring_of->assign(n, max_ring);
+  std::vector<int32_t> frontier, next;
+  for (size_t v = 0; v < n; ++v)
+    if (border[v]) {
+      (*ring_of)[v] = 0;
+      frontier.push_back(static_cast<int32_t>(v));
+    }
+  for (int r = 1; r < max_ring && !frontier.empty(); ++r) {
+    next.clear();
+    for (const int32_t v : frontier)
+      for (int32_t i = first[v]; i < first[v + 1]; ++i)
+        if ((*ring_of)[adjacent[i]] > r) {
+          (*ring_of)[adjacent[i]] = r;
+          next.push_back(adjacent[i]);
+        }
+    frontier.swap(next);
+  }
+}
+
 // Drops the kept triangles touching a flagged vertex.
 void DropTrianglesAt(const TriangleMesh& mesh, const std::vector<char>& flagged, std::vector<char>* keep) {
   for (size_t t = 0; t < keep->size(); ++t)
@@ -325,44 +364,11 @@ int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
   const size_t n = mesh->vertices.size();
   const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * M_PI / 180.0));
   std::vector<char> keep(mesh->triangles.size(), 1), border;
-  std::vector<int> ring_of(n);
-  std::vector<int32_t> first(n + 1), adjacent, frontier, next;  // vertex adjacency of the kept triangles (CSR)
+  std::vector<int> ring_of;
   for (int pass = 0; pass < o.max_rings; ++pass) {
     if (!MarkBorderVertices(*mesh, keep, &border)) break;
     const std::vector<Eigen::Vector3f> normal = VertexNormals(*mesh, &keep);  // zero for unused vertices
-    std::fill(first.begin(), first.end(), 0);
-    for (size_t t = 0; t < keep.size(); ++t)
-      if (keep[t])
-        for (int k = 0; k < 3; ++k) first[mesh->triangles[t][k] + 1] += 2;
-    for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
-    adjacent.resize(first[n]);
-    std::vector<int32_t> fill(first.begin(), first.end() - 1);
-    for (size_t t = 0; t < keep.size(); ++t) {
-      if (!keep[t]) continue;
-      const auto& tri = mesh->triangles[t];
-      for (int k = 0; k < 3; ++k) {
-        adjacent[fill[tri[k]]++] = tri[(k + 1) % 3];
-        adjacent[fill[tri[k]]++] = tri[(k + 2) % 3];
-      }
-    }
-    // Rings from the border, breadth first, up to interior_rings (unreached = interior).
-    std::fill(ring_of.begin(), ring_of.end(), o.interior_rings);
-    frontier.clear();
-    for (size_t v = 0; v < n; ++v)
-      if (border[v]) {
-        ring_of[v] = 0;
-        frontier.push_back(static_cast<int32_t>(v));
-      }
-    for (int r = 1; r < o.interior_rings && !frontier.empty(); ++r) {
-      next.clear();
-      for (const int32_t v : frontier)
-        for (int32_t i = first[v]; i < first[v + 1]; ++i)
-          if (ring_of[adjacent[i]] > r) {
-            ring_of[adjacent[i]] = r;
-            next.push_back(adjacent[i]);
-          }
-      frontier.swap(next);
-    }
+    RingsFromBorder(*mesh, keep, border, o.interior_rings, &ring_of);
     std::vector<Eigen::Vector3d> interior;
     std::vector<Eigen::Vector3f> interior_normal;
     for (size_t v = 0; v < n; ++v)

@@ -9,9 +9,10 @@
 //       completeness set (--intrinsics fx,fy,cx,cy,w,h; default the sim's 800,800,319.5,239.5,640,480), so
 //       completeness is measured on the visible surface (needs truth normals); a truth point hidden from a camera by
 //       other truth points (z-buffer, see VisibleSurfacePoints) does not count as seen by it (--no-occlusion: facing
-//       and in the image is enough, the figure before 1 Dec night; exact for convex objects only). Accuracy is always against the whole
-//       true surface (a model point on a part no camera saw is still on the surface); visible_accuracy_* repeat it
-//       against the completeness set only (the stricter figure the tests used before 29 Nov).
+//       and in the image is enough, the figure before 1 Dec night; exact for convex objects only). Accuracy is
+//       always against the whole true surface (a model point on a part no camera saw is still on the surface);
+//       visible_accuracy_* repeat it against the completeness set only (the stricter figure the tests used before 29
+//       Nov).
 //       --write-aligned FILE writes the model points as scored (after --align; "x y z" per line, truth frame) and
 //       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are.
 // Output is one "key value" pair per line (easy to grep in tests and scripts).
@@ -44,7 +45,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
-                 "[--align EST TRUTH] [--visible-from POSES] [--min-views N] [--no-occlusion] [--intrinsics fx,fy,cx,cy,w,h]\n");
+                 "[--align EST TRUTH] [--visible-from POSES] [--min-views N] [--no-occlusion] "
+                 "[--intrinsics fx,fy,cx,cy,w,h]\n");
     return 2;
   }
   const std::string command = argv[1];

@@ -232,6 +232,8 @@ std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points
   const int width = intrinsics.width, height = intrinsics.height;
   constexpr double kMaxTanAngle = 10.0;  // the grazing term's bound (84.3 deg; also for points seen from behind)
   const double min_focal = std::min(intrinsics.fx, intrinsics.fy);
+  std::vector<Eigen::Vector3d> unit_normals(normals.size());
+  for (size_t i = 0; i < normals.size(); ++i) unit_normals[i] = normals[i].normalized();
   std::vector<int> views(points.size(), 0);
   std::vector<float> depth_buffer;
   std::vector<int> pixel_index(points.size());  // -1 = behind the camera or outside the image
@@ -257,9 +259,8 @@ std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points
     }
     for (size_t i = 0; i < points.size(); ++i) {
       if (pixel_index[i] < 0) continue;
-      const Eigen::Vector3d n = normals[i].normalized();
       const Eigen::Vector3d to_camera = center - points[i];
-      const double cos_angle = n.dot(to_camera) / to_camera.norm();
+      const double cos_angle = unit_normals[i].dot(to_camera) / to_camera.norm();
       if (!(cos_angle >= min_cos)) continue;
       if (occlusion) {
         // Two points in one pixel are up to sqrt(2) footprints apart across the image; a surface seen at angle θ
