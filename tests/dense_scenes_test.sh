@@ -46,7 +46,10 @@ scene() {
   check "$name mesh completeness" "$(value completeness "$d/mesh.txt")" ">=" 0.95 target
 }
 
-# Measured (seed 1, 200 frames) since 1 Dec, evening (curled hole rims peeled, marching_cubes.h; votes recomputed
+# Measured (seed 1, 200 frames) since 2 Dec (the pair's own LK matches where the tracker left the object bare,
+# pair_matches.h): box mesh p90 0.937, max 4.54, voxels 1.22, completeness 0.963 / 0.934; cylinder 0.925, 3.64, 1.25,
+# 0.983 / 0.960; mesh (blob) 0.958, 6.16, 1.32, 0.963 / 0.957 (its flat cap, which the tracker loses, is now
+# modelled; the blob's max is the floor contact, 4-6 mm outside). Before, since 1 Dec, evening (curled hole rims peeled, marching_cubes.h; votes recomputed
 # with the final poses): box mesh p90 0.962, max 5.78, voxels 1.26, completeness 0.952 / 0.923; cylinder 0.959,
 # 6.72, 1.27, 0.970 / 0.944; mesh (blob) 0.904, 5.23, 1.28, 0.914 / 0.900. Without the re-vote: box 0.966, 4.14
 # (the re-vote lets a 19-vertex piece 5.8 mm inside one wall through), 1.26, 0.953 / 0.924; cylinder 0.965, 6.69,
@@ -67,9 +70,9 @@ scene() {
 # cylinder 2.21, 1.52; blob 2.48, 1.44.) The box's and cylinder's largest errors are points inside the object near
 # its creases (box edges, cylinder rim: triangles spanning a crease put points on the chord), the blob's are under
 # its overhang next to the floor.
-scene box 1.3 7.0 1.5 0.92 0.90
-scene cylinder 1.25 8.0 1.5 0.94 0.92
-scene mesh 1.2 7.0 1.5 0.89 0.87
+scene box 1.3 7.0 1.5 0.94 0.91
+scene cylinder 1.25 8.0 1.5 0.96 0.94
+scene mesh 1.2 7.0 1.5 0.94 0.93
 
 [ "$FAILED" = 0 ] || fail "accuracy below the bounds above"
 echo "PASS: dense model accuracy on the box, cylinder and mesh scenes"

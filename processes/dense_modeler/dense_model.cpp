@@ -18,6 +18,7 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   std::ostringstream e;
   std::string w;
   if (!ValidateAffineDenseOptions(o.dense, &w)) e << w << "; ";
+  if (!ValidatePairMatchOptions(o.pair_matches, &w)) e << w << "; ";
   if (!ValidateVoxelVoteOptions(o.votes, &w)) e << w << "; ";
   if (!ValidateSpaceCarvingOptions(o.carving, &w)) e << w << "; ";
   if (!(o.min_relative_votes >= 0 && o.min_relative_votes <= 1)) e << "min relative votes must be in [0, 1]; ";

@@ -12,6 +12,7 @@
 #include "processes/dense_modeler/affine_dense.h"
 #include "processes/dense_modeler/marching_cubes.h"
 #include "processes/dense_modeler/mesh_visibility.h"
+#include "processes/dense_modeler/pair_matches.h"
 #include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/surface_extraction.h"
@@ -21,6 +22,7 @@ namespace objscan {
 
 struct DenseModelOptions {
   AffineDenseOptions dense;         // dense pair matching
+  PairMatchOptions pair_matches;    // the pair's own matches where the tracker left the object bare
   VoxelVoteOptions votes;           // vote grid
   SpaceCarvingOptions carving;      // final photometric carving
   int vote_threshold = 16;          // votes a voxel needs to seed the final model / appear on VOXEL_MAP (>= 1)

@@ -199,6 +199,7 @@ class DenseModelerNode : public Node {
   int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
+  int64_t pair_matches_added_ = 0;  // matches AddPairMatches gave the pairs so far
   int64_t dense_points_ = 0;
   int64_t last_seq_ = -1, last_utime_ = 0;
   int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
