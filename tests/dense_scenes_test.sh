@@ -47,29 +47,28 @@ scene() {
 }
 
 # Measured (seed 1, 200 frames) since 2 Dec (the pair's own LK matches where the tracker left the object bare,
-# pair_matches.h): box mesh p90 0.937, max 4.54, voxels 1.22, completeness 0.963 / 0.934; cylinder 0.925, 3.64, 1.25,
-# 0.983 / 0.960; mesh (blob) 0.958, 6.16, 1.32, 0.963 / 0.957 (its flat cap, which the tracker loses, is now
-# modelled; the blob's max is the floor contact, 4-6 mm outside). Before, since 1 Dec, evening (curled hole rims peeled, marching_cubes.h; votes recomputed
-# with the final poses): box mesh p90 0.962, max 5.78, voxels 1.26, completeness 0.952 / 0.923; cylinder 0.959,
-# 6.72, 1.27, 0.970 / 0.944; mesh (blob) 0.904, 5.23, 1.28, 0.914 / 0.900. Without the re-vote: box 0.966, 4.14
-# (the re-vote lets a 19-vertex piece 5.8 mm inside one wall through), 1.26, 0.953 / 0.924; cylinder 0.965, 6.69,
-# 1.29, 0.970 / 0.943; blob 0.905, 5.32, 1.29, 0.911 / 0.898. Before (hidden mesh parts removed, floor clearance 4 mm with the floor band,
-# floor hypothesis in junction triangles, voxels follow the mesh, crease-preserving surface fit, one border ring
-# peeled): box mesh p90 0.971, max 4.13, voxels 1.26, completeness 0.956 / 0.925; cylinder 0.972, 6.68, 1.29,
-# 0.972 / 0.943; mesh (blob) 0.907, 9.88, 1.29, 0.911 / 0.897. Before the surface fit and border peeling: box 1.035,
-# 5.39, 1.26, 0.944 / 0.925; cylinder 0.994, 8.06, 1.29, 0.968 / 0.943; mesh (blob) 0.927, 11.5, 1.30,
-# 0.921 / 0.900. Before (since 29 Nov accuracy is against the whole true surface, see objscan_evaluate):
-# box mesh p90 1.04, voxels 1.27, completeness 0.910 / 0.889; cylinder 1.06, 1.37, 0.949 / 0.924; mesh (blob) 0.96,
-# 1.32, 0.923 / 0.901. With the epipolar refinement searching +-1.5 px (step 0.25) instead of +-3 px (step 0.5):
-# box 1.26, 1.38, 0.871 / 0.853; cylinder 1.10, 1.40, 0.929 / 0.904; blob 0.97, 1.32, 0.905 / 0.880 (mesh max
-# 18 / 12 / 20 mm). Before small mesh pieces were dropped (< 1 % of the largest, after carving): box 1.52,
-# cylinder 1.16, blob 0.99 (max 20 / 12 / 25). With the plane-only smoothing (radius 4): box 1.91, cylinder 1.30,
-# blob 1.05. Before the surface-point smoothing and the relative fragment
-# filter: box mesh p90 3.22, voxels 1.43, completeness 0.900 / 0.857; cylinder 1.94, 1.40, 0.937 / 0.903; blob
-# 1.10, 1.33, 0.904 / 0.881. (Before the refinement-border check: box 4.92, 1.68;
-# cylinder 2.21, 1.52; blob 2.48, 1.44.) The box's and cylinder's largest errors are points inside the object near
-# its creases (box edges, cylinder rim: triangles spanning a crease put points on the chord), the blob's are under
-# its overhang next to the floor.
+# pair_matches.h): box mesh p90 0.936, max 4.60, voxels 1.22, completeness 0.962 / 0.933; cylinder 0.925, 3.64, 1.25,
+# 0.983 / 0.960; mesh (blob) 0.945, 5.56, 1.31, 0.957 / 0.951 (its flat cap, which the tracker loses, is now modelled;
+# the blob's max is the floor contact, 4-6 mm outside). Before, since 1 Dec, evening (curled hole rims peeled,
+# marching_cubes.h; votes recomputed with the final poses): box mesh p90 0.962, max 5.78, voxels 1.26, completeness
+# 0.952 / 0.923; cylinder 0.959, 6.72, 1.27, 0.970 / 0.944; mesh (blob) 0.904, 5.23, 1.28, 0.914 / 0.900. Without the
+# re-vote: box 0.966, 4.14 (the re-vote lets a 19-vertex piece 5.8 mm inside one wall through), 1.26, 0.953 / 0.924;
+# cylinder 0.965, 6.69, 1.29, 0.970 / 0.943; blob 0.905, 5.32, 1.29, 0.911 / 0.898. Before (hidden mesh parts removed,
+# floor clearance 4 mm with the floor band, floor hypothesis in junction triangles, voxels follow the mesh,
+# crease-preserving surface fit, one border ring peeled): box mesh p90 0.971, max 4.13, voxels 1.26, completeness 0.956
+# / 0.925; cylinder 0.972, 6.68, 1.29, 0.972 / 0.943; mesh (blob) 0.907, 9.88, 1.29, 0.911 / 0.897. Before the surface
+# fit and border peeling: box 1.035, 5.39, 1.26, 0.944 / 0.925; cylinder 0.994, 8.06, 1.29, 0.968 / 0.943; mesh (blob)
+# 0.927, 11.5, 1.30, 0.921 / 0.900. Before (since 29 Nov accuracy is against the whole true surface, see
+# objscan_evaluate): box mesh p90 1.04, voxels 1.27, completeness 0.910 / 0.889; cylinder 1.06, 1.37, 0.949 / 0.924;
+# mesh (blob) 0.96, 1.32, 0.923 / 0.901. With the epipolar refinement searching +-1.5 px (step 0.25) instead of +-3 px
+# (step 0.5): box 1.26, 1.38, 0.871 / 0.853; cylinder 1.10, 1.40, 0.929 / 0.904; blob 0.97, 1.32, 0.905 / 0.880 (mesh
+# max 18 / 12 / 20 mm). Before small mesh pieces were dropped (< 1 % of the largest, after carving): box 1.52, cylinder
+# 1.16, blob 0.99 (max 20 / 12 / 25). With the plane-only smoothing (radius 4): box 1.91, cylinder 1.30, blob 1.05.
+# Before the surface-point smoothing and the relative fragment filter: box mesh p90 3.22, voxels 1.43, completeness
+# 0.900 / 0.857; cylinder 1.94, 1.40, 0.937 / 0.903; blob 1.10, 1.33, 0.904 / 0.881. (Before the refinement-border
+# check: box 4.92, 1.68; cylinder 2.21, 1.52; blob 2.48, 1.44.) The box's and cylinder's largest errors are points
+# inside the object near its creases (box edges, cylinder rim: triangles spanning a crease put points on the chord), the
+# blob's are under its overhang next to the floor.
 scene box 1.3 7.0 1.5 0.94 0.91
 scene cylinder 1.25 8.0 1.5 0.96 0.94
 scene mesh 1.2 7.0 1.5 0.94 0.93

@@ -751,6 +751,14 @@ double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const 
   return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b, kSearchPortable);
 }
 
+cv::Rect DensePairRoi(const PinholeCamera& camera_a, const Eigen::Isometry3d& world_from_a,
+                      const AffineDenseOptions& o) {
+  const cv::Rect image_rect(0, 0, camera_a.width, camera_a.height);
+  cv::Rect roi = o.roi_a.area() > 0 ? (o.roi_a & image_rect) : image_rect;
+  if (o.region.valid) roi &= o.region.ImageRect(camera_a, world_from_a, o.region_image_margin_px);
+  return roi;
+}
+
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
                                          const AffineDenseOptions& o, DensePairStats* stats_out) {
   DensePairStats stats;
@@ -842,9 +850,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   WindowA window_a;
   std::vector<double>& scores = scratch.scores;
   scores.assign(2 * n_steps + 1, -2.0);
-  const cv::Rect image_rect(0, 0, a.image.cols, a.image.rows);
-  cv::Rect roi = o.roi_a.area() > 0 ? (o.roi_a & image_rect) : image_rect;
-  if (o.region.valid) roi &= o.region.ImageRect(a.camera, a.world_from_camera, o.region_image_margin_px);
+  const cv::Rect roi = DensePairRoi(a.camera, a.world_from_camera, o);
   if (roi.area() <= 0) return finish();
   const int h = o.ncc_half_window;
   const int channels = a.image.channels();

@@ -134,6 +134,11 @@ struct DensePairStats {
 // True when usable; otherwise false with *why set.
 bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* why);
 
+// The pixels of A a dense pair visits: options.roi_a (empty = the whole image) clipped to the image and, with a
+// valid region, to the region's projected box (region_image_margin_px around it). Empty: nothing to visit.
+cv::Rect DensePairRoi(const PinholeCamera& camera_a, const Eigen::Isometry3d& world_from_a,
+                      const AffineDenseOptions& options);
+
 // Dense points for the pair (A, B). a.image and b.image must have the same type (gray or BGR) and match their
 // cameras' sizes (else the result is empty). Output order is deterministic (triangle by triangle, raster inside).
 // Keeps per-thread scratch buffers between calls (gray images, visited mask, the points before the final copy).

@@ -2,6 +2,7 @@
 // surface steps and the hidden-part removal of the final mesh.
 #include <benchmark/benchmark.h>
 
+#include <opencv2/core/utility.hpp>
 #include <random>
 
 #include "processes/dense_modeler/dense_model.h"
@@ -46,6 +47,25 @@ void BM_DensePairSphere(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(st.accepted);
 }
 BENCHMARK(BM_DensePairSphere)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The pair's own matches (pair_matches.h) with the tracker's matches left of the image centre removed: corner
+// detection and LK both ways for the bare half.
+void BM_AddPairMatches(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  std::vector<PointMatch> tracked;
+  for (const PointMatch& m : d.matches)
+    if (m.a.x() >= d.a.camera.cx) tracked.push_back(m);
+  PairMatchStats st;
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);  // one core, as the node runs it (--threads 1)
+  for (auto _ : state)
+    benchmark::DoNotOptimize(
+        AddPairMatches(d.a, d.b, tracked, cv::Rect(), RegionOfInterest(), PairMatchOptions(), &st));
+  state.counters["corners"] = static_cast<double>(st.corners);
+  state.counters["added"] = static_cast<double>(st.added);
+  cv::setNumThreads(threads);
+}
+BENCHMARK(BM_AddPairMatches)->Unit(benchmark::kMillisecond);
 
 // The refinement with each implementation of the window NCCs (AffineDenseOptions::refine_kernel; all bit-identical):
 // 1 = one window NCC per search step (reference), 2 = portable, steps batched, 3 = AVX2, steps batched.

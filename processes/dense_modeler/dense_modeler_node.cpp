@@ -118,24 +118,6 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-refine", &d->refine_along_epipolar, "refine Q by a 1-D NCC search along the epipolar line");
   p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
   p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
-  PairMatchOptions* pm = &o->model.pair_matches;
-  p.Add("pair-matches", &pm->enabled, "add the pair's own LK matches where the tracker left the object bare");
-  p.Add("pair-match-max-corners", &pm->max_corners, "corners detected per pair at most");
-  p.Add("pair-match-corner-quality", &pm->corner_quality, "Shi-Tomasi quality level, relative to the best corner");
-  p.Add("pair-match-min-distance", &pm->min_distance_px, "px, between new corners");
-  p.Add("pair-match-min-track-distance", &pm->min_track_distance_px,
-        "px, from every tracked feature (new corners only where the tracker left a gap)");
-  p.Add("pair-match-window", &pm->window_px, "px, side of the LK window (odd)");
-  p.Add("pair-match-pyramid-levels", &pm->pyramid_levels, "LK pyramid levels");
-  p.Add("pair-match-max-backward-error", &pm->max_backward_error_px, "px, max forward-backward LK error");
-  p.Add("pair-match-max-residual", &pm->max_residual, "gray levels, max mean |A - B| over the LK window");
-  p.Add("pair-match-bare-distance", &pm->bare_distance_px,
-        "px, corners this far from every tracked feature need only bare-max-backward-error (no residual limit)");
-  p.Add("pair-match-bare-max-backward-error", &pm->bare_max_backward_error_px,
-        "px, max forward-backward LK error of bare corners");
-  p.Add("pair-match-max-epipolar", &pm->max_epipolar_px, "px, max distance of a match from its epipolar line");
-  p.Add("pair-match-guess-neighbours", &pm->guess_neighbours,
-        "nearest tracked features whose median range along A's rays starts LK (0 = none)");
   p.Add("dense-skip-floor-triangles", &d->skip_floor_triangles, "skip triangles whose vertices all lie on the floor");
   p.Add("dense-reject-refine-at-border", &d->reject_refine_at_border,
         "drop pixels whose best refined match is at the end of the search");
@@ -156,6 +138,26 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-junction-floor-min-separation", &d->junction_floor_min_separation_px,
         "px, floor-object triangle pixels whose floor-plane match lies closer than this are dropped");
   p.Add("dense-region-margin", &d->region_image_margin_px, "px, margin around the region's projected box");
+  PairMatchOptions* pm = &m->pair_matches;
+  p.Add("pair-matches", &pm->enabled, "add the pair's own LK matches where the tracker left the object bare");
+  p.Add("pair-match-max-corners", &pm->max_corners, "corners detected per pair at most");
+  p.Add("pair-match-corner-quality", &pm->corner_quality, "Shi-Tomasi quality level, relative to the best corner");
+  p.Add("pair-match-min-distance", &pm->min_distance_px, "px, between new corners");
+  p.Add("pair-match-min-track-distance", &pm->min_track_distance_px,
+        "px, from every tracked feature (new corners only where the tracker left a gap)");
+  p.Add("pair-match-window", &pm->window_px, "px, side of the LK window (odd)");
+  p.Add("pair-match-pyramid-levels", &pm->pyramid_levels, "LK pyramid levels");
+  p.Add("pair-match-max-backward-error", &pm->max_backward_error_px, "px, max forward-backward LK error");
+  p.Add("pair-match-max-residual", &pm->max_residual, "gray levels, max mean |A - B| over the LK window");
+  p.Add("pair-match-bare-distance", &pm->bare_distance_px,
+        "px, corners this far from every tracked feature need only bare-max-backward-error (no residual limit)");
+  p.Add("pair-match-bare-max-backward-error", &pm->bare_max_backward_error_px,
+        "px, max forward-backward LK error of bare corners");
+  p.Add("pair-match-max-epipolar", &pm->max_epipolar_px, "px, max distance of a match from its epipolar line");
+  p.Add("pair-match-skip-floor-corners", &pm->skip_floor_corners,
+        "corners whose nearest tracked features all lie on the floor are not matched");
+  p.Add("pair-match-guess-neighbours", &pm->guess_neighbours,
+        "nearest tracked features whose median range along A's rays starts LK (0 = none)");
   VoxelVoteOptions* v = &m->votes;
   p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
   p.Add("vote-neighbourhood", &v->neighbourhood, "0, 6 or 26 neighbours get votes");
@@ -490,14 +492,11 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   b.image = slot.image;
   const AffineDenseOptions dense = DenseOptionsForNow();
   std::vector<PointMatch> matches = MatchTracks(*pa.tracks, *slot.tracks);
-  if (options_.model.pair_matches.enabled) {
-    cv::Rect rect = dense.roi_a;
-    if (region_.valid) {
-      const cv::Rect box = region_.ImageRect(a.camera, a.world_from_camera, dense.region_image_margin_px);
-      rect = rect.area() > 0 ? (rect & box) : box;
-    }
+  const cv::Rect rect = DensePairRoi(a.camera, a.world_from_camera, dense);
+  if (options_.model.pair_matches.enabled && rect.area() > 0) {
     PairMatchStats pm;
-    const std::vector<PointMatch> extra = AddPairMatches(a, b, matches, rect, options_.model.pair_matches, &pm);
+    const std::vector<PointMatch> extra =
+        AddPairMatches(a, b, matches, rect, region_, options_.model.pair_matches, &pm);
     matches.insert(matches.end(), extra.begin(), extra.end());
     pair_matches_added_ += pm.added;
     status_.SetValue("pair_matches_added", static_cast<double>(pair_matches_added_));

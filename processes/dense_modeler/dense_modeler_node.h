@@ -11,7 +11,8 @@
 // before any region is known run unrestricted.
 // Frames (image + tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame
 // j is complete with a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired
-// with frame j - pair_gap (if complete): dense points (affine_dense.h) from the tracks both frames share are voted
+// with frame j - pair_gap (if complete): dense points (affine_dense.h) from the tracks both frames share, plus the
+// pair's own LK matches where the tracker left the region bare (pair_matches.h, model.pair_matches), are voted
 // into the voxel grid (voxel_votes.h). Every complete frame also keeps a downsampled copy for the final carving
 // (at most max_carving_views; when full, every second one is dropped, deterministic).
 // Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at most max_map_voxels, strongest
@@ -34,7 +35,8 @@
 // "control: malformed", "snapshot: no path", "snapshot: write failed". Pair check: when landmarks are known, a pair
 // whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped (the
 // pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
-// pairs_skipped_inconsistent, dense_points, voxels, votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
+// pairs_skipped_inconsistent, dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels,
+// votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
 // target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
 // final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_carved,
 // final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,

@@ -11,6 +11,9 @@
 namespace objscan {
 namespace {
 
+constexpr double kMaxDistancePx = 1000.0;               // px, ValidatePairMatchOptions' limit of the distance options
+constexpr double kMinRangeAngleRad = 1.0 * M_PI / 180;  // tracked features meeting at less give no range
+
 cv::Mat Gray8(const cv::Mat& image) {
   if (image.channels() == 1) return image;
   cv::Mat gray;
@@ -34,41 +37,51 @@ bool ValidatePairMatchOptions(const PairMatchOptions& o, std::string* why) {
   if (!(o.bare_max_backward_error_px > 0)) e << "pair-match bare-max-backward-error must be > 0; ";
   if (!(o.max_epipolar_px > 0)) e << "pair-match max-epipolar must be > 0; ";
   if (o.guess_neighbours < 0) e << "pair-match guess-neighbours must be >= 0; ";
+  if (!(o.min_distance_px <= kMaxDistancePx) || !(o.min_track_distance_px <= kMaxDistancePx) ||
+      !(o.bare_distance_px <= kMaxDistancePx))
+    e << "pair-match distances must be <= " << kMaxDistancePx << " px; ";
+  if (!(o.bare_distance_px >= o.min_track_distance_px))
+    e << "pair-match bare-distance must be >= min-track-distance (else every corner is bare); ";
+  if (!(o.bare_max_backward_error_px >= o.max_backward_error_px))
+    e << "pair-match bare-max-backward-error must be >= max-backward-error (the bare rule is the looser one); ";
   if (why) *why = e.str();
   return e.str().empty();
 }
 
 std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& tracked,
-                                       const cv::Rect& rect_in, const PairMatchOptions& o, PairMatchStats* stats_out) {
+                                       const cv::Rect& rect_in, const RegionOfInterest& region,
+                                       const PairMatchOptions& o, PairMatchStats* stats_out) {
   PairMatchStats stats;
   std::vector<PointMatch> out;
   auto finish = [&]() {
     if (stats_out) *stats_out = stats;
     return out;
   };
-  if (!ValidatePairMatchOptions(o, nullptr) || a.image.empty() || b.image.empty() || a.image.type() != b.image.type() ||
-      a.image.size() != b.image.size() || !a.camera.IsValid() || !b.camera.IsValid() ||
-      a.image.cols != a.camera.width || a.image.rows != a.camera.height ||
+  const int type = a.image.type();
+  if (!ValidatePairMatchOptions(o, nullptr) || a.image.empty() || b.image.empty() || b.image.type() != type ||
+      (type != CV_8UC1 && type != CV_8UC3) || !a.camera.IsValid() || !b.camera.IsValid() ||
+      a.image.cols != a.camera.width || a.image.rows != a.camera.height || b.image.cols != b.camera.width ||
+      b.image.rows != b.camera.height || !a.world_from_camera.matrix().allFinite() ||
+      !b.world_from_camera.matrix().allFinite() ||
       (a.world_from_camera.translation() - b.world_from_camera.translation()).norm() < 1e-9)
     return finish();
   const cv::Rect image_rect(0, 0, a.image.cols, a.image.rows);
   const cv::Rect rect = rect_in.area() > 0 ? (rect_in & image_rect) : image_rect;
   if (rect.width < o.window_px || rect.height < o.window_px) return finish();
+  std::vector<PointMatch> known;  // the finite tracked matches
+  known.reserve(tracked.size());
+  for (const PointMatch& m : tracked)
+    if (m.a.allFinite() && m.b.allFinite()) known.push_back(m);
 
-  // Corners of A in the rectangle, away from the tracked features.
+  // Corners of A in the rectangle, away from the tracked features (detected in the rectangle only).
   const cv::Mat gray_a = Gray8(a.image), gray_b = Gray8(b.image);
-  cv::Mat1b mask(a.image.rows, a.image.cols, uchar(0));
-  mask(rect).setTo(255);
-  std::vector<cv::Point2f> tracked_a;
-  tracked_a.reserve(tracked.size());
-  for (const PointMatch& m : tracked) {
-    if (!m.a.allFinite() || !m.b.allFinite()) continue;
-    tracked_a.emplace_back(static_cast<float>(m.a.x()), static_cast<float>(m.a.y()));
-    cv::circle(mask, cv::Point(cvRound(m.a.x()), cvRound(m.a.y())), cvRound(o.min_track_distance_px), cv::Scalar(0),
-               -1);
-  }
+  cv::Mat1b mask(rect.size(), uchar(255));
+  for (const PointMatch& m : known)
+    cv::circle(mask, cv::Point(cvRound(m.a.x()) - rect.x, cvRound(m.a.y()) - rect.y), cvRound(o.min_track_distance_px),
+               cv::Scalar(0), -1);
   std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(gray_a, corners, o.max_corners, o.corner_quality, o.min_distance_px, mask);
+  cv::goodFeaturesToTrack(gray_a(rect), corners, o.max_corners, o.corner_quality, o.min_distance_px, mask);
+  for (cv::Point2f& c : corners) c += cv::Point2f(static_cast<float>(rect.x), static_cast<float>(rect.y));
   stats.corners = static_cast<int>(corners.size());
   if (corners.empty()) return finish();
 
@@ -78,46 +91,72 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
   const Eigen::Vector3d center_a = a.world_from_camera.translation(), center_b = b.world_from_camera.translation();
   const Eigen::Matrix3d rwa = a.world_from_camera.linear(), rwb = b.world_from_camera.linear();
   const Eigen::Isometry3d b_from_world = b.world_from_camera.inverse();
+  const bool floor_test = o.skip_floor_corners && region.valid && region.has_floor && region.floor_clearance_mm > 0;
   auto ray_a = [&](const Eigen::Vector2d& p) { return (rwa * a.camera.Unproject(p).homogeneous()).normalized(); };
-  std::vector<Eigen::Vector2d> known_a;  // tracked features that triangulate, with their distance from A's centre
-  std::vector<double> known_range;       // mm
-  for (const PointMatch& m : tracked) {
-    if (!m.a.allFinite() || !m.b.allFinite()) continue;
+  std::vector<Eigen::Vector2d> ranged_a;  // tracked features that triangulate (rays >= 1 deg apart)
+  std::vector<double> range;              // mm, their distance from A's centre
+  std::vector<char> on_floor;             // less than half the floor clearance above the region's floor
+  for (const PointMatch& m : known) {
     Eigen::Vector3d x;
+    double angle = 0;
     const Eigen::Vector3d db = (rwb * b.camera.Unproject(m.b).homogeneous()).normalized();
-    if (!TriangulateMidpoint(center_a, ray_a(m.a), center_b, db, &x)) continue;
-    known_a.push_back(m.a);
-    known_range.push_back((x - center_a).norm());
+    if (!TriangulateMidpoint(center_a, ray_a(m.a), center_b, db, &x, &angle) || angle < kMinRangeAngleRad) continue;
+    ranged_a.push_back(m.a);
+    range.push_back((x - center_a).norm());
+    on_floor.push_back(floor_test && region.HeightAboveFloor(x) < 0.5 * region.floor_clearance_mm);
   }
   std::vector<cv::Point2f> guess = corners;
+  std::vector<char> skip(corners.size(), 0);  // on the floor: its nearest tracked features all are
   std::vector<double> track_distance(corners.size(), std::numeric_limits<double>::infinity());  // px
   std::vector<std::pair<double, size_t>> near;
   std::vector<double> ranges;
   for (size_t c = 0; c < corners.size(); ++c) {
     const Eigen::Vector2d pc(corners[c].x, corners[c].y);
-    for (const PointMatch& m : tracked)
-      if (m.a.allFinite() && m.b.allFinite()) track_distance[c] = std::min(track_distance[c], (m.a - pc).norm());
-    if (o.guess_neighbours == 0 || known_a.empty()) continue;
+    for (const PointMatch& m : known) track_distance[c] = std::min(track_distance[c], (m.a - pc).norm());
+    if (o.guess_neighbours == 0 || ranged_a.empty()) continue;
     near.clear();
-    for (size_t i = 0; i < known_a.size(); ++i) near.emplace_back((known_a[i] - pc).squaredNorm(), i);
+    for (size_t i = 0; i < ranged_a.size(); ++i) near.emplace_back((ranged_a[i] - pc).squaredNorm(), i);
     const size_t k = std::min<size_t>(o.guess_neighbours, near.size());
     std::partial_sort(near.begin(), near.begin() + k, near.end());
     ranges.clear();
-    for (size_t j = 0; j < k; ++j) ranges.push_back(known_range[near[j].second]);
+    bool floor = floor_test;
+    for (size_t j = 0; j < k; ++j) {
+      ranges.push_back(range[near[j].second]);
+      floor = floor && on_floor[near[j].second];
+    }
+    skip[c] = floor;
     std::nth_element(ranges.begin(), ranges.begin() + k / 2, ranges.end());
     Eigen::Vector2d qb;
     if (b.camera.Project(b_from_world * (center_a + ranges[k / 2] * ray_a(pc)), &qb) && b.camera.InImage(qb))
       guess[c] = cv::Point2f(static_cast<float>(qb.x()), static_cast<float>(qb.y()));
   }
+  {  // drop the floor corners before LK (the dense pair skips triangles on the floor anyway)
+    size_t kept = 0;
+    for (size_t c = 0; c < corners.size(); ++c) {
+      if (skip[c]) continue;
+      corners[kept] = corners[c], guess[kept] = guess[c], track_distance[kept] = track_distance[c];
+      ++kept;
+    }
+    stats.skipped_floor = static_cast<int>(corners.size() - kept);
+    corners.resize(kept), guess.resize(kept), track_distance.resize(kept);
+    if (corners.empty()) return finish();
+  }
   const cv::Size window(o.window_px, o.window_px);
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
   std::vector<uchar> status_ab, status_ba;
   std::vector<float> err_ab, err_ba;
+  std::vector<cv::Mat> pyramid_a, pyramid_b;  // built once for both directions
+  const int levels = std::min(cv::buildOpticalFlowPyramid(gray_a, pyramid_a, window, o.pyramid_levels),
+                              cv::buildOpticalFlowPyramid(gray_b, pyramid_b, window, o.pyramid_levels));
   std::vector<cv::Point2f> in_b = guess;
-  cv::calcOpticalFlowPyrLK(gray_a, gray_b, corners, in_b, status_ab, err_ab, window, o.pyramid_levels, term,
+  cv::calcOpticalFlowPyrLK(pyramid_a, pyramid_b, corners, in_b, status_ab, err_ab, window, levels, term,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
-  std::vector<cv::Point2f> back = corners;
-  cv::calcOpticalFlowPyrLK(gray_b, gray_a, in_b, back, status_ba, err_ba, window, o.pyramid_levels, term,
+  // Back from B, started as far from the corner as the forward pass moved from its start: a forward pass that
+  // locked onto the wrong period of a texture then starts a period off and shows it, where a start at the corner
+  // itself would stay there.
+  std::vector<cv::Point2f> back(corners.size());
+  for (size_t c = 0; c < corners.size(); ++c) back[c] = corners[c] + (in_b[c] - guess[c]);
+  cv::calcOpticalFlowPyrLK(pyramid_b, pyramid_a, in_b, back, status_ba, err_ba, window, levels, term,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
 
   const Eigen::Matrix3d essential = EssentialMatrix(a.world_from_camera, b.world_from_camera);
