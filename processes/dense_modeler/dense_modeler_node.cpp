@@ -147,6 +147,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "px, from every tracked feature (new corners only where the tracker left a gap)");
   p.Add("pair-match-window", &pm->window_px, "px, side of the LK window (odd)");
   p.Add("pair-match-pyramid-levels", &pm->pyramid_levels, "LK pyramid levels");
+  p.Add("pair-match-lk-iterations", &pm->lk_max_iterations, "LK iterations per level at most");
+  p.Add("pair-match-lk-epsilon", &pm->lk_epsilon_px, "px, LK stops when its step is smaller");
   p.Add("pair-match-max-backward-error", &pm->max_backward_error_px, "px, max forward-backward LK error");
   p.Add("pair-match-max-residual", &pm->max_residual, "gray levels, max mean |A - B| over the LK window");
   p.Add("pair-match-bare-distance", &pm->bare_distance_px,

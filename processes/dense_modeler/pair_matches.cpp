@@ -31,6 +31,8 @@ bool ValidatePairMatchOptions(const PairMatchOptions& o, std::string* why) {
   if (!(o.min_track_distance_px > 0)) e << "pair-match min-track-distance must be > 0; ";
   if (o.window_px < 5 || o.window_px % 2 == 0) e << "pair-match window must be odd and >= 5; ";
   if (o.pyramid_levels < 0 || o.pyramid_levels > 6) e << "pair-match pyramid-levels must be in [0, 6]; ";
+  if (o.lk_max_iterations < 1 || o.lk_max_iterations > 100) e << "pair-match lk-iterations must be in [1, 100]; ";
+  if (!(o.lk_epsilon_px > 0 && o.lk_epsilon_px < 1)) e << "pair-match lk-epsilon must be in (0, 1) px; ";
   if (!(o.max_backward_error_px > 0)) e << "pair-match max-backward-error must be > 0; ";
   if (!(o.max_residual > 0)) e << "pair-match max-residual must be > 0; ";
   if (!(o.bare_distance_px > 0)) e << "pair-match bare-distance must be > 0; ";
@@ -142,7 +144,7 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
     if (corners.empty()) return finish();
   }
   const cv::Size window(o.window_px, o.window_px);
-  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, o.lk_max_iterations, o.lk_epsilon_px);
   std::vector<uchar> status_ab, status_ba;
   std::vector<float> err_ab, err_ba;
   std::vector<cv::Mat> pyramid_a, pyramid_b;  // built once for both directions

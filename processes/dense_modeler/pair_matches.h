@@ -37,6 +37,8 @@ struct PairMatchOptions {
   double min_track_distance_px = 12.0;  // px, from every tracked feature: only where the tracker left a gap, (0, 1000]
   int window_px = 15;                   // px, side of the LK window (odd, >= 5); 11 px doubled the sim's mesh max
   int pyramid_levels = 3;               // LK pyramid levels above the image (0..6)
+  int lk_max_iterations = 20;           // LK iterations per level at most, [1, 100] (30 took 19 % longer, same matches)
+  double lk_epsilon_px = 0.03;          // px, LK stops when its step is smaller, (0, 1)
   double max_backward_error_px = 0.1;   // px, max distance of the B -> A track from the corner (> 0)
   double max_residual = 8.0;            // gray levels, max mean |A - B| over the LK window at the match (> 0)
   double bare_distance_px = 16.0;       // px, corners this far from every tracked feature are bare (see the top),
