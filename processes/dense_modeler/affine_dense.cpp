@@ -751,6 +751,13 @@ double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const 
   return WindowNcc(WindowA(gray_a, p, h), WindowWarp(jacobian, h), gray_b, q, stddev_a, stddev_b, kSearchPortable);
 }
 
+bool DensePairViewsUsable(const DenseView& a, const DenseView& b) {
+  return !a.image.empty() && !b.image.empty() && a.image.type() == b.image.type() && a.camera.IsValid() &&
+         b.camera.IsValid() && a.image.cols == a.camera.width && a.image.rows == a.camera.height &&
+         b.image.cols == b.camera.width && b.image.rows == b.camera.height &&
+         !((a.world_from_camera.translation() - b.world_from_camera.translation()).norm() < 1e-9);
+}
+
 cv::Rect DensePairRoi(const PinholeCamera& camera_a, const Eigen::Isometry3d& world_from_a,
                       const AffineDenseOptions& o) {
   const cv::Rect image_rect(0, 0, camera_a.width, camera_a.height);
@@ -767,15 +774,9 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     if (stats_out) *stats_out = stats;
     return out;
   };
-  if (a.image.empty() || b.image.empty() || a.image.type() != b.image.type() || !a.camera.IsValid() ||
-      !b.camera.IsValid() || !ValidateAffineDenseOptions(o, nullptr))
-    return finish();
-  if (a.image.cols != a.camera.width || a.image.rows != a.camera.height || b.image.cols != b.camera.width ||
-      b.image.rows != b.camera.height)
-    return finish();
+  if (!DensePairViewsUsable(a, b) || !ValidateAffineDenseOptions(o, nullptr)) return finish();
   const Eigen::Vector3d center_a = a.world_from_camera.translation();
   const Eigen::Vector3d center_b = b.world_from_camera.translation();
-  if ((center_a - center_b).norm() < 1e-9) return finish();
 
   // Features: inside both images, finite, deduplicated (order kept, deterministic).
   std::vector<PointMatch> feats;

@@ -134,6 +134,10 @@ struct DensePairStats {
 // True when usable; otherwise false with *why set.
 bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* why);
 
+// True when the two views can form a pair: both images non-empty, of the same type and of their cameras' sizes,
+// both cameras valid, the centres apart (> 1e-9 mm).
+bool DensePairViewsUsable(const DenseView& a, const DenseView& b);
+
 // The pixels of A a dense pair visits: options.roi_a (empty = the whole image) clipped to the image and, with a
 // valid region, to the region's projected box (region_image_margin_px around it). Empty: nothing to visit.
 cv::Rect DensePairRoi(const PinholeCamera& camera_a, const Eigen::Isometry3d& world_from_a,

@@ -504,11 +504,7 @@ Eigen::Isometry3d FloorViewB() {
 }
 AffineDenseOptions FloorRegionOptions() {
   AffineDenseOptions o;
-  o.region.valid = true;
-  o.region.box_min = Eigen::Vector3d(-1000, -1000, -100);
-  o.region.box_max = Eigen::Vector3d(1000, 1000, 300);
-  o.region.has_floor = true;
-  o.region.floor_clearance_mm = 4;
+  o.region = testing_scene::FloorRegion(Eigen::Vector3d(-1000, -1000, -100), Eigen::Vector3d(1000, 1000, 300));
   return o;
 }
 

@@ -220,12 +220,8 @@ VoxelVoteGrid WallAndFloorVotes() {
 
 TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
   const VoxelVoteGrid grid = WallAndFloorVotes();
-  RegionOfInterest region;
-  region.valid = true;
-  region.box_min = Eigen::Vector3d(-100, -100, -50);
-  region.box_max = Eigen::Vector3d(100, 100, 200);
-  region.has_floor = true;
-  region.floor_clearance_mm = 4;
+  const RegionOfInterest region =
+      testing_scene::FloorRegion(Eigen::Vector3d(-100, -100, -50), Eigen::Vector3d(100, 100, 200));
   DenseModelOptions options;
   options.carve = false;
   auto lowest_wall_and_floor = [&](const FinalModel& model, double* lowest_wall, int* floor_vertices) {

@@ -60,12 +60,8 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
     return out;
   };
   const int type = a.image.type();
-  if (!ValidatePairMatchOptions(o, nullptr) || a.image.empty() || b.image.empty() || b.image.type() != type ||
-      (type != CV_8UC1 && type != CV_8UC3) || !a.camera.IsValid() || !b.camera.IsValid() ||
-      a.image.cols != a.camera.width || a.image.rows != a.camera.height || b.image.cols != b.camera.width ||
-      b.image.rows != b.camera.height || !a.world_from_camera.matrix().allFinite() ||
-      !b.world_from_camera.matrix().allFinite() ||
-      (a.world_from_camera.translation() - b.world_from_camera.translation()).norm() < 1e-9)
+  if (!ValidatePairMatchOptions(o, nullptr) || !a.world_from_camera.matrix().allFinite() ||
+      !b.world_from_camera.matrix().allFinite() || !DensePairViewsUsable(a, b) || (type != CV_8UC1 && type != CV_8UC3))
     return finish();
   const cv::Rect image_rect(0, 0, a.image.cols, a.image.rows);
   const cv::Rect rect = rect_in.area() > 0 ? (rect_in & image_rect) : image_rect;
@@ -107,42 +103,41 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
     range.push_back((x - center_a).norm());
     on_floor.push_back(floor_test && region.HeightAboveFloor(x) < 0.5 * region.floor_clearance_mm);
   }
-  std::vector<cv::Point2f> guess = corners;
-  std::vector<char> skip(corners.size(), 0);  // on the floor: its nearest tracked features all are
-  std::vector<double> track_distance(corners.size(), std::numeric_limits<double>::infinity());  // px
+  // The corners to follow (not among floor tracks), their LK starts and distances to the nearest tracked feature.
+  std::vector<cv::Point2f> from_a, guess;
+  std::vector<double> track_distance;  // px
   std::vector<std::pair<double, size_t>> near;
   std::vector<double> ranges;
-  for (size_t c = 0; c < corners.size(); ++c) {
-    const Eigen::Vector2d pc(corners[c].x, corners[c].y);
-    for (const PointMatch& m : known) track_distance[c] = std::min(track_distance[c], (m.a - pc).norm());
-    if (o.guess_neighbours == 0 || ranged_a.empty()) continue;
-    near.clear();
-    for (size_t i = 0; i < ranged_a.size(); ++i) near.emplace_back((ranged_a[i] - pc).squaredNorm(), i);
-    const size_t k = std::min<size_t>(o.guess_neighbours, near.size());
-    std::partial_sort(near.begin(), near.begin() + k, near.end());
-    ranges.clear();
-    bool floor = floor_test;
-    for (size_t j = 0; j < k; ++j) {
-      ranges.push_back(range[near[j].second]);
-      floor = floor && on_floor[near[j].second];
+  for (const cv::Point2f& corner : corners) {
+    const Eigen::Vector2d pc(corner.x, corner.y);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const PointMatch& m : known) nearest = std::min(nearest, (m.a - pc).norm());
+    cv::Point2f start = corner;
+    if (o.guess_neighbours > 0 && !ranged_a.empty()) {
+      near.clear();
+      for (size_t i = 0; i < ranged_a.size(); ++i) near.emplace_back((ranged_a[i] - pc).squaredNorm(), i);
+      const size_t k = std::min<size_t>(o.guess_neighbours, near.size());
+      std::partial_sort(near.begin(), near.begin() + k, near.end());
+      ranges.clear();
+      bool floor = floor_test;
+      for (size_t j = 0; j < k; ++j) {
+        ranges.push_back(range[near[j].second]);
+        floor = floor && on_floor[near[j].second];
+      }
+      if (floor) {  // its nearest tracked features all lie on the floor: the dense pair skips floor triangles
+        ++stats.skipped_floor;
+        continue;
+      }
+      std::nth_element(ranges.begin(), ranges.begin() + k / 2, ranges.end());
+      Eigen::Vector2d qb;
+      if (b.camera.Project(b_from_world * (center_a + ranges[k / 2] * ray_a(pc)), &qb) && b.camera.InImage(qb))
+        start = cv::Point2f(static_cast<float>(qb.x()), static_cast<float>(qb.y()));
     }
-    skip[c] = floor;
-    std::nth_element(ranges.begin(), ranges.begin() + k / 2, ranges.end());
-    Eigen::Vector2d qb;
-    if (b.camera.Project(b_from_world * (center_a + ranges[k / 2] * ray_a(pc)), &qb) && b.camera.InImage(qb))
-      guess[c] = cv::Point2f(static_cast<float>(qb.x()), static_cast<float>(qb.y()));
+    from_a.push_back(corner);
+    guess.push_back(start);
+    track_distance.push_back(nearest);
   }
-  {  // drop the floor corners before LK (the dense pair skips triangles on the floor anyway)
-    size_t kept = 0;
-    for (size_t c = 0; c < corners.size(); ++c) {
-      if (skip[c]) continue;
-      corners[kept] = corners[c], guess[kept] = guess[c], track_distance[kept] = track_distance[c];
-      ++kept;
-    }
-    stats.skipped_floor = static_cast<int>(corners.size() - kept);
-    corners.resize(kept), guess.resize(kept), track_distance.resize(kept);
-    if (corners.empty()) return finish();
-  }
+  if (from_a.empty()) return finish();
   const cv::Size window(o.window_px, o.window_px);
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, o.lk_max_iterations, o.lk_epsilon_px);
   std::vector<uchar> status_ab, status_ba;
@@ -151,25 +146,25 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
   const int levels = std::min(cv::buildOpticalFlowPyramid(gray_a, pyramid_a, window, o.pyramid_levels),
                               cv::buildOpticalFlowPyramid(gray_b, pyramid_b, window, o.pyramid_levels));
   std::vector<cv::Point2f> in_b = guess;
-  cv::calcOpticalFlowPyrLK(pyramid_a, pyramid_b, corners, in_b, status_ab, err_ab, window, levels, term,
+  cv::calcOpticalFlowPyrLK(pyramid_a, pyramid_b, from_a, in_b, status_ab, err_ab, window, levels, term,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
   // Back from B, started as far from the corner as the forward pass moved from its start: a forward pass that
   // locked onto the wrong period of a texture then starts a period off and shows it, where a start at the corner
   // itself would stay there.
-  std::vector<cv::Point2f> back(corners.size());
-  for (size_t c = 0; c < corners.size(); ++c) back[c] = corners[c] + (in_b[c] - guess[c]);
+  std::vector<cv::Point2f> back(from_a.size());
+  for (size_t c = 0; c < from_a.size(); ++c) back[c] = from_a[c] + (in_b[c] - guess[c]);
   cv::calcOpticalFlowPyrLK(pyramid_b, pyramid_a, in_b, back, status_ba, err_ba, window, levels, term,
                            cv::OPTFLOW_USE_INITIAL_FLOW);
 
   const Eigen::Matrix3d essential = EssentialMatrix(a.world_from_camera, b.world_from_camera);
-  for (size_t c = 0; c < corners.size(); ++c) {
-    const Eigen::Vector2d pa(corners[c].x, corners[c].y), pb(in_b[c].x, in_b[c].y);
+  for (size_t c = 0; c < from_a.size(); ++c) {
+    const Eigen::Vector2d pa(from_a[c].x, from_a[c].y), pb(in_b[c].x, in_b[c].y);
     if (!status_ab[c] || !status_ba[c] || !pb.allFinite() || !b.camera.InImage(pb)) {
       ++stats.lost;
       continue;
     }
     const bool bare = track_distance[c] >= o.bare_distance_px;
-    if (std::hypot(back[c].x - corners[c].x, back[c].y - corners[c].y) >
+    if (std::hypot(back[c].x - from_a[c].x, back[c].y - from_a[c].y) >
         (bare ? o.bare_max_backward_error_px : o.max_backward_error_px)) {
       ++stats.rejected_backward;
       continue;

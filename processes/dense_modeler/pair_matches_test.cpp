@@ -216,12 +216,8 @@ TEST(PairMatches, LucasKanadeStartsAtTheTrackedFeaturesRange) {
 TEST(PairMatches, CornersAmongFloorTracksAreNotMatched) {
   const GapPair& d = Pair();
   const PairMatchOptions o;
-  RegionOfInterest region;
-  region.valid = true;
-  region.box_min = Eigen::Vector3d(-1000, -1000, -1000);
-  region.box_max = Eigen::Vector3d(1000, 1000, 1000);
-  region.has_floor = true;
-  region.floor_clearance_mm = 4;
+  RegionOfInterest region =
+      testing_scene::FloorRegion(Eigen::Vector3d(-1000, -1000, -1000), Eigen::Vector3d(1000, 1000, 1000));
   PairMatchStats none, all, no_region;
   AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), RegionOfInterest(), o, &no_region);
   region.floor_offset_mm = -1000;  // the floor far below: no tracked feature is on it

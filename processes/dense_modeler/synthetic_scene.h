@@ -12,6 +12,7 @@
 
 #include "common/camera_model.h"
 #include "common/sensor_data.h"
+#include "processes/dense_modeler/region_of_interest.h"
 
 namespace objscan {
 namespace testing_scene {
@@ -43,6 +44,21 @@ inline Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3
 }
 
 // Smooth colour texture as a function of a world point (BGR, 0..255).
+// A valid region: the box [box_min, box_max] (world, mm) cut by the floor z = floor_offset_mm (normal +z) with this
+// clearance (mm).
+inline RegionOfInterest FloorRegion(const Eigen::Vector3d& box_min, const Eigen::Vector3d& box_max,
+                                    double clearance_mm = 4, double floor_offset_mm = 0) {
+  RegionOfInterest r;
+  r.valid = true;
+  r.box_min = box_min;
+  r.box_max = box_max;
+  r.has_floor = true;
+  r.floor_normal = Eigen::Vector3d::UnitZ();
+  r.floor_offset_mm = floor_offset_mm;
+  r.floor_clearance_mm = clearance_mm;
+  return r;
+}
+
 inline std::array<uint8_t, 3> Texture(const Eigen::Vector3d& p) {
   std::array<uint8_t, 3> out;
   const double k1 = 2 * M_PI / 23.0, k2 = 2 * M_PI / 13.0, k3 = 2 * M_PI / 37.0;
