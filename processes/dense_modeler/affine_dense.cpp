@@ -684,6 +684,7 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (o.ncc_half_window < 0 || o.ncc_half_window > kMaxHalfWindow)
     e << "ncc-half-window must be in [0, " << kMaxHalfWindow << "]; ";
   if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min-ncc must be in [-1, 1]; ";
+  if (!(o.strict_triangle_edge_px > 0)) e << "strict-triangle-edge must be > 0 px; ";
   if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction-min-ncc must be in [-1, 1]; ";
   if (!(o.junction_floor_ncc_margin <= 2)) e << "junction-floor-ncc-margin must be <= 2 (< 0 = off); ";
   if (!(o.junction_floor_min_separation_px >= 0)) e << "junction-floor-min-separation must be >= 0 px; ";
@@ -891,6 +892,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
       ++stats.triangles_skipped_depth;
       continue;
     }
+    const bool strict = max_edge > o.strict_triangle_edge_px;  // stricter photometric checks below
     bool junction = false;  // joins the floor to the object: stricter photometric checks below
     if (o.region.valid) {
       const Eigen::Vector3d w0 = a.world_from_camera * vertex_in_a[idx[0]],
@@ -1023,7 +1025,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
             ++stats.rejected_ncc;
             continue;
           }
-          if (junction && o.junction_min_window_stddev >= 0 &&
+          if ((junction || strict) && o.junction_min_window_stddev >= 0 &&
               (sd_a < o.junction_min_window_stddev || sd_b < o.junction_min_window_stddev ||
                ncc < o.junction_min_ncc)) {
             ++stats.rejected_ncc;

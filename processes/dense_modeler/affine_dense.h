@@ -79,6 +79,13 @@ struct AffineDenseOptions {
                                          // AVX2)
   double min_triangle_area_px2 = 4.0;    // px², smaller triangles are skipped
   double max_triangle_edge_px = 80.0;    // px, triangles with a longer edge in A or B are skipped
+  double strict_triangle_edge_px = 50.0;  // px, triangles with a longer edge in A or B get the floor junction's
+                                          // photometric checks (junction_min_window_stddev, junction_min_ncc): far
+                                          // from the vertices the affine map follows the chord of a curved surface
+                                          // (a 50 mm chord of the 100 mm sphere lies 3.1 mm inside), and only a
+                                          // textured window lets the refinement pull Q onto the surface; the sim
+                                          // sphere's 3.5-4.6 mm dents came from such pixels (>= max_triangle_edge_px
+                                          // = off), > 0
   double min_triangle_angle_deg = 10.0;  // deg, thinner triangles (smallest angle in A) are skipped
   double max_vertex_depth_ratio = 1.15;  // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
   double max_triangle_slant_deg = 80.0;  // deg, max angle between the 3-D triangle's normal and the view ray of

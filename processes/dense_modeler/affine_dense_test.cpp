@@ -118,6 +118,44 @@ TEST(AffineDense, AffineMapExactOnFrontoParallelPlane) {
   EXPECT_LT(e.max_plane_mm, 0.5);
 }
 
+TEST(AffineDense, LargeTrianglesNeedTexturedWindows) {
+  // A fronto-parallel plane whose texture is faded to a ~2 gray-level ripple: exact matches that pass the ordinary
+  // NCC test, but too flat for the strict checks of triangles longer than strict_triangle_edge_px.
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(120, 25, 60);
+  auto faded = [](const cv::Mat& img) {
+    cv::Mat out;
+    img.convertTo(out, CV_8UC3, 0.04, 128 * 0.96);
+    return out;
+  };
+  const DenseView a = View(scene.camera, pa, faded(scene.Render(pa)));
+  const DenseView b = View(scene.camera, pb, faded(scene.Render(pb)));
+  AffineDenseOptions o;
+  o.min_window_stddev = 0.5;
+  std::string why;
+  ASSERT_TRUE(ValidateAffineDenseOptions(o, &why)) << why;
+  auto accepted_fraction = [&](int spacing_px, double strict_edge_px) {
+    AffineDenseOptions oo = o;
+    oo.strict_triangle_edge_px = strict_edge_px;
+    DensePairStats st;
+    ComputeDensePair(a, b, scene.Matches(pa, pb, spacing_px), oo, &st);
+    return st.pixels > 0 ? static_cast<double>(st.accepted) / st.pixels : 0.0;
+  };
+  // Grid spacing 40 px: the triangles' diagonals are ~57 px; 30 px: ~42 px.
+  const double large_strict = accepted_fraction(40, 50), large_off = accepted_fraction(40, 1e9);
+  const double small_strict = accepted_fraction(30, 50);
+  std::printf("faded texture: accepted %.3f of pixels in 57 px triangles (strict), %.3f (not strict), %.3f in 42 px "
+              "triangles (strict)\n", large_strict, large_off, small_strict);
+  EXPECT_LT(large_strict, 0.01);
+  EXPECT_GT(large_off, 0.9);
+  EXPECT_GT(small_strict, 0.9);
+  o.strict_triangle_edge_px = 0;
+  EXPECT_FALSE(ValidateAffineDenseOptions(o, &why));
+  EXPECT_NE(why.find("strict-triangle-edge"), std::string::npos);
+}
+
 TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
   const TiltedPlanePair t;
   const PlaneScene& scene = t.scene;

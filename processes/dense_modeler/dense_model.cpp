@@ -148,7 +148,9 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
       kept.push_back(s);
     }
     model.mesh = MeshFromSurfacePoints(
-        SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
+        SharpenCreases(
+            SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
+            grid.voxel_size(), o.ridge.creases, &model.ridge.crease_points_moved),
         grid.voxel_size());
     model.times.meshing_s = since(t0);
     t0 = Clock::now();

@@ -95,6 +95,12 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "mm, a curled border triangle also lies this far off the nearest interior vertex's tangent plane");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
+  CreaseOptions* cr = &m->ridge.creases;
+  p.Add("crease-radius", &cr->radius_voxels, "voxels, neighbourhood split into two faces to sharpen a crease (0 = off)");
+  p.Add("crease-min-angle", &cr->min_angle_deg, "deg, the two faces' normals at least this far apart");
+  p.Add("crease-core-angle", &cr->core_angle_deg, "deg, neighbours within this of a face's normal give its plane");
+  p.Add("crease-min-face-points", &cr->min_face_points, "surface points each face of a crease needs at least");
+  p.Add("crease-max-move", &cr->max_move_voxels, "voxels, crease points that would move farther stay");
   p.Add("floor-band", &m->floor_band_mm,
         "mm, ridge voxels lower than this above the floor that face up are dropped as floor (0 = off)");
   p.Add("floor-band-normal", &m->floor_band_normal_deg, "deg, largest angle of a floor voxel's normal to the floor's");
@@ -122,6 +128,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-reject-refine-at-border", &d->reject_refine_at_border,
         "drop pixels whose best refined match is at the end of the search");
   p.Add("dense-min-triangle-area", &d->min_triangle_area_px2, "px^2, smaller triangles are skipped");
+  p.Add("dense-strict-triangle-edge", &d->strict_triangle_edge_px,
+        "px, triangles with a longer edge get the floor junction's texture and NCC checks");
   p.Add("dense-max-triangle-edge", &d->max_triangle_edge_px, "px, triangles with longer edges are skipped");
   p.Add("dense-min-triangle-angle", &d->min_triangle_angle_deg, "deg, thinner triangles are skipped");
   p.Add("dense-max-depth-ratio", &d->max_vertex_depth_ratio, "max/min vertex depth; larger = depth edge");
@@ -653,7 +661,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
             std::to_string(model.ridge.fragments_dropped) +
-            " in small fragments dropped; mesh: " + std::to_string(model.visibility.vertices_removed) +
+            " in small fragments dropped, " + std::to_string(model.ridge.crease_points_moved) +
+            " surface points moved onto creases; mesh: " + std::to_string(model.visibility.vertices_removed) +
             " vertices hidden in " + std::to_string(model.visibility.views) + " views removed, " +
             std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +

@@ -67,7 +67,53 @@ class VoteField {
   std::vector<int32_t> dense_;
 };
 
+// Surface points bucketed in cubic cells of side radius: the points within radius of p lie in p's cell and its 26
+// neighbours. ForEachNear visits them in a fixed order (cells dz, dy, dx; points in input order).
+class PointCells {
+ public:
+  PointCells(const std::vector<SurfaceVoxel>& surface, double radius) : surface_(surface), radius_(radius) {
+    for (size_t i = 0; i < surface.size(); ++i) cells_[VoxelKey(CellOf(surface[i].point_in_world))].push_back(i);
+  }
+  // f(j, d) for every point j within radius of p, d = its offset from p.
+  template <typename F>
+  void ForEachNear(const Eigen::Vector3d& p, F&& f) const {
+    const Eigen::Vector3i c0 = CellOf(p);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          auto it = cells_.find(VoxelKey(c0 + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (size_t j : it->second) {
+            const Eigen::Vector3d d = surface_[j].point_in_world - p;
+            if (d.squaredNorm() <= radius_ * radius_) f(j, d);
+          }
+        }
+  }
+
+ private:
+  Eigen::Vector3i CellOf(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d g = p / radius_;
+    return Eigen::Vector3i(static_cast<int>(std::floor(g.x())), static_cast<int>(std::floor(g.y())),
+                           static_cast<int>(std::floor(g.z())));
+  }
+  const std::vector<SurfaceVoxel>& surface_;
+  double radius_;
+  std::unordered_map<uint64_t, std::vector<size_t>> cells_;
+};
+
 }  // namespace
+
+bool ValidateCreaseOptions(const CreaseOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (!(o.radius_voxels == 0 || (o.radius_voxels >= 2 && o.radius_voxels <= 12)))
+    e << "crease radius_voxels must be 0 or in [2, 12]; ";
+  if (!(o.min_angle_deg > 0 && o.min_angle_deg < 180)) e << "crease min_angle_deg must be in (0, 180); ";
+  if (!(o.core_angle_deg > 0 && o.core_angle_deg <= 45)) e << "crease core_angle_deg must be in (0, 45]; ";
+  if (o.min_face_points < 3) e << "crease min_face_points must be >= 3; ";
+  if (!(o.max_move_voxels > 0)) e << "crease max_move_voxels must be > 0; ";
+  if (why) *why = e.str();
+  return e.str().empty();
+}
 
 bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   std::ostringstream e;
@@ -81,6 +127,8 @@ bool ValidateRidgeOptions(const RidgeOptions& o, std::string* why) {
   if (!ValidateCurledBorderOptions(o.curled_borders, &curl_why)) e << curl_why;
   if (!(o.smoothing_min_normal_cos >= -1 && o.smoothing_min_normal_cos < 1))
     e << "ridge smoothing_min_normal_cos must be in [-1, 1); ";
+  std::string crease_why;
+  if (!ValidateCreaseOptions(o.creases, &crease_why)) e << crease_why;
   if (!(o.smoothing_radius == 0 || (o.smoothing_radius >= 1 && o.smoothing_radius <= 12)))
     e << "ridge smoothing_radius must be 0 or in [1, 12]; ";
   if (why) *why = e.str();
@@ -198,38 +246,22 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
   std::vector<SurfaceVoxel> out = surface;
   if (surface.empty() || !(voxel_size > 0) || !(radius_voxels > 0)) return out;
   const double radius = radius_voxels * voxel_size, sigma = 0.5 * radius;
-  // Cells of side radius: the neighbours of a point are in its cell's 27-neighbourhood.
-  auto cell_of = [&](const Eigen::Vector3d& p) {
-    const Eigen::Vector3d g = p / radius;
-    return Eigen::Vector3i(static_cast<int>(std::floor(g.x())), static_cast<int>(std::floor(g.y())),
-                           static_cast<int>(std::floor(g.z())));
-  };
-  std::unordered_map<uint64_t, std::vector<size_t>> cells;
-  for (size_t i = 0; i < surface.size(); ++i) cells[VoxelKey(cell_of(surface[i].point_in_world))].push_back(i);
+  const PointCells cells(surface, radius);
   std::vector<std::pair<Eigen::Vector3d, double>> near;  // neighbour offset from the point, weight
   for (size_t i = 0; i < surface.size(); ++i) {
     const Eigen::Vector3d p = surface[i].point_in_world;
-    const Eigen::Vector3i c0 = cell_of(p);
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
     double wsum = 0;
     near.clear();
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          auto it = cells.find(VoxelKey(c0 + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells.end()) continue;
-          for (size_t j : it->second) {
-            const Eigen::Vector3d d = surface[j].point_in_world - p;
-            const double dist2 = d.squaredNorm();
-            if (dist2 > radius * radius || surface[j].normal.dot(surface[i].normal) < min_normal_cos) continue;
-            const double w = std::max(surface[j].voxel.votes, 1) * std::exp(-0.5 * dist2 / (sigma * sigma));
-            mean += w * d;
-            second += w * d * d.transpose();
-            wsum += w;
-            near.emplace_back(d, w);
-          }
-        }
+    cells.ForEachNear(p, [&](size_t j, const Eigen::Vector3d& d) {
+      if (surface[j].normal.dot(surface[i].normal) < min_normal_cos) return;
+      const double w = std::max(surface[j].voxel.votes, 1) * std::exp(-0.5 * d.squaredNorm() / (sigma * sigma));
+      mean += w * d;
+      second += w * d * d.transpose();
+      wsum += w;
+      near.emplace_back(d, w);
+    });
     if (!(wsum > 0)) continue;
     mean /= wsum;
     Eigen::Vector3d n;
@@ -262,6 +294,101 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
     }
     out[i].normal = normal;
     out[i].point_in_world = moved;
+  }
+  return out;
+}
+
+std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surface, double voxel_size,
+                                         const CreaseOptions& o, int64_t* moved) {
+  std::vector<SurfaceVoxel> out = surface;
+  if (moved) *moved = 0;
+  if (surface.empty() || !(voxel_size > 0) || !(o.radius_voxels > 0)) return out;
+  constexpr double kDegToRad = M_PI / 180.0;
+  const double radius = o.radius_voxels * voxel_size, max_move = o.max_move_voxels * voxel_size;
+  const double cos_apart = std::cos(o.min_angle_deg * kDegToRad), cos_core = std::cos(o.core_angle_deg * kDegToRad);
+  const size_t min_points = static_cast<size_t>(std::max(o.min_face_points, 3));
+  const PointCells cells(surface, radius);
+  std::vector<size_t> near;
+  for (size_t i = 0; i < surface.size(); ++i) {
+    const Eigen::Vector3d p = surface[i].point_in_world, own = surface[i].normal;
+    near.clear();
+    cells.ForEachNear(p, [&](size_t j, const Eigen::Vector3d&) { near.push_back(j); });
+    if (near.size() < 2 * min_points) continue;
+    // 2-means of the normals, seeded by the normal farthest from the point's own and the one farthest from that.
+    auto farthest_from = [&](const Eigen::Vector3d& n) {
+      size_t best = near[0];
+      for (size_t j : near)
+        if (surface[j].normal.dot(n) < surface[best].normal.dot(n)) best = j;
+      return surface[best].normal;
+    };
+    Eigen::Vector3d m1 = farthest_from(own);
+    Eigen::Vector3d m2 = farthest_from(m1);
+    if (m1.dot(m2) > cos_apart) continue;  // one face (the common case)
+    bool split = true;
+    for (int iteration = 0; iteration < 5 && split; ++iteration) {
+      Eigen::Vector3d s1 = Eigen::Vector3d::Zero(), s2 = Eigen::Vector3d::Zero();
+      for (size_t j : near) (surface[j].normal.dot(m1) >= surface[j].normal.dot(m2) ? s1 : s2) += surface[j].normal;
+      split = s1.norm() > 1e-9 && s2.norm() > 1e-9;
+      if (split) m1 = s1.normalized(), m2 = s2.normalized();
+    }
+    if (!split || m1.dot(m2) > cos_apart) continue;
+    // Each face's core: the group's normals within core_angle_deg of the group's far side (the normal at the 10th
+    // percentile of the dot product with the other group's mean: on the face, not on the bevel in between, and no
+    // single stray normal). Its plane goes through the core's vote-weighted centroid along its mean normal.
+    auto far_side = [&](const Eigen::Vector3d& own_mean, const Eigen::Vector3d& other_mean) {
+      std::vector<std::pair<double, size_t>> order;
+      for (size_t j : near)
+        if (surface[j].normal.dot(own_mean) >= surface[j].normal.dot(other_mean))
+          order.emplace_back(surface[j].normal.dot(other_mean), j);
+      const size_t k = order.size() / 10;
+      std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end());
+      return surface[order[k].second].normal;
+    };
+    const Eigen::Vector3d e1 = far_side(m1, m2), e2 = far_side(m2, m1);
+    Eigen::Vector3d c1 = Eigen::Vector3d::Zero(), c2 = Eigen::Vector3d::Zero();
+    Eigen::Vector3d s1 = Eigen::Vector3d::Zero(), s2 = Eigen::Vector3d::Zero();
+    double w1 = 0, w2 = 0;
+    size_t n1_count = 0, n2_count = 0;
+    for (size_t j : near) {
+      const double w = std::max(surface[j].voxel.votes, 1);
+      const Eigen::Vector3d& nj = surface[j].normal;
+      if (nj.dot(e1) >= cos_core) c1 += w * surface[j].point_in_world, s1 += w * nj, w1 += w, ++n1_count;
+      if (nj.dot(e2) >= cos_core) c2 += w * surface[j].point_in_world, s2 += w * nj, w2 += w, ++n2_count;
+    }
+    if (n1_count < min_points || n2_count < min_points) continue;
+    c1 /= w1;
+    c2 /= w2;
+    m1 = s1.normalized();
+    m2 = s2.normalized();
+    if (n1_count < min_points || n2_count < min_points || m1.dot(m2) > cos_apart) continue;
+    // Convex: each face's centroid lies behind the other's plane; the solid is the wedge {m1.(x - c1) <= 0,
+    // m2.(x - c2) <= 0}. Concave: both in front; the space outside the solid is the wedge of -m1, -m2. Either way
+    // the surface is the boundary of the wedge W = {n1.(x - c1) <= 0, n2.(x - c2) <= 0}.
+    const double side12 = m1.dot(c2 - c1), side21 = m2.dot(c1 - c2);
+    const bool convex = side12 < 0 && side21 < 0;
+    if (!convex && !(side12 > 0 && side21 > 0)) continue;
+    const Eigen::Vector3d n1 = convex ? m1 : Eigen::Vector3d(-m1), n2 = convex ? m2 : Eigen::Vector3d(-m2);
+    constexpr double kOnFace = 1e-9;  // mm
+    // Candidates: the projections onto each plane that lie on W's face, and the nearest point of the edge line.
+    Eigen::Vector3d best = p, best_normal = own;
+    double best_dist = std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d q1 = p - n1.dot(p - c1) * n1, q2 = p - n2.dot(p - c2) * n2;
+    if (n2.dot(q1 - c2) <= kOnFace && (q1 - p).norm() < best_dist) best = q1, best_normal = m1, best_dist = (q1 - p).norm();
+    if (n1.dot(q2 - c1) <= kOnFace && (q2 - p).norm() < best_dist) best = q2, best_normal = m2, best_dist = (q2 - p).norm();
+    const Eigen::Vector3d e = n1.cross(n2);
+    if (e.norm() > 1e-6) {
+      Eigen::Matrix3d a;
+      a.row(0) = n1.transpose();
+      a.row(1) = n2.transpose();
+      a.row(2) = e.normalized().transpose();
+      const Eigen::Vector3d qe = a.inverse() * Eigen::Vector3d(n1.dot(c1), n2.dot(c2), e.normalized().dot(p));
+      if ((qe - p).norm() < best_dist)
+        best = qe, best_normal = own.dot(m1) >= own.dot(m2) ? m1 : m2, best_dist = (qe - p).norm();
+    }
+    if (!(best_dist <= max_move)) continue;
+    out[i].point_in_world = best;
+    out[i].normal = best_normal;
+    if (moved) ++*moved;
   }
   return out;
 }

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <string>
 
 namespace objscan {
 namespace {
@@ -185,6 +187,116 @@ TEST(SurfaceExtractionTest, EmptyInputAndOptions) {
   EXPECT_FALSE(ValidateRidgeOptions(bad_curl, &why));
   EXPECT_NE(why.find("curl max_angle_deg"), std::string::npos);
   EXPECT_TRUE(SmoothSurfacePoints({}, 2.0, 4.0).empty());
+}
+
+// Oriented points of a crease along y: the solid {x <= 0, z <= 0} (convex edge), its edge rounded by a fillet of
+// radius fillet_mm (up to 0.41 x fillet_mm inside both faces) and its top face running on past the edge by 3 mm,
+// 0.3 mm high (a lip). flip = outward normals reversed: the same surface as the concave crease of the complement.
+std::vector<SurfaceVoxel> BevelledCrease(double fillet_mm, bool flip) {
+  std::vector<SurfaceVoxel> pts;
+  auto add = [&](double x, double y, double z, const Eigen::Vector3d& n) {
+    SurfaceVoxel s;
+    s.point_in_world = Eigen::Vector3d(x, y, z);
+    s.normal = flip ? Eigen::Vector3d(-n) : n;
+    s.voxel.votes = 20;
+    pts.push_back(s);
+  };
+  for (double y = -20; y <= 20; y += 1.0) {
+    for (double x = -24; x <= -fillet_mm; x += 1.0) add(x, y, 0, Eigen::Vector3d::UnitZ());
+    for (double z = -24; z <= -fillet_mm; z += 1.0) add(0, y, z, Eigen::Vector3d::UnitX());
+    for (double deg = 7.5; deg < 90; deg += 7.5) {
+      const double t = deg * M_PI / 180;
+      add(-fillet_mm + fillet_mm * std::sin(t), y, -fillet_mm + fillet_mm * std::cos(t),
+          Eigen::Vector3d(std::sin(t), 0, std::cos(t)));
+    }
+    for (double x = 1; x <= 3; x += 1.0) add(x, y, 0.3, Eigen::Vector3d::UnitZ());
+  }
+  return pts;
+}
+
+// Distance of p (in the x-z plane) to the boundary of the wedge {x <= 0, z <= 0}.
+double DistanceToWedge(const Eigen::Vector3d& p) {
+  if (p.x() <= 0 && p.z() <= 0) return std::min(-p.x(), -p.z());
+  return std::hypot(std::max(p.x(), 0.0), std::max(p.z(), 0.0));
+}
+
+double MaxDistanceToWedge(const std::vector<SurfaceVoxel>& pts) {
+  double worst = 0;
+  for (const SurfaceVoxel& s : pts) worst = std::max(worst, DistanceToWedge(s.point_in_world));
+  return worst;
+}
+
+TEST(SurfaceExtractionTest, SharpenCreasesRestoresConvexAndConcaveEdges) {
+  CreaseOptions o;
+  std::string why;
+  ASSERT_TRUE(ValidateCreaseOptions(o, &why)) << why;
+  for (const bool flip : {false, true}) {
+    SCOPED_TRACE(flip ? "concave" : "convex");
+    const std::vector<SurfaceVoxel> bevelled = BevelledCrease(6.0, flip);
+    const double before = MaxDistanceToWedge(bevelled);
+    int64_t moved = 0;
+    const std::vector<SurfaceVoxel> sharp = SharpenCreases(bevelled, 2.0, o, &moved);
+    const double after = MaxDistanceToWedge(sharp);
+    std::printf("%s crease: max distance to the true faces %.2f mm -> %.3f mm, %lld of %zu points moved\n",
+                flip ? "concave" : "convex", before, after, static_cast<long long>(moved), sharp.size());
+    EXPECT_GT(before, 2.4);  // the fillet's middle: 6 x (sqrt(2) - 1) mm inside; the lip 3 mm beyond the wall
+    EXPECT_LT(after, 0.2);  // the faces' planes lean a little towards the bevel points within 10 deg of them
+    ASSERT_EQ(sharp.size(), bevelled.size());
+    double worst_normal_deg = 0;
+    for (size_t i = 0; i < sharp.size(); ++i) {
+      EXPECT_EQ(sharp[i].voxel.ijk, bevelled[i].voxel.ijk);
+      // Each point takes the normal of the face it lies on (up or out; reversed for the concave crease).
+      const Eigen::Vector3d n = flip ? Eigen::Vector3d(-sharp[i].normal) : sharp[i].normal;
+      const double deg = std::acos(std::min(1.0, std::max(n.z(), n.x()))) * 180 / M_PI;
+      worst_normal_deg = std::max(worst_normal_deg, deg);
+    }
+    std::printf("  normals at most %.2f deg off their face's\n", worst_normal_deg);
+    EXPECT_LT(worst_normal_deg, 1.5);
+  }
+}
+
+TEST(SurfaceExtractionTest, SharpenCreasesLeavesSmoothSurfacesAlone) {
+  // A 100 mm sphere (normals spread by ~10 deg over the neighbourhood) and a 30 mm one (~35 deg): one face each.
+  for (const double radius : {100.0, 30.0}) {
+    std::vector<SurfaceVoxel> pts;
+    const int n = static_cast<int>(4 * M_PI * radius * radius / 2.0);  // ~one point per 2 mm^2
+    const double golden = M_PI * (3 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - 2 * (i + 0.5) / n, rr = std::sqrt(1 - z * z);
+      SurfaceVoxel s;
+      s.normal = Eigen::Vector3d(rr * std::cos(golden * i), rr * std::sin(golden * i), z);
+      s.point_in_world = kCentre + radius * s.normal;
+      s.voxel.votes = 20;
+      pts.push_back(s);
+    }
+    int64_t moved = -1;
+    const std::vector<SurfaceVoxel> out = SharpenCreases(pts, 2.0, CreaseOptions(), &moved);
+    EXPECT_EQ(moved, 0) << radius;
+    ASSERT_EQ(out.size(), pts.size());
+    for (size_t i = 0; i < out.size(); ++i) EXPECT_EQ(out[i].point_in_world, pts[i].point_in_world);
+  }
+  // Off, empty input and bad options.
+  CreaseOptions off;
+  off.radius_voxels = 0;
+  const std::vector<SurfaceVoxel> bevelled = BevelledCrease(6.0, false);
+  int64_t moved = -1;
+  const std::vector<SurfaceVoxel> same = SharpenCreases(bevelled, 2.0, off, &moved);
+  EXPECT_EQ(moved, 0);
+  EXPECT_EQ(MaxDistanceToWedge(same), MaxDistanceToWedge(bevelled));
+  EXPECT_TRUE(SharpenCreases({}, 2.0, CreaseOptions()).empty());
+  CreaseOptions bad;
+  bad.radius_voxels = 1;
+  bad.min_angle_deg = 180;
+  bad.core_angle_deg = 0;
+  bad.min_face_points = 2;
+  bad.max_move_voxels = 0;
+  std::string why;
+  EXPECT_FALSE(ValidateCreaseOptions(bad, &why));
+  for (const char* field : {"radius_voxels", "min_angle_deg", "core_angle_deg", "min_face_points", "max_move_voxels"})
+    EXPECT_NE(why.find(field), std::string::npos) << field;
+  RidgeOptions ridge;
+  ridge.creases = bad;
+  EXPECT_FALSE(ValidateRidgeOptions(ridge, &why));
 }
 
 }  // namespace
