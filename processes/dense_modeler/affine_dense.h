@@ -56,29 +56,29 @@ struct DensePoint {
 enum class DenseMapping : int { kAffine = 0, kPlane = 1 };
 
 struct AffineDenseOptions {
-  int mapping = 0;                       // 0 = affine barycentric map, 1 = plane of the triangle (perspective-correct)
-  int pixel_step = 1;                    // px, sample every pixel_step-th row and column of A (>= 1)
-  double epipolar_threshold_px = 1.0;    // px, max distance of Q to the epipolar line of P (> 0)
-  double max_color_difference = 30.0;    // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
-  int ncc_half_window = 2;               // px, half side of the NCC window (0 = no NCC check)
-  double min_ncc = 0.7;                  // min NCC of the warped window, [-1, 1]
-  double min_window_stddev = 0.5;        // gray levels, windows flatter than this skip the NCC test (textureless)
-  bool refine_along_epipolar = true;     // refine Q by a 1-D NCC search along the epipolar line
-  double refine_search_px = 3.0;         // px, half length of the refinement search (> 0); the affine map of a
-                                         // curved surface's triangle is off by more than 1.5 px often enough that
-                                         // +-1.5 px lost much of the lower sphere and the box (docs/benchmarks.md)
-  double refine_step_px = 0.5;           // px, refinement search step (> 0); the best step is refined by a
-                                         // parabola through its neighbours
-  bool reject_refine_at_border = true;   // drop P when the refinement's best NCC is at either end of the search:
-                                         // the true match lies farther than refine_search_px from the affine
-                                         // prediction (a triangle across a crease or a depth change)
-  int refine_kernel = 0;                 // implementation of the window NCCs, all bit-identical (for tests and
-                                         // benchmarks): 0 = AVX2 where the CPU has it, else 1; 1 = the reference
-                                         // (one window NCC per search step, SSE2 sampling); 2 = portable scalar
-                                         // sampling, the search's steps batched; 3 = AVX2, steps batched (1 without
-                                         // AVX2)
-  double min_triangle_area_px2 = 4.0;    // px², smaller triangles are skipped
-  double max_triangle_edge_px = 80.0;    // px, triangles with a longer edge in A or B are skipped
+  int mapping = 0;                        // 0 = affine barycentric map, 1 = plane of the triangle (perspective-correct)
+  int pixel_step = 1;                     // px, sample every pixel_step-th row and column of A (>= 1)
+  double epipolar_threshold_px = 1.0;     // px, max distance of Q to the epipolar line of P (> 0)
+  double max_color_difference = 30.0;     // gray levels, max mean |ΔB|,|ΔG|,|ΔR| between P and Q (< 0 = off)
+  int ncc_half_window = 2;                // px, half side of the NCC window (0 = no NCC check)
+  double min_ncc = 0.7;                   // min NCC of the warped window, [-1, 1]
+  double min_window_stddev = 0.5;         // gray levels, windows flatter than this skip the NCC test (textureless)
+  bool refine_along_epipolar = true;      // refine Q by a 1-D NCC search along the epipolar line
+  double refine_search_px = 3.0;          // px, half length of the refinement search (> 0); the affine map of a
+                                          // curved surface's triangle is off by more than 1.5 px often enough that
+                                          // +-1.5 px lost much of the lower sphere and the box (docs/benchmarks.md)
+  double refine_step_px = 0.5;            // px, refinement search step (> 0); the best step is refined by a
+                                          // parabola through its neighbours
+  bool reject_refine_at_border = true;    // drop P when the refinement's best NCC is at either end of the search:
+                                          // the true match lies farther than refine_search_px from the affine
+                                          // prediction (a triangle across a crease or a depth change)
+  int refine_kernel = 0;                  // implementation of the window NCCs, all bit-identical (for tests and
+                                          // benchmarks): 0 = AVX2 where the CPU has it, else 1; 1 = the reference
+                                          // (one window NCC per search step, SSE2 sampling); 2 = portable scalar
+                                          // sampling, the search's steps batched; 3 = AVX2, steps batched (1 without
+                                          // AVX2)
+  double min_triangle_area_px2 = 4.0;     // px², smaller triangles are skipped
+  double max_triangle_edge_px = 80.0;     // px, triangles with a longer edge in A or B are skipped
   double strict_triangle_edge_px = 50.0;  // px, triangles with a longer edge in A or B get the floor junction's
                                           // photometric checks (junction_min_window_stddev, junction_min_ncc): far
                                           // from the vertices the affine map follows the chord of a curved surface
@@ -86,10 +86,10 @@ struct AffineDenseOptions {
                                           // textured window lets the refinement pull Q onto the surface; the sim
                                           // sphere's 3.5-4.6 mm dents came from such pixels (>= max_triangle_edge_px
                                           // = off), > 0
-  double min_triangle_angle_deg = 10.0;  // deg, thinner triangles (smallest angle in A) are skipped
-  double max_vertex_depth_ratio = 1.15;  // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
-  double max_triangle_slant_deg = 80.0;  // deg, max angle between the 3-D triangle's normal and the view ray of
-                                         // its centroid in A; more oblique = likely spans a depth edge, skipped
+  double min_triangle_angle_deg = 10.0;   // deg, thinner triangles (smallest angle in A) are skipped
+  double max_vertex_depth_ratio = 1.15;   // max/min vertex depth in A; larger = depth edge, skipped (>= 1)
+  double max_triangle_slant_deg = 80.0;   // deg, max angle between the 3-D triangle's normal and the view ray of
+                                          // its centroid in A; more oblique = likely spans a depth edge, skipped
   double min_triangulation_angle_deg = 1.0;           // deg, rays meeting at a smaller angle are rejected
   double max_reprojection_px = 1.0;                   // px, max reprojection error of the triangulated point in A or B
   double min_feature_separation_px = 0.5;             // px, features closer than this to an earlier one are dropped
@@ -109,10 +109,10 @@ struct AffineDenseOptions {
   // plane would put in the air):
   double junction_floor_ncc_margin = 0.1;         // NCC units, <= 2 (< 0 = off)
   double junction_floor_min_separation_px = 1.0;  // px, >= 0
-  bool skip_floor_triangles = true;     // triangles with every vertex on the floor (RegionOfInterest::
-                                        // TriangleOnFloor) are skipped: almost all their points fall under the
-                                        // clearance (half of a sim pair's pixels went that way), the rest are
-                                        // floor mismatches
+  bool skip_floor_triangles = true;               // triangles with every vertex on the floor (RegionOfInterest::
+                                     // TriangleOnFloor) are skipped: almost all their points fall under the
+                                     // clearance (half of a sim pair's pixels went that way), the rest are
+                                     // floor mismatches
   double region_slack_mm = 10.0;        // mm, a triangle is skipped only when its vertices are this far outside
   double region_image_margin_px = 8.0;  // px, margin around the region's projected box in A
 };

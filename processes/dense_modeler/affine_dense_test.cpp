@@ -146,8 +146,10 @@ TEST(AffineDense, LargeTrianglesNeedTexturedWindows) {
   // Grid spacing 40 px: the triangles' diagonals are ~57 px; 30 px: ~42 px.
   const double large_strict = accepted_fraction(40, 50), large_off = accepted_fraction(40, 1e9);
   const double small_strict = accepted_fraction(30, 50);
-  std::printf("faded texture: accepted %.3f of pixels in 57 px triangles (strict), %.3f (not strict), %.3f in 42 px "
-              "triangles (strict)\n", large_strict, large_off, small_strict);
+  std::printf(
+      "faded texture: accepted %.3f of pixels in 57 px triangles (strict), %.3f (not strict), %.3f in 42 px "
+      "triangles (strict)\n",
+      large_strict, large_off, small_strict);
   EXPECT_LT(large_strict, 0.01);
   EXPECT_GT(large_off, 0.9);
   EXPECT_GT(small_strict, 0.9);

@@ -96,7 +96,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
   CreaseOptions* cr = &m->ridge.creases;
-  p.Add("crease-radius", &cr->radius_voxels, "voxels, neighbourhood split into two faces to sharpen a crease (0 = off)");
+  p.Add("crease-radius", &cr->radius_voxels,
+        "voxels, neighbourhood split into two faces to sharpen a crease (0 = off)");
   p.Add("crease-min-angle", &cr->min_angle_deg, "deg, the two faces' normals at least this far apart");
   p.Add("crease-core-angle", &cr->core_angle_deg, "deg, neighbours within this of a face's normal give its plane");
   p.Add("crease-min-face-points", &cr->min_face_points, "surface points each face of a crease needs at least");
@@ -660,8 +661,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
-            std::to_string(model.ridge.fragments_dropped) +
-            " in small fragments dropped, " + std::to_string(model.ridge.crease_points_moved) +
+            std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
+            std::to_string(model.ridge.crease_points_moved) +
             " surface points moved onto creases; mesh: " + std::to_string(model.visibility.vertices_removed) +
             " vertices hidden in " + std::to_string(model.visibility.views) + " views removed, " +
             std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +

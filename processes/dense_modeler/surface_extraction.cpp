@@ -340,6 +340,7 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
       for (size_t j : near)
         if (surface[j].normal.dot(own_mean) >= surface[j].normal.dot(other_mean))
           order.emplace_back(surface[j].normal.dot(other_mean), j);
+      if (order.empty()) return own_mean;  // (the 2-means groups are not empty; kept for safety)
       const size_t k = order.size() / 10;
       std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end());
       return surface[order[k].second].normal;
@@ -360,7 +361,7 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
     c2 /= w2;
     m1 = s1.normalized();
     m2 = s2.normalized();
-    if (n1_count < min_points || n2_count < min_points || m1.dot(m2) > cos_apart) continue;
+    if (m1.dot(m2) > cos_apart) continue;
     // Convex: each face's centroid lies behind the other's plane; the solid is the wedge {m1.(x - c1) <= 0,
     // m2.(x - c2) <= 0}. Concave: both in front; the space outside the solid is the wedge of -m1, -m2. Either way
     // the surface is the boundary of the wedge W = {n1.(x - c1) <= 0, n2.(x - c2) <= 0}.
@@ -373,17 +374,19 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
     Eigen::Vector3d best = p, best_normal = own;
     double best_dist = std::numeric_limits<double>::infinity();
     const Eigen::Vector3d q1 = p - n1.dot(p - c1) * n1, q2 = p - n2.dot(p - c2) * n2;
-    if (n2.dot(q1 - c2) <= kOnFace && (q1 - p).norm() < best_dist) best = q1, best_normal = m1, best_dist = (q1 - p).norm();
-    if (n1.dot(q2 - c1) <= kOnFace && (q2 - p).norm() < best_dist) best = q2, best_normal = m2, best_dist = (q2 - p).norm();
+    auto consider = [&](const Eigen::Vector3d& q, const Eigen::Vector3d& normal) {
+      if ((q - p).norm() < best_dist) best = q, best_normal = normal, best_dist = (q - p).norm();
+    };
+    if (n2.dot(q1 - c2) <= kOnFace) consider(q1, m1);
+    if (n1.dot(q2 - c1) <= kOnFace) consider(q2, m2);
     const Eigen::Vector3d e = n1.cross(n2);
-    if (e.norm() > 1e-6) {
+    if (e.norm() > 1e-6) {  // (antiparallel faces, a thin plate's two sides, have no edge)
       Eigen::Matrix3d a;
       a.row(0) = n1.transpose();
       a.row(1) = n2.transpose();
       a.row(2) = e.normalized().transpose();
-      const Eigen::Vector3d qe = a.inverse() * Eigen::Vector3d(n1.dot(c1), n2.dot(c2), e.normalized().dot(p));
-      if ((qe - p).norm() < best_dist)
-        best = qe, best_normal = own.dot(m1) >= own.dot(m2) ? m1 : m2, best_dist = (qe - p).norm();
+      consider(a.inverse() * Eigen::Vector3d(n1.dot(c1), n2.dot(c2), e.normalized().dot(p)),
+               own.dot(m1) >= own.dot(m2) ? m1 : m2);
     }
     if (!(best_dist <= max_move)) continue;
     out[i].point_in_world = best;

@@ -33,17 +33,17 @@ namespace objscan {
 // rim) into a bevel up to ~4 mm off both faces, or let one face run on past the edge. Where a point's neighbourhood
 // holds two faces, it moves onto the wedge those faces' planes bound.
 struct CreaseOptions {
-  double radius_voxels = 9.0;     // voxels, neighbourhood of a point whose normals are split into two faces (0 =
-                                  // off), 0 or [2, 12]; it must reach past the bevel (~4 voxels) well onto both
-                                  // faces (7 left the cylinder's rim 3.6 mm round, 9: 2.3 mm)
-  double min_angle_deg = 50.0;    // deg, the two faces' mean normals at least this far apart, (0, 180): a smooth
-                                  // surface of curvature radius R spreads normals by ~2 x radius / R rad over the
-                                  // neighbourhood (21 deg on a 100 mm sphere)
-  double core_angle_deg = 10.0;   // deg, neighbours within this of a face's mean normal give its plane; the bevel's
-                                  // own points, in between, must not (20 tilted the cylinder's top towards its
-                                  // rim by 2.7 mm), (0, 45]
-  int min_face_points = 12;       // points each face's plane needs at least (>= 3)
-  double max_move_voxels = 3.0;   // voxels, points that would move farther stay where they are (> 0)
+  double radius_voxels = 9.0;    // voxels, neighbourhood of a point whose normals are split into two faces (0 =
+                                 // off), 0 or [2, 12]; it must reach past the bevel (~4 voxels) well onto both
+                                 // faces (7 left the cylinder's rim 3.6 mm round, 9: 2.3 mm)
+  double min_angle_deg = 50.0;   // deg, the two faces' mean normals at least this far apart, (0, 180): a smooth
+                                 // surface of curvature radius R spreads normals by ~2 x radius / R rad over the
+                                 // neighbourhood (21 deg on a 100 mm sphere)
+  double core_angle_deg = 10.0;  // deg, neighbours within this of a face's mean normal give its plane; the bevel's
+                                 // own points, in between, must not (20 tilted the cylinder's top towards its
+                                 // rim by 2.7 mm), (0, 45]
+  int min_face_points = 12;      // points each face's plane needs at least (>= 3)
+  double max_move_voxels = 3.0;  // voxels, points that would move farther stay where they are (> 0)
 };
 
 bool ValidateCreaseOptions(const CreaseOptions& options, std::string* why);

@@ -240,7 +240,7 @@ TEST(SurfaceExtractionTest, SharpenCreasesRestoresConvexAndConcaveEdges) {
     std::printf("%s crease: max distance to the true faces %.2f mm -> %.3f mm, %lld of %zu points moved\n",
                 flip ? "concave" : "convex", before, after, static_cast<long long>(moved), sharp.size());
     EXPECT_GT(before, 2.4);  // the fillet's middle: 6 x (sqrt(2) - 1) mm inside; the lip 3 mm beyond the wall
-    EXPECT_LT(after, 0.2);  // the faces' planes lean a little towards the bevel points within 10 deg of them
+    EXPECT_LT(after, 0.2);   // the faces' planes lean a little towards the bevel points within 10 deg of them
     ASSERT_EQ(sharp.size(), bevelled.size());
     double worst_normal_deg = 0;
     for (size_t i = 0; i < sharp.size(); ++i) {
