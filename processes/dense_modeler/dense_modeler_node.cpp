@@ -247,6 +247,8 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
       grid_(options_.model.votes) {
   cv::setNumThreads(options_.threads);
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for posed images");
+  status_.SetValue("pairs_waiting", 0);         // pairs waiting for the region of interest
+  status_.SetValue("pairs_without_region", 0);  // pairs run unrestricted although a region was expected
   auto malformed = [this](const std::string& what) { return status_.MalformedHandler(what); };
   bus_.SubscribeMessage<image_t>(
       options_.image_channel, [this](const image_t& m, const RawMessage&) { OnImage(m); }, malformed("image"),
@@ -280,6 +282,8 @@ DenseModelerNode::FrameSlot& DenseModelerNode::Slot(int64_t seq) {
   while (static_cast<int>(frames_.size()) > options_.buffer_frames) {
     auto oldest = frames_.begin();
     if (oldest->first == seq) break;
+    if (!waiting_pairs_.empty() && waiting_pairs_.front().first <= oldest->first)
+      RunWaitingPairs(false, oldest->first);  // its pairs cannot wait any longer
     if (!oldest->second.pose && !oldest->second.processed)
       status_.Reject("frame: evicted without pose", "seq " + std::to_string(oldest->first));
     frames_.erase(oldest);
@@ -490,10 +494,42 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       return;
     }
   }
+  UpdateRegion(false);
+  waiting_pairs_.emplace_back(partner->first, seq);
+  RunWaitingPairs(false);
+}
+
+bool DenseModelerNode::RegionExpected() const {
+  return !region_.valid && (options_.auto_roi || (options_.use_target_box && !options_.target_channel.empty()));
+}
+
+void DenseModelerNode::RunWaitingPairs(bool force, int64_t evicting_seq) {
+  while (!waiting_pairs_.empty()) {
+    const auto [seq_a, seq_b] = waiting_pairs_.front();
+    if (RegionExpected() && !force && seq_a > evicting_seq) break;
+    waiting_pairs_.pop_front();
+    if (RegionExpected()) {
+      ++pairs_without_region_;
+      status_.SetValue("pairs_without_region", static_cast<double>(pairs_without_region_));
+      LogWarning("pair " + std::to_string(seq_a) + "-" + std::to_string(seq_b) +
+                 " runs without a region of interest (none yet, and its frame leaves the ring buffer or the final "
+                 "phase started)");
+    }
+    if (!RunPair(seq_a, seq_b)) status_.Reject("pair: frame gone", std::to_string(seq_a) + "-" + std::to_string(seq_b));
+  }
+  status_.SetValue("pairs_waiting", static_cast<double>(waiting_pairs_.size()));
+}
+
+bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
+  auto ia = frames_.find(seq_a), ib = frames_.find(seq_b);
+  if (ia == frames_.end() || ib == frames_.end() || ia->second.image.empty() || ib->second.image.empty()) return false;
+  const FrameSlot& pa = ia->second;
+  const FrameSlot& slot = ib->second;
+  const int64_t seq = seq_b;
   const int64_t start_us = MonotonicMicros();
   UpdateRegion(false);
   DenseView a, b;
-  a.seq = partner->first;
+  a.seq = seq_a;
   a.camera = *camera_;
   a.world_from_camera = pa.pose->world_from_camera;
   a.image = pa.image;
@@ -545,6 +581,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   status_.SetValue("vote_ms", (end_us - vote_start_us) * 1e-3);
   status_.RecordLatencyMs((end_us - start_us) * 1e-3);
   if (pairs_done_ % options_.voxel_map_every == 0) PublishVoxelMap(slot.utime, seq, false, nullptr);
+  return true;
 }
 
 void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final,
@@ -646,6 +683,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   }
   final_poses_used_ = final_used;
   UpdateRegion(true);
+  RunWaitingPairs(true);
   if (region_.valid) {
     std::ostringstream r;
     r << "region of interest (source " << region_source_ << "): box [" << region_.box_min.transpose() << "] .. ["

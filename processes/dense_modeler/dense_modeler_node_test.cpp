@@ -258,16 +258,54 @@ TEST_F(NodeFixture, BadInputIsCountedAndSkipped) {
   EXPECT_EQ(node.status().rejected("image: wrong size"), 1);
   EXPECT_EQ(node.status().rejected_total(), 6);
   // Good frames still work after all that; frames without a usable pose are evicted and counted.
+  // No region comes here (no TARGET, no landmarks): the 8 pairs wait for one while their frames stay in the 6-frame
+  // buffer, 3 run unrestricted as their older frame leaves it, the rest at the final phase.
   for (int i = 3; i < 12; ++i) PublishFrame(i, 16, features);
-  EXPECT_EQ(node.pairs_done(), 8);
+  EXPECT_EQ(node.pairs_done(), 3);
   EXPECT_EQ(node.status().rejected("frame: evicted without pose"), 2);  // seq 0 and 1
   // Snapshot without a path.
   PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer");
   EXPECT_EQ(node.status().rejected("snapshot: no path"), 1);
   PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  EXPECT_EQ(node.pairs_done(), 8);
+  EXPECT_EQ(StatusValue(out_.statuses.back(), "pairs_without_region"), 8);
   ASSERT_EQ(out_.models.size(), 1u);
   EXPECT_TRUE(out_.models[0].voxels_ply_path.empty());
   EXPECT_GT(out_.models[0].num_voxels, 100);
+}
+
+// Pairs wait for the region of interest while it can still come: here the TARGET box arrives after 3 pairs, which
+// then run restricted to it like every later one. Without the wait they would vote the unrestricted scene.
+TEST_F(NodeFixture, PairsWaitForTheRegionOfInterest) {
+  options_.output_dir.clear();
+  options_.target_margin_mm = 0;
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  const auto features = scene_.SurfacePoints(2000);
+  for (int i = 0; i < 4; ++i) PublishFrame(i, 16, features);
+  EXPECT_EQ(node.pairs_done(), 0);
+  EXPECT_EQ(node.grid().total_votes(), 0);
+  // A confirmed box over the sphere's upper half only: z from 100 to 200 mm.
+  target_t target{};
+  target.state = target_t::STATE_CONFIRMED;
+  target.frame = "world";
+  target.center_mm[2] = 150;
+  target.size_mm[0] = target.size_mm[1] = 220;
+  target.size_mm[2] = 100;
+  bus_->PublishMessage("TARGET", target);
+  Drain();
+  for (int i = 4; i < 8; ++i) PublishFrame(i, 16, features);
+  EXPECT_EQ(node.pairs_done(), 7);
+  ASSERT_GT(node.grid().total_votes(), 0);
+  // Every voted voxel lies in the box (votes spread one voxel beyond the points).
+  int64_t below = 0;
+  for (const VoxelRecord& v : node.grid().Extract(1))
+    if (node.grid().CenterOf(v.ijk).z() < 100 - 2 * node.grid().voxel_size()) ++below;
+  EXPECT_EQ(below, 0);
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  ASSERT_FALSE(out_.statuses.empty());
+  EXPECT_EQ(StatusValue(out_.statuses.back(), "pairs_without_region"), 0);
+  EXPECT_EQ(StatusValue(out_.statuses.back(), "pairs_waiting"), 0);
 }
 
 TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
