@@ -25,6 +25,8 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (o.vote_threshold < 1) e << "vote threshold must be >= 1; ";
   if (!(o.floor_band_mm >= 0)) e << "floor band must be >= 0 mm; ";
   if (!(o.floor_band_normal_deg > 0 && o.floor_band_normal_deg < 90)) e << "floor band normal must be in (0, 90) deg; ";
+  if (!(o.crevice_band_mm >= 0)) e << "crevice band must be >= 0 mm; ";
+  if (!(o.crevice_normal_deg > 0 && o.crevice_normal_deg < 90)) e << "crevice normal must be in (0, 90) deg; ";
   if (o.smoothing_passes < 0 || o.smoothing_passes > 5) e << "smoothing passes must be in [0, 5]; ";
   if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
   if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
@@ -100,14 +102,19 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
   std::vector<Eigen::Vector3d> normals;
   if (ridge) {
     surface = ExtractVoteRidge(grid, seeds, o.ridge, &model.ridge);
-    if (region.valid && region.has_floor && o.floor_band_mm > 0) {
-      // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not.
-      const double min_cos = std::cos(o.floor_band_normal_deg * M_PI / 180.0);
+    if (region.valid && region.has_floor && (o.floor_band_mm > 0 || o.crevice_band_mm > 0)) {
+      // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not. Under
+      // an overhang, surface facing down just above the floor is the crevice (see crevice_band_mm).
+      const double min_up_cos = std::cos(o.floor_band_normal_deg * M_PI / 180.0);
+      const double max_down_cos = -std::sin(o.crevice_normal_deg * M_PI / 180.0);
       std::vector<SurfaceVoxel> kept;
       kept.reserve(surface.size());
       for (const SurfaceVoxel& s : surface) {
-        if (region.HeightAboveFloor(s.point_in_world) < o.floor_band_mm && s.normal.dot(region.floor_normal) >= min_cos)
+        const double height = region.HeightAboveFloor(s.point_in_world), up = s.normal.dot(region.floor_normal);
+        if (height < o.floor_band_mm && up >= min_up_cos)
           ++model.floor_band_dropped;
+        else if (height < o.crevice_band_mm && up <= max_down_cos)
+          ++model.crevice_band_dropped;
         else
           kept.push_back(s);
       }

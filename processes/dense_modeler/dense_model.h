@@ -39,7 +39,14 @@ struct DenseModelOptions {
                                     // surface_method 1, region with a floor): the region's hard floor clearance can
                                     // then stay low enough to keep the object's walls down to the floor
   double floor_band_normal_deg = 45.0;  // deg, see floor_band_mm, (0, 90)
-  MeshVisibilityOptions visibility;     // removal of mesh parts no view sees (inner sheets; surface_method 1)
+  double crevice_band_mm = 14.0;  // mm, ridge voxels lower than this above the region's floor that face down (normal
+                                  // more than crevice_normal_deg below the horizontal) are dropped (0 = off; surface
+                                  // method 1, region with a floor): on an object resting on the floor that is the
+                                  // crevice under its overhang, seen at grazing angles past the dark underside, where
+                                  // the only dense points are chords of floor-junction triangles (the sim sphere's and
+                                  // blob's 4-5.4 mm skirts; a wall standing on the floor is vertical and stays)
+  double crevice_normal_deg = 30.0;  // deg, see crevice_band_mm, (0, 90)
+  MeshVisibilityOptions visibility;  // removal of mesh parts no view sees (inner sheets; surface_method 1)
 };
 
 bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
@@ -68,10 +75,11 @@ struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  RidgeStats ridge;                // surface_method 1 only
-  MeshVisibilityStats visibility;  // surface_method 1 only
-  int64_t seeds = 0;               // voxels over the vote threshold (inside the box)
-  int64_t floor_band_dropped = 0;  // ridge voxels dropped as floor (floor_band_mm)
+  RidgeStats ridge;                  // surface_method 1 only
+  MeshVisibilityStats visibility;    // surface_method 1 only
+  int64_t seeds = 0;                 // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;    // ridge voxels dropped as floor (floor_band_mm)
+  int64_t crevice_band_dropped = 0;  // ridge voxels dropped as the crevice under an overhang (crevice_band_mm)
   FinalPhaseTimes times;
   int64_t voxels_without_mesh = 0;  // carved voxels dropped because the final mesh has no vertex near them
                                     // (surface_method 1)
@@ -80,7 +88,8 @@ struct FinalModel {
 };
 
 // Seeds = voxels with votes >= threshold whose centre is inside region (when valid: box and floor half-space).
-// Ridge voxels near the floor that face up are dropped as floor (floor_band_mm).
+// Ridge voxels near the floor that face up are dropped as floor (floor_band_mm), those that face down as the crevice
+// under an overhang (crevice_band_mm).
 // Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
 // views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
 // oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh

@@ -104,6 +104,9 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("crease-max-move", &cr->max_move_voxels, "voxels, crease points that would move farther stay");
   p.Add("floor-band", &m->floor_band_mm,
         "mm, ridge voxels lower than this above the floor that face up are dropped as floor (0 = off)");
+  p.Add("crevice-band", &m->crevice_band_mm,
+        "mm, ridge voxels lower than this above the floor that face down are dropped as the crevice (0 = off)");
+  p.Add("crevice-normal", &m->crevice_normal_deg, "deg, a crevice voxel's normal lies this far below the horizontal");
   p.Add("floor-band-normal", &m->floor_band_normal_deg, "deg, largest angle of a floor voxel's normal to the floor's");
   p.Add("mesh-min-seen-views", &m->visibility.min_seen_views,
         "mesh vertices seen (unoccluded, facing) by fewer views are removed: inner sheets (0 = off)");
@@ -698,7 +701,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
-            " seeds, " + std::to_string(model.floor_band_dropped) + " facing up near the floor dropped, " +
+            " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
+            std::to_string(model.crevice_band_dropped) + " facing down near the floor dropped, " +
             std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
             std::to_string(model.ridge.crease_points_moved) +
             " surface points moved onto creases; mesh: " + std::to_string(model.visibility.vertices_removed) +
@@ -767,6 +771,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_seeds", static_cast<double>(model.seeds));
   status_.SetValue("final_triangles", static_cast<double>(model.mesh.triangles.size()));
   status_.SetValue("final_floor_band_dropped", static_cast<double>(model.floor_band_dropped));
+  status_.SetValue("final_crevice_band_dropped", static_cast<double>(model.crevice_band_dropped));
   status_.SetValue("final_carved", static_cast<double>(model.carving.removed));
   status_.SetValue("final_hidden_vertices", static_cast<double>(model.visibility.vertices_removed));
   status_.SetValue("final_curled_triangles", static_cast<double>(model.ridge.curled_triangles_dropped));

@@ -38,14 +38,14 @@
 // "control: malformed", "snapshot: no path", "snapshot: write failed". Pair check: when landmarks are known, a pair
 // whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped (the
 // pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
-// pairs_skipped_inconsistent, dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels,
-// votes, pair_ms, vote_ms, carving_views, roi_source (0 none, 1
-// target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
-// final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_carved,
-// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,
-// final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
-// (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s.
-// Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+// pairs_skipped_inconsistent, pairs_waiting (for the region), pairs_without_region (run unrestricted although a
+// region was expected), dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels, votes,
+// pair_ms, vote_ms, carving_views, roi_source (0 none, 1 target, 2 configuration, 3 automatic), roi_floor (1 when the
+// floor cuts the region); after the final phase final_ms, final_seeds, final_voxels, final_triangles,
+// final_floor_band_dropped, final_crevice_band_dropped, final_carved, final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s,
+// final_visibility_s, final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept),
+// final_revote_rejected (matches the re-triangulation's checks rejected, the final region's included) and
+// final_revote_s. Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>

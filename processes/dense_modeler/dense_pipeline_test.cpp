@@ -253,5 +253,64 @@ TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
   EXPECT_NE(why.find("floor band"), std::string::npos);
 }
 
+// The same wall, and 20 mm in front of it the underside of an overhang from 12 down to 4 mm over the floor, slanted
+// 45 deg and facing down and out (x + z = -16 mm): the skirt the crevice under a sphere left in the sim.
+VoxelVoteGrid WallAndCreviceVotes() {
+  VoxelVoteGrid grid;
+  std::mt19937 rng(8);
+  std::normal_distribution<double> gauss(0.0, 0.8);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (int i = 0; i < 120000; ++i) {
+    const double y = -40 + 80 * uni(rng), z = 4 + 76 * uni(rng);
+    grid.AddPoint(Eigen::Vector3d(gauss(rng), y, z), {{90, 120, 150}}, Eigen::Vector3f(-0.95f, 0, 0.31f));
+  }
+  const Eigen::Vector3d normal = Eigen::Vector3d(-1, 0, -1).normalized();
+  for (int i = 0; i < 30000; ++i) {
+    const double y = -40 + 80 * uni(rng), z = 4 + 8 * uni(rng);
+    grid.AddPoint(Eigen::Vector3d(-16 - z, y, z) + gauss(rng) * normal, {{40, 40, 40}},
+                  Eigen::Vector3f(-0.95f, 0, 0.31f));
+  }
+  return grid;
+}
+
+TEST(DensePipeline, SurfaceFacingDownNearTheFloorIsTheCreviceWallsStay) {
+  const VoxelVoteGrid grid = WallAndCreviceVotes();
+  const RegionOfInterest region =
+      testing_scene::FloorRegion(Eigen::Vector3d(-100, -100, -50), Eigen::Vector3d(100, 100, 200));
+  DenseModelOptions options;
+  options.carve = false;
+  auto lowest_wall_and_skirt = [&](const FinalModel& model, double* lowest_wall, int* skirt_vertices) {
+    *lowest_wall = 1e9;
+    *skirt_vertices = 0;
+    for (const auto& v : model.mesh.vertices) {
+      if (v.x() < -12) ++*skirt_vertices;
+      if (std::abs(v.x()) < 2 && std::abs(v.y()) < 30) *lowest_wall = std::min(*lowest_wall, double{v.z()});
+    }
+  };
+  double lowest_wall = 0;
+  int skirt_vertices = 0;
+  const FinalModel with_band = BuildFinalModel(grid, {}, options, region);
+  lowest_wall_and_skirt(with_band, &lowest_wall, &skirt_vertices);
+  std::printf("crevice band %.0f mm: %lld ridge voxels dropped, %d skirt vertices, wall down to %.1f mm\n",
+              options.crevice_band_mm, static_cast<long long>(with_band.crevice_band_dropped), skirt_vertices,
+              lowest_wall);
+  EXPECT_GT(with_band.crevice_band_dropped, 100);
+  EXPECT_EQ(skirt_vertices, 0);
+  EXPECT_LT(lowest_wall, 9.0);  // vertical: not the crevice
+
+  options.crevice_band_mm = 0;  // off: the skirt is part of the model
+  const FinalModel without_band = BuildFinalModel(grid, {}, options, region);
+  lowest_wall_and_skirt(without_band, &lowest_wall, &skirt_vertices);
+  EXPECT_EQ(without_band.crevice_band_dropped, 0);
+  EXPECT_GT(skirt_vertices, 300);
+
+  std::string why;
+  options.crevice_band_mm = -1;
+  options.crevice_normal_deg = 0;
+  EXPECT_FALSE(ValidateDenseModelOptions(options, &why));
+  EXPECT_NE(why.find("crevice band"), std::string::npos);
+  EXPECT_NE(why.find("crevice normal"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace objscan
