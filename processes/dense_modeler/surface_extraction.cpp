@@ -345,22 +345,39 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
       std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end());
       return surface[order[k].second].normal;
     };
-    const Eigen::Vector3d e1 = far_side(m1, m2), e2 = far_side(m2, m1);
-    Eigen::Vector3d c1 = Eigen::Vector3d::Zero(), c2 = Eigen::Vector3d::Zero();
-    Eigen::Vector3d s1 = Eigen::Vector3d::Zero(), s2 = Eigen::Vector3d::Zero();
-    double w1 = 0, w2 = 0;
-    size_t n1_count = 0, n2_count = 0;
-    for (size_t j : near) {
-      const double w = std::max(surface[j].voxel.votes, 1);
-      const Eigen::Vector3d& nj = surface[j].normal;
-      if (nj.dot(e1) >= cos_core) c1 += w * surface[j].point_in_world, s1 += w * nj, w1 += w, ++n1_count;
-      if (nj.dot(e2) >= cos_core) c2 += w * surface[j].point_in_world, s2 += w * nj, w2 += w, ++n2_count;
-    }
-    if (n1_count < min_points || n2_count < min_points) continue;
-    c1 /= w1;
-    c2 /= w2;
-    m1 = s1.normalized();
-    m2 = s2.normalized();
+    // A face's plane: vote-weighted centroid and mean normal of the normals within core_angle_deg of a seed: the
+    // group's far side, which avoids the bevel's normals (they pull the mean towards the other face), or its mean
+    // when fewer than min_face_points lie near the far side (a stray one: on the sim box, 10 normals of the
+    // underside of a flap the top face ran on past the edge).
+    struct Face {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+      size_t count = 0;
+    };
+    auto face_around = [&](const Eigen::Vector3d& seed) {
+      Face f;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      double wsum = 0;
+      for (size_t j : near) {
+        const Eigen::Vector3d& nj = surface[j].normal;
+        if (nj.dot(seed) < cos_core) continue;
+        const double w = std::max(surface[j].voxel.votes, 1);
+        f.centroid += w * surface[j].point_in_world;
+        sum += w * nj;
+        wsum += w;
+        ++f.count;
+      }
+      if (f.count > 0) f.centroid /= wsum, f.normal = sum.normalized();
+      return f;
+    };
+    auto face_of = [&](const Eigen::Vector3d& mean, const Eigen::Vector3d& other_mean) {
+      const Face far = face_around(far_side(mean, other_mean));
+      return far.count >= min_points ? far : face_around(mean);
+    };
+    const Face f1 = face_of(m1, m2), f2 = face_of(m2, m1);
+    if (f1.count < min_points || f2.count < min_points) continue;
+    const Eigen::Vector3d c1 = f1.centroid, c2 = f2.centroid;
+    m1 = f1.normal;
+    m2 = f2.normal;
     if (m1.dot(m2) > cos_apart) continue;
     // Convex: each face's centroid lies behind the other's plane; the solid is the wedge {m1.(x - c1) <= 0,
     // m2.(x - c2) <= 0}. Concave: both in front; the space outside the solid is the wedge of -m1, -m2. Either way

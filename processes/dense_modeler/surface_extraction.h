@@ -102,8 +102,10 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
 
 // Crease sharpening (see CreaseOptions): for every point, the neighbours within radius_voxels have their normals
 // split into two groups (2-means, seeded by the two most different normals); when the groups' mean normals are at
-// least min_angle_deg apart and each has min_face_points within core_angle_deg of its mean, each group's core gives
-// a face plane (its vote-weighted centroid and mean normal). A convex crease (each face's centroid behind the other
+// least min_angle_deg apart, each group's core gives a face plane (its vote-weighted centroid and mean normal): the
+// normals within core_angle_deg of the group's far side (the 10th percentile of the dot product with the other
+// group's mean, off the bevel), or of the group's mean when fewer than min_face_points lie there (a stray far side:
+// the underside of a flap). Both cores need min_face_points. A convex crease (each face's centroid behind the other
 // face's plane) bounds the solid by the intersection of the two half-spaces, a concave one by their union; the point
 // moves to the nearest point of that solid's boundary (onto a face, or onto the edge line) and takes the normal of
 // that face (on the edge: of the face nearer its own normal), unless that is farther than max_move_voxels. Points
