@@ -503,7 +503,8 @@ void DenseModelerNode::TryProcess(int64_t seq) {
 }
 
 bool DenseModelerNode::RegionExpected() const {
-  return !region_.valid && (options_.auto_roi || (options_.use_target_box && !options_.target_channel.empty()));
+  return !region_.valid && ((options_.auto_roi && !options_.landmarks_channel.empty()) ||
+                            (options_.use_target_box && !options_.target_channel.empty()));
 }
 
 void DenseModelerNode::RunWaitingPairs(bool force, int64_t evicting_seq) {
@@ -514,9 +515,11 @@ void DenseModelerNode::RunWaitingPairs(bool force, int64_t evicting_seq) {
     if (RegionExpected()) {
       ++pairs_without_region_;
       status_.SetValue("pairs_without_region", static_cast<double>(pairs_without_region_));
-      LogWarning("pair " + std::to_string(seq_a) + "-" + std::to_string(seq_b) +
-                 " runs without a region of interest (none yet, and its frame leaves the ring buffer or the final "
-                 "phase started)");
+      if (pairs_without_region_ == 1 || pairs_without_region_ % 100 == 0)
+        LogWarning("pair " + std::to_string(seq_a) + "-" + std::to_string(seq_b) +
+                   " runs without a region of interest (none yet, and its frame leaves the ring buffer or the final "
+                   "phase started); " +
+                   std::to_string(pairs_without_region_) + " such pairs so far");
     }
     if (!RunPair(seq_a, seq_b)) status_.Reject("pair: frame gone", std::to_string(seq_a) + "-" + std::to_string(seq_b));
   }

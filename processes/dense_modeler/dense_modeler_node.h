@@ -8,21 +8,20 @@
 // window of the posed frames. The floor plane found among the landmarks (roi.detect_floor) cuts every source.
 // Dense pairs (pixels, triangles, points) and the final seeds are restricted to the region; it is recomputed when
 // landmarks or central tracks changed, before each pair and at the final phase (with the final landmarks). While a
-// region can still come (auto_roi, or a target box to be confirmed) and none is known, pairs wait for it (without
-// the region a pair votes the floor and the crevice under the object: the sim sphere's first pair gave 125 k points,
-// 84 % of them floor, and the floor-contact skirt 4-5 mm outside), in order, and run once it is known - or
-// unrestricted when the older frame would leave the ring buffer, or at the final phase.
-// Frames (image + tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame
-// j is complete with a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired
-// with frame j - pair_gap (if complete): dense points (affine_dense.h) from the tracks both frames share, plus the
-// pair's own LK matches where the tracker left the region bare (pair_matches.h, model.pair_matches), are voted
-// into the voxel grid (voxel_votes.h). Every complete frame also keeps a downsampled copy for the final carving
-// (at most max_carving_views; when full, every second one is dropped, deterministic).
-// Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at most max_map_voxels, strongest
-// first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and control_t COMMAND_FINISHED.
-// Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed at this process): with
-// revote_final_poses and a final_pose_channel, every pair's pixel matches (kept, 20 bytes each, up to
-// max_stored_matches) are triangulated again with the final poses where both frames have one (else with the live
+// region can still come (auto_roi with a landmarks channel, or a target box to be confirmed) and none is known, pairs
+// wait for it (without the region a pair votes the whole scene: the sim sphere's first pair gave 125 k points, 84 %
+// of them floor, against ~17 k for the others), in order, and run once it is
+// known - or unrestricted when the older frame would leave the ring buffer, or at the final phase. Frames (image +
+// tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame j is complete with
+// a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired with frame j - pair_gap
+// (if complete): dense points (affine_dense.h) from the tracks both frames share, plus the pair's own LK matches where
+// the tracker left the region bare (pair_matches.h, model.pair_matches), are voted into the voxel grid (voxel_votes.h).
+// Every complete frame also keeps a downsampled copy for the final carving (at most max_carving_views; when full, every
+// second one is dropped, deterministic). Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at
+// most max_map_voxels, strongest first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and
+// control_t COMMAND_FINISHED. Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed
+// at this process): with revote_final_poses and a final_pose_channel, every pair's pixel matches (kept, 20 bytes each,
+// up to max_stored_matches) are triangulated again with the final poses where both frames have one (else with the live
 // poses) and the geometric checks, the final region included, and voted into a fresh grid, which replaces the live
 // one unless no pair had final poses or it holds under half the live votes (then a warning; the live grid stays);
 // seeds = voxels over the threshold (inside the target box
@@ -42,10 +41,10 @@
 // region was expected), dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels, votes,
 // pair_ms, vote_ms, carving_views, roi_source (0 none, 1 target, 2 configuration, 3 automatic), roi_floor (1 when the
 // floor cuts the region); after the final phase final_ms, final_seeds, final_voxels, final_triangles,
-// final_floor_band_dropped, final_crevice_band_dropped, final_carved, final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s,
-// final_visibility_s, final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept),
-// final_revote_rejected (matches the re-triangulation's checks rejected, the final region's included) and
-// final_revote_s. Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+// final_floor_band_dropped, final_crevice_band_dropped, final_carved, final_hidden_vertices, final_curled_triangles,
+// final_voxels_off_mesh, final_carving_s, final_visibility_s, final_revoted_pairs (pairs triangulated with final poses;
+// 0 = the live votes were kept), final_revote_rejected (matches the re-triangulation's checks rejected, the final
+// region's included) and final_revote_s. Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>
