@@ -200,22 +200,41 @@ TEST(DensePipeline, TexturedSphereFromRingNoisyTracks) {
   EXPECT_LE(refined.mesh_p90, 1.0);
 }
 
-// A wall (x = 0, facing -x) standing on the floor and a sheet of floor points 6 mm above the floor plane in front of
-// it (what is left of the floor's noisy points above the region's clearance), voted as the dense pairs would.
-VoxelVoteGrid WallAndFloorVotes() {
+// A wall (x = 0, facing -x, y within +-40 mm, z 4-80 mm) standing on the floor, voted as the dense pairs would.
+VoxelVoteGrid WallVotes(std::mt19937* rng) {
   VoxelVoteGrid grid;
-  std::mt19937 rng(7);
   std::normal_distribution<double> gauss(0.0, 0.8);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   for (int i = 0; i < 120000; ++i) {
-    const double y = -40 + 80 * uni(rng), z = 4 + 76 * uni(rng);
-    grid.AddPoint(Eigen::Vector3d(gauss(rng), y, z), {{90, 120, 150}}, Eigen::Vector3f(-0.95f, 0, 0.31f));
+    const double y = -40 + 80 * uni(*rng), z = 4 + 76 * uni(*rng);
+    grid.AddPoint(Eigen::Vector3d(gauss(*rng), y, z), {{90, 120, 150}}, Eigen::Vector3f(-0.95f, 0, 0.31f));
   }
+  return grid;
+}
+
+// The wall and a sheet of floor points 6 mm above the floor plane in front of it (what is left of the floor's noisy
+// points above the region's clearance).
+VoxelVoteGrid WallAndFloorVotes() {
+  std::mt19937 rng(7);
+  VoxelVoteGrid grid = WallVotes(&rng);
+  std::normal_distribution<double> gauss(0.0, 0.8);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
   for (int i = 0; i < 60000; ++i) {
     const double x = -60 + 56 * uni(rng), y = -40 + 80 * uni(rng);
     grid.AddPoint(Eigen::Vector3d(x, y, 6 + gauss(rng)), {{60, 60, 60}}, Eigen::Vector3f(-0.31f, 0, 0.95f));
   }
   return grid;
+}
+
+// The lowest mesh vertex on the wall's middle (mm), and how many vertices lie in front of it (x < front_x) below
+// max_z.
+void WallAndFront(const FinalModel& model, double front_x, double max_z, double* lowest_wall, int* front_vertices) {
+  *lowest_wall = 1e9;
+  *front_vertices = 0;
+  for (const auto& v : model.mesh.vertices) {
+    if (v.x() < front_x && v.z() < max_z) ++*front_vertices;
+    if (std::abs(v.x()) < 2 && std::abs(v.y()) < 30) *lowest_wall = std::min(*lowest_wall, double{v.z()});
+  }
 }
 
 TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
@@ -224,25 +243,17 @@ TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
       testing_scene::FloorRegion(Eigen::Vector3d(-100, -100, -50), Eigen::Vector3d(100, 100, 200));
   DenseModelOptions options;
   options.carve = false;
-  auto lowest_wall_and_floor = [&](const FinalModel& model, double* lowest_wall, int* floor_vertices) {
-    *lowest_wall = 1e9;
-    *floor_vertices = 0;
-    for (const auto& v : model.mesh.vertices) {
-      if (v.x() < -6 && v.z() < 12) ++*floor_vertices;
-      if (std::abs(v.x()) < 2 && std::abs(v.y()) < 30) *lowest_wall = std::min(*lowest_wall, double{v.z()});
-    }
-  };
   double lowest_wall = 0;
   int floor_vertices = 0;
   const FinalModel with_band = BuildFinalModel(grid, {}, options, region);
-  lowest_wall_and_floor(with_band, &lowest_wall, &floor_vertices);
+  WallAndFront(with_band, -6, 12, &lowest_wall, &floor_vertices);
   EXPECT_GT(with_band.floor_band_dropped, 500);
   EXPECT_EQ(floor_vertices, 0);
   EXPECT_LT(lowest_wall, 9.0);  // the wall is kept down to a few mm over the clearance
 
   options.floor_band_mm = 0;  // off: the floor sheet is part of the model
   const FinalModel without_band = BuildFinalModel(grid, {}, options, region);
-  lowest_wall_and_floor(without_band, &lowest_wall, &floor_vertices);
+  WallAndFront(without_band, -6, 12, &lowest_wall, &floor_vertices);
   EXPECT_EQ(without_band.floor_band_dropped, 0);
   EXPECT_GT(floor_vertices, 1000);
 
@@ -256,14 +267,10 @@ TEST(DensePipeline, SurfaceFacingUpNearTheFloorIsFloorWallsReachDown) {
 // The same wall, and 20 mm in front of it the underside of an overhang from 12 down to 4 mm over the floor, slanted
 // 45 deg and facing down and out (x + z = -16 mm): the skirt the crevice under a sphere left in the sim.
 VoxelVoteGrid WallAndCreviceVotes() {
-  VoxelVoteGrid grid;
   std::mt19937 rng(8);
+  VoxelVoteGrid grid = WallVotes(&rng);
   std::normal_distribution<double> gauss(0.0, 0.8);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  for (int i = 0; i < 120000; ++i) {
-    const double y = -40 + 80 * uni(rng), z = 4 + 76 * uni(rng);
-    grid.AddPoint(Eigen::Vector3d(gauss(rng), y, z), {{90, 120, 150}}, Eigen::Vector3f(-0.95f, 0, 0.31f));
-  }
   const Eigen::Vector3d normal = Eigen::Vector3d(-1, 0, -1).normalized();
   for (int i = 0; i < 30000; ++i) {
     const double y = -40 + 80 * uni(rng), z = 4 + 8 * uni(rng);
@@ -279,18 +286,10 @@ TEST(DensePipeline, SurfaceFacingDownNearTheFloorIsTheCreviceWallsStay) {
       testing_scene::FloorRegion(Eigen::Vector3d(-100, -100, -50), Eigen::Vector3d(100, 100, 200));
   DenseModelOptions options;
   options.carve = false;
-  auto lowest_wall_and_skirt = [&](const FinalModel& model, double* lowest_wall, int* skirt_vertices) {
-    *lowest_wall = 1e9;
-    *skirt_vertices = 0;
-    for (const auto& v : model.mesh.vertices) {
-      if (v.x() < -12) ++*skirt_vertices;
-      if (std::abs(v.x()) < 2 && std::abs(v.y()) < 30) *lowest_wall = std::min(*lowest_wall, double{v.z()});
-    }
-  };
   double lowest_wall = 0;
   int skirt_vertices = 0;
   const FinalModel with_band = BuildFinalModel(grid, {}, options, region);
-  lowest_wall_and_skirt(with_band, &lowest_wall, &skirt_vertices);
+  WallAndFront(with_band, -12, 1e9, &lowest_wall, &skirt_vertices);
   std::printf("crevice band %.0f mm: %lld ridge voxels dropped, %d skirt vertices, wall down to %.1f mm\n",
               options.crevice_band_mm, static_cast<long long>(with_band.crevice_band_dropped), skirt_vertices,
               lowest_wall);
@@ -300,7 +299,7 @@ TEST(DensePipeline, SurfaceFacingDownNearTheFloorIsTheCreviceWallsStay) {
 
   options.crevice_band_mm = 0;  // off: the skirt is part of the model
   const FinalModel without_band = BuildFinalModel(grid, {}, options, region);
-  lowest_wall_and_skirt(without_band, &lowest_wall, &skirt_vertices);
+  WallAndFront(without_band, -12, 1e9, &lowest_wall, &skirt_vertices);
   EXPECT_EQ(without_band.crevice_band_dropped, 0);
   EXPECT_GT(skirt_vertices, 300);
 
