@@ -109,10 +109,9 @@ struct AffineDenseOptions {
   // plane would put in the air):
   double junction_floor_ncc_margin = 0.1;         // NCC units, <= 2 (< 0 = off)
   double junction_floor_min_separation_px = 1.0;  // px, >= 0
-  bool skip_floor_triangles = true;               // triangles with every vertex on the floor (RegionOfInterest::
-                                     // TriangleOnFloor) are skipped: almost all their points fall under the
-                                     // clearance (half of a sim pair's pixels went that way), the rest are
-                                     // floor mismatches
+  // Triangles with every vertex on the floor (RegionOfInterest::TriangleOnFloor) are skipped: almost all their
+  // points fall under the clearance (half of a sim pair's pixels went that way), the rest are floor mismatches.
+  bool skip_floor_triangles = true;
   double region_slack_mm = 10.0;        // mm, a triangle is skipped only when its vertices are this far outside
   double region_image_margin_px = 8.0;  // px, margin around the region's projected box in A
 };

@@ -497,7 +497,6 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       return;
     }
   }
-  UpdateRegion(false);
   waiting_pairs_.emplace_back(partner->first, seq);
   RunWaitingPairs(false);
 }
@@ -508,6 +507,7 @@ bool DenseModelerNode::RegionExpected() const {
 }
 
 void DenseModelerNode::RunWaitingPairs(bool force, int64_t evicting_seq) {
+  UpdateRegion(false);  // (landmarks may have changed since: a region known by now is used)
   while (!waiting_pairs_.empty()) {
     const auto [seq_a, seq_b] = waiting_pairs_.front();
     if (RegionExpected() && !force && seq_a > evicting_seq) break;
@@ -533,7 +533,6 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   const FrameSlot& slot = ib->second;
   const int64_t seq = seq_b;
   const int64_t start_us = MonotonicMicros();
-  UpdateRegion(false);
   DenseView a, b;
   a.seq = seq_a;
   a.camera = *camera_;

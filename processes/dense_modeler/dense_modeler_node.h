@@ -171,10 +171,12 @@ class DenseModelerNode : public Node {
   void OnControl(const control_t& msg);
   FrameSlot& Slot(int64_t seq);
   void TryProcess(int64_t seq);
-  // Runs the waiting pairs, oldest first: all once the region is known or when force is set (final phase),
-  // otherwise only those whose older frame is evicting_seq or older (about to leave the ring buffer).
+  // Updates the region, then runs the waiting pairs, oldest first: all once the region is known or when force is
+  // set (final phase), otherwise only those whose older frame is evicting_seq or older (about to leave the ring
+  // buffer).
   void RunWaitingPairs(bool force, int64_t evicting_seq = -1);
-  // Dense points of the pair (seq_a, seq_b) voted into grid_ (and stored for the re-vote); false when a frame is gone.
+  // Dense points of the pair (seq_a, seq_b) with the current region, voted into grid_ (and stored for the re-vote);
+  // false when a frame is gone.
   bool RunPair(int64_t seq_a, int64_t seq_b);
   // A region of interest can still arrive (automatic from the landmarks, or a TARGET box to be confirmed).
   bool RegionExpected() const;

@@ -309,6 +309,7 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
   const size_t min_points = static_cast<size_t>(std::max(o.min_face_points, 3));
   const PointCells cells(surface, radius);
   std::vector<size_t> near;
+  std::vector<std::pair<double, size_t>> order;  // far_side's buffer: (dot with the other group's mean, point)
   for (size_t i = 0; i < surface.size(); ++i) {
     const Eigen::Vector3d p = surface[i].point_in_world, own = surface[i].normal;
     near.clear();
@@ -336,7 +337,7 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
     // percentile of the dot product with the other group's mean: on the face, not on the bevel in between, and no
     // single stray normal). Its plane goes through the core's vote-weighted centroid along its mean normal.
     auto far_side = [&](const Eigen::Vector3d& own_mean, const Eigen::Vector3d& other_mean) {
-      std::vector<std::pair<double, size_t>> order;
+      order.clear();
       for (size_t j : near)
         if (surface[j].normal.dot(own_mean) >= surface[j].normal.dot(other_mean))
           order.emplace_back(surface[j].normal.dot(other_mean), j);
