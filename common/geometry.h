@@ -4,9 +4,12 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <vector>
 
 namespace objscan {
+
+constexpr double kDegToRad = M_PI / 180.0;  // rad per degree
 
 struct Sim3 {
   double scale = 1.0;

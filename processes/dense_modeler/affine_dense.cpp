@@ -14,10 +14,11 @@
 #include <unordered_map>
 #include <utility>
 
+#include "common/geometry.h"
+
 namespace objscan {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 
 inline float SampleBilinear(const cv::Mat& img, double u, double v) {
   const int u0 = static_cast<int>(std::floor(u));

@@ -6,10 +6,11 @@
 #include <limits>
 #include <sstream>
 
+#include "common/geometry.h"
+
 namespace objscan {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;

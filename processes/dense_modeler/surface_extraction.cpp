@@ -10,6 +10,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "common/geometry.h"
+
 namespace objscan {
 namespace {
 
@@ -303,7 +305,6 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
   std::vector<SurfaceVoxel> out = surface;
   if (moved) *moved = 0;
   if (surface.empty() || !(voxel_size > 0) || !(o.radius_voxels > 0)) return out;
-  constexpr double kDegToRad = M_PI / 180.0;
   const double radius = o.radius_voxels * voxel_size, max_move = o.max_move_voxels * voxel_size;
   const double cos_apart = std::cos(o.min_angle_deg * kDegToRad), cos_core = std::cos(o.core_angle_deg * kDegToRad);
   const size_t min_points = static_cast<size_t>(std::max(o.min_face_points, 3));
