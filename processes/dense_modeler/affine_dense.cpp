@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "common/geometry.h"
+#include "processes/dense_modeler/image_point_grid.h"
 
 namespace objscan {
 namespace {
@@ -605,45 +606,6 @@ void SearchScores(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b,
   for (int k = 0; k < count; ++k)
     if (sc->inside[k]) scores[k] = NccFromSums(wa, n, sc->sb[k], sc->sbb[k], sc->sab[k], nullptr, nullptr);
 }
-
-// Points of one image in a uniform grid of cells at least `radius` wide, for "is an earlier point closer than
-// radius" queries (the candidates of the 3x3 cells around a point include every point within radius).
-class ImagePointGrid {
- public:
-  ImagePointGrid(int width, int height, double radius) {
-    cell_ = std::max(std::abs(radius), 4.0);
-    nx_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((width + 1) / cell_))));
-    ny_ = std::max(1, static_cast<int>(std::min(4096.0, std::ceil((height + 1) / cell_))));
-    head_.assign(static_cast<size_t>(nx_) * ny_, -1);
-  }
-  // Cell of a pixel in [-0.5, size - 0.5] (clamped).
-  int Cell(const Eigen::Vector2d& px) const {
-    const int cx = std::clamp(static_cast<int>(std::floor((px.x() + 0.5) / cell_)), 0, nx_ - 1);
-    const int cy = std::clamp(static_cast<int>(std::floor((px.y() + 0.5) / cell_)), 0, ny_ - 1);
-    return cy * nx_ + cx;
-  }
-  void Insert(const Eigen::Vector2d& px, int index) {
-    const int c = Cell(px);
-    if (static_cast<size_t>(index) >= next_.size()) next_.resize(index + 1, -1);
-    next_[index] = head_[c];
-    head_[c] = index;
-  }
-  // Calls visit(index) for the points of the 3x3 cells around px until it returns true; true if it did.
-  template <typename Visit>
-  bool AnyNear(const Eigen::Vector2d& px, Visit visit) const {
-    const int c = Cell(px), cx = c % nx_, cy = c / nx_;
-    for (int y = std::max(0, cy - 1); y <= std::min(ny_ - 1, cy + 1); ++y)
-      for (int x = std::max(0, cx - 1); x <= std::min(nx_ - 1, cx + 1); ++x)
-        for (int i = head_[y * nx_ + x]; i >= 0; i = next_[i])
-          if (visit(i)) return true;
-    return false;
-  }
-
- private:
-  double cell_ = 1;
-  int nx_ = 1, ny_ = 1;
-  std::vector<int> head_, next_;
-};
 
 // Exact key of a float pixel position (+0.0f folds -0 into +0, as float comparison does).
 inline uint64_t FloatPairKey(float x, float y) {

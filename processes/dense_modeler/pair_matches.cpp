@@ -8,11 +8,14 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "processes/dense_modeler/image_point_grid.h"
+
 namespace objscan {
 namespace {
 
 constexpr double kMaxDistancePx = 1000.0;               // px, ValidatePairMatchOptions' limit of the distance options
 constexpr double kMinRangeAngleRad = 1.0 * M_PI / 180;  // tracked features meeting at less give no range
+constexpr double kGridCellPx = 16.0;                    // px, cells of the nearest-feature grids
 
 cv::Mat Gray8(const cv::Mat& image) {
   if (image.channels() == 1) return image;
@@ -70,6 +73,13 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
   known.reserve(tracked.size());
   for (const PointMatch& m : tracked)
     if (m.a.allFinite() && m.b.allFinite()) known.push_back(m);
+  std::vector<Eigen::Vector2d> known_a;  // their positions in A, in a grid for the nearest-feature distance
+  known_a.reserve(known.size());
+  ImagePointGrid known_grid(a.image.cols, a.image.rows, kGridCellPx);
+  for (const PointMatch& m : known) {
+    known_grid.Insert(m.a, static_cast<int>(known_a.size()));
+    known_a.push_back(m.a);
+  }
 
   // Corners of A in the rectangle, away from the tracked features (detected in the rectangle only).
   const cv::Mat gray_a = Gray8(a.image), gray_b = Gray8(b.image);
@@ -103,6 +113,8 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
     range.push_back((x - center_a).norm());
     on_floor.push_back(floor_test && region.HeightAboveFloor(x) < 0.5 * region.floor_clearance_mm);
   }
+  ImagePointGrid ranged_grid(a.image.cols, a.image.rows, kGridCellPx);
+  for (size_t i = 0; i < ranged_a.size(); ++i) ranged_grid.Insert(ranged_a[i], static_cast<int>(i));
   // The corners to follow (not among floor tracks), their LK starts and distances to the nearest tracked feature.
   std::vector<cv::Point2f> from_a, guess;
   std::vector<double> track_distance;  // px
@@ -110,14 +122,11 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
   std::vector<double> ranges;
   for (const cv::Point2f& corner : corners) {
     const Eigen::Vector2d pc(corner.x, corner.y);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const PointMatch& m : known) nearest = std::min(nearest, (m.a - pc).norm());
+    const double nearest = known_grid.NearestDistance(known_a, pc);
     cv::Point2f start = corner;
     if (o.guess_neighbours > 0 && !ranged_a.empty()) {
-      near.clear();
-      for (size_t i = 0; i < ranged_a.size(); ++i) near.emplace_back((ranged_a[i] - pc).squaredNorm(), i);
-      const size_t k = std::min<size_t>(o.guess_neighbours, near.size());
-      std::partial_sort(near.begin(), near.begin() + k, near.end());
+      ranged_grid.NearestK(ranged_a, pc, static_cast<size_t>(o.guess_neighbours), &near);
+      const size_t k = near.size();
       ranges.clear();
       bool floor = floor_test;
       for (size_t j = 0; j < k; ++j) {
