@@ -30,7 +30,8 @@ for m in mesh voxels; do
   "$BIN/objscan_evaluate" surface "$WORK/out6/model_$m.ply" "$WORK/gt/target_surface.ply" \
     --align "$WORK/out6/trajectory.txt" "$GT" --visible-from "$GT" > "$WORK/$m.txt" || fail "evaluate $m"
 done
-# Regression bounds; measured 2 Dec, late (surface facing down within 14 mm of the floor dropped as the crevice,
+# Regression bounds (the mesh max's tightened from 5.5 to 4.5 mm on 2 Dec, night: about 1 mm over today's value; the
+# replay is deterministic, so only a change of the code or the scene moves it); measured 2 Dec, late (surface facing down within 14 mm of the floor dropped as the crevice,
 # crevice_band_mm): mesh p90 0.941, max 3.56 (two single vertices 3.3-3.6 mm inside), completeness 0.969; voxels p90
 # 1.32, completeness 0.943. 2 Dec, afternoon (creases sharpened; triangles longer than 50 px need textured windows,
 # which removed the 3.5-4.6 mm dents that the affine map's chords left at z 60-80): mesh p90 0.950, max 5.42 (the
@@ -40,7 +41,7 @@ done
 # recomputed with the final poses): mesh p90 0.935, max 6.34, completeness 0.965; voxels p90 1.33, completeness 0.938
 # (before the curled rims: max 10.3).
 check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 1.1
-check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 5.5
+check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 4.5
 check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.6
 check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.95
 check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.92
