@@ -20,7 +20,6 @@
 namespace objscan {
 namespace {
 
-
 inline float SampleBilinear(const cv::Mat& img, double u, double v) {
   const int u0 = static_cast<int>(std::floor(u));
   const int v0 = static_cast<int>(std::floor(v));

@@ -61,7 +61,7 @@ class ImagePointGrid {
       for (int i = head_[y * nx_ + x]; i >= 0; i = next_[i]) visit(i);
     };
     if (ring == 0) return cell(cx, cy);
-    for (int x = cx - ring; x <= cx + ring; ++x) cell(x, cy - ring), cell(x, cy + ring);  // top and bottom rows
+    for (int x = cx - ring; x <= cx + ring; ++x) cell(x, cy - ring), cell(x, cy + ring);          // top and bottom rows
     for (int y = cy - ring + 1; y <= cy + ring - 1; ++y) cell(cx - ring, y), cell(cx + ring, y);  // the sides
   }
 

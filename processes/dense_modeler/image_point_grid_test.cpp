@@ -43,8 +43,7 @@ TEST(ImagePointGrid, RingSearchesMatchBruteForce) {
       int within = 0, found = 0;
       for (const auto& [d2, i] : all) within += d2 <= 16.0 * 16.0;
       for (const auto& [d2, i] : all)
-        if (d2 <= 16.0 * 16.0)
-          found += grid.AnyNear(p, [&](int j) { return static_cast<size_t>(j) == i; });
+        if (d2 <= 16.0 * 16.0) found += grid.AnyNear(p, [&](int j) { return static_cast<size_t>(j) == i; });
       EXPECT_EQ(found, within);
     }
   }

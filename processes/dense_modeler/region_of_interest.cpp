@@ -11,7 +11,6 @@
 namespace objscan {
 namespace {
 
-
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const size_t mid = v.size() / 2;
