@@ -8,14 +8,15 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "common/geometry.h"
 #include "processes/dense_modeler/image_point_grid.h"
 
 namespace objscan {
 namespace {
 
-constexpr double kMaxDistancePx = 1000.0;               // px, ValidatePairMatchOptions' limit of the distance options
-constexpr double kMinRangeAngleRad = 1.0 * M_PI / 180;  // tracked features meeting at less give no range
-constexpr double kGridCellPx = 16.0;                    // px, cells of the nearest-feature grids
+constexpr double kMaxDistancePx = 1000.0;              // px, ValidatePairMatchOptions' limit of the distance options
+constexpr double kMinRangeAngleRad = 1.0 * kDegToRad;  // tracked features meeting at less give no range
+constexpr double kGridCellPx = 16.0;                   // px, cells of the nearest-feature grids
 
 cv::Mat Gray8(const cv::Mat& image) {
   if (image.channels() == 1) return image;
