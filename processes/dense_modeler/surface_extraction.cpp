@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "common/geometry.h"
+#include "common/point_grid.h"
 
 namespace objscan {
 namespace {
@@ -69,39 +70,13 @@ class VoteField {
   std::vector<int32_t> dense_;
 };
 
-// Surface points bucketed in cubic cells of side radius: the points within radius of p lie in p's cell and its 26
-// neighbours. ForEachNear visits them in a fixed order (cells dz, dy, dx; points in input order).
-class PointCells {
- public:
-  PointCells(const std::vector<SurfaceVoxel>& surface, double radius) : surface_(surface), radius_(radius) {
-    for (size_t i = 0; i < surface.size(); ++i) cells_[VoxelKey(CellOf(surface[i].point_in_world))].push_back(i);
-  }
-  // f(j, d) for every point j within radius of p, d = its offset from p.
-  template <typename F>
-  void ForEachNear(const Eigen::Vector3d& p, F&& f) const {
-    const Eigen::Vector3i c0 = CellOf(p);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          auto it = cells_.find(VoxelKey(c0 + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (size_t j : it->second) {
-            const Eigen::Vector3d d = surface_[j].point_in_world - p;
-            if (d.squaredNorm() <= radius_ * radius_) f(j, d);
-          }
-        }
-  }
-
- private:
-  Eigen::Vector3i CellOf(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d g = p / radius_;
-    return Eigen::Vector3i(static_cast<int>(std::floor(g.x())), static_cast<int>(std::floor(g.y())),
-                           static_cast<int>(std::floor(g.z())));
-  }
-  const std::vector<SurfaceVoxel>& surface_;
-  double radius_;
-  std::unordered_map<uint64_t, std::vector<size_t>> cells_;
-};
+// The surface points' positions, for a PointGrid over them.
+std::vector<Eigen::Vector3d> PositionsOf(const std::vector<SurfaceVoxel>& surface) {
+  std::vector<Eigen::Vector3d> positions;
+  positions.reserve(surface.size());
+  for (const SurfaceVoxel& s : surface) positions.push_back(s.point_in_world);
+  return positions;
+}
 
 }  // namespace
 
@@ -248,7 +223,8 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
   std::vector<SurfaceVoxel> out = surface;
   if (surface.empty() || !(voxel_size > 0) || !(radius_voxels > 0)) return out;
   const double radius = radius_voxels * voxel_size, sigma = 0.5 * radius;
-  const PointCells cells(surface, radius);
+  const std::vector<Eigen::Vector3d> positions = PositionsOf(surface);
+  const PointGrid cells(positions, radius);
   std::vector<std::pair<Eigen::Vector3d, double>> near;  // neighbour offset from the point, weight
   for (size_t i = 0; i < surface.size(); ++i) {
     const Eigen::Vector3d p = surface[i].point_in_world;
@@ -256,8 +232,9 @@ std::vector<SurfaceVoxel> SmoothSurfacePoints(const std::vector<SurfaceVoxel>& s
     Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
     double wsum = 0;
     near.clear();
-    cells.ForEachNear(p, [&](size_t j, const Eigen::Vector3d& d) {
+    cells.ForEachWithin(p, radius, [&](int j) {
       if (surface[j].normal.dot(surface[i].normal) < min_normal_cos) return;
+      const Eigen::Vector3d d = positions[j] - p;
       const double w = std::max(surface[j].voxel.votes, 1) * std::exp(-0.5 * d.squaredNorm() / (sigma * sigma));
       mean += w * d;
       second += w * d * d.transpose();
@@ -308,13 +285,14 @@ std::vector<SurfaceVoxel> SharpenCreases(const std::vector<SurfaceVoxel>& surfac
   const double radius = o.radius_voxels * voxel_size, max_move = o.max_move_voxels * voxel_size;
   const double cos_apart = std::cos(o.min_angle_deg * kDegToRad), cos_core = std::cos(o.core_angle_deg * kDegToRad);
   const size_t min_points = static_cast<size_t>(std::max(o.min_face_points, 3));
-  const PointCells cells(surface, radius);
+  const std::vector<Eigen::Vector3d> positions = PositionsOf(surface);
+  const PointGrid cells(positions, radius);
   std::vector<size_t> near;
   std::vector<std::pair<double, size_t>> order;  // far_side's buffer: (dot with the other group's mean, point)
   for (size_t i = 0; i < surface.size(); ++i) {
     const Eigen::Vector3d p = surface[i].point_in_world, own = surface[i].normal;
     near.clear();
-    cells.ForEachNear(p, [&](size_t j, const Eigen::Vector3d&) { near.push_back(j); });
+    cells.ForEachWithin(p, radius, [&](int j) { near.push_back(static_cast<size_t>(j)); });
     if (near.size() < 2 * min_points) continue;
     // 2-means of the normals, seeded by the normal farthest from the point's own and the one farthest from that.
     auto farthest_from = [&](const Eigen::Vector3d& n) {
