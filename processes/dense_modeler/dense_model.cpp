@@ -9,6 +9,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/geometry.h"
 #include "common/point_grid.h"
 #include "processes/dense_modeler/export.h"
 
@@ -105,8 +106,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     if (region.valid && region.has_floor && (o.floor_band_mm > 0 || o.crevice_band_mm > 0)) {
       // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not. Under
       // an overhang, surface facing down just above the floor is the crevice (see crevice_band_mm).
-      const double min_up_cos = std::cos(o.floor_band_normal_deg * M_PI / 180.0);
-      const double max_down_cos = -std::sin(o.crevice_normal_deg * M_PI / 180.0);
+      const double min_up_cos = std::cos(o.floor_band_normal_deg * kDegToRad);
+      const double max_down_cos = -std::sin(o.crevice_normal_deg * kDegToRad);
       std::vector<SurfaceVoxel> kept;
       kept.reserve(surface.size());
       for (const SurfaceVoxel& s : surface) {

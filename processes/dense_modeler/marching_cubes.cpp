@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "common/geometry.h"
 #include "common/point_grid.h"
 
 namespace objscan {
@@ -362,7 +363,7 @@ bool ValidateCurledBorderOptions(const CurledBorderOptions& o, std::string* why)
 int64_t TrimCurledBorders(TriangleMesh* mesh, const CurledBorderOptions& o) {
   if (o.max_rings <= 0 || mesh->triangles.empty()) return 0;
   const size_t n = mesh->vertices.size();
-  const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * M_PI / 180.0));
+  const float min_cos = static_cast<float>(std::cos(o.max_angle_deg * kDegToRad));
   std::vector<char> keep(mesh->triangles.size(), 1), border;
   std::vector<int> ring_of;
   for (int pass = 0; pass < o.max_rings; ++pass) {
