@@ -636,6 +636,14 @@ const cv::Mat& GrayFloatInto(const cv::Mat& image, cv::Mat* gray8, cv::Mat* out)
   return *out;
 }
 
+// The view's float gray: its own, else its gray8 converted into *out, else its image's (the same values).
+const cv::Mat& GrayFloatOf(const DenseView& v, cv::Mat* gray8, cv::Mat* out) {
+  if (!v.gray.empty()) return v.gray;
+  if (v.gray8.empty()) return GrayFloatInto(v.image, gray8, out);
+  v.gray8.convertTo(*out, CV_32F);
+  return *out;
+}
+
 }  // namespace
 
 bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
@@ -671,6 +679,13 @@ cv::Mat GrayFloat(const cv::Mat& image) {
   cv::Mat gray8, out;
   GrayFloatInto(image, &gray8, &out);
   return out;
+}
+
+cv::Mat Gray8(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat gray;
+  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  return gray;
 }
 
 Eigen::Matrix3d EssentialMatrix(const Eigen::Isometry3d& world_from_a, const Eigen::Isometry3d& world_from_b) {
@@ -715,6 +730,11 @@ double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const 
 }
 
 bool DensePairViewsUsable(const DenseView& a, const DenseView& b) {
+  auto gray_fits = [](const cv::Mat& gray, const cv::Mat& image, int type) {
+    return gray.empty() || (gray.type() == type && gray.size() == image.size());
+  };
+  for (const DenseView* v : {&a, &b})
+    if (!gray_fits(v->gray, v->image, CV_32FC1) || !gray_fits(v->gray8, v->image, CV_8UC1)) return false;
   return !a.image.empty() && !b.image.empty() && a.image.type() == b.image.type() && a.camera.IsValid() &&
          b.camera.IsValid() && a.image.cols == a.camera.width && a.image.rows == a.camera.height &&
          b.image.cols == b.camera.width && b.image.rows == b.camera.height &&
@@ -800,8 +820,8 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   subdiv.getTriangleList(tri_list);
 
   thread_local PairScratch scratch;
-  const cv::Mat& gray_a = a.gray.empty() ? GrayFloatInto(a.image, &scratch.gray8, &scratch.gray_a) : a.gray;
-  const cv::Mat& gray_b = b.gray.empty() ? GrayFloatInto(b.image, &scratch.gray8, &scratch.gray_b) : b.gray;
+  const cv::Mat& gray_a = GrayFloatOf(a, &scratch.gray8, &scratch.gray_a);
+  const cv::Mat& gray_b = GrayFloatOf(b, &scratch.gray8, &scratch.gray_b);
   cv::Mat1b& visited = scratch.visited;
   visited.create(a.image.rows, a.image.cols);
   visited.setTo(0);

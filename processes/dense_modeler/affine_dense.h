@@ -34,7 +34,8 @@ struct DenseView {
   PinholeCamera camera;                                                 // intrinsics matching image
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
   cv::Mat image;                                                        // CV_8UC3 (BGR) or CV_8UC1
-  cv::Mat gray;  // optional CV_32FC1 gray of image (computed per call when empty)
+  cv::Mat gray;   // optional CV_32FC1 gray of image, its size (else made from gray8 or image per call)
+  cv::Mat gray8;  // optional CV_8UC1 gray of image, its size (else converted from image per call where needed)
 };
 
 // The same feature seen in both views (px).
@@ -141,7 +142,7 @@ struct DensePairStats {
 bool ValidateAffineDenseOptions(const AffineDenseOptions& options, std::string* why);
 
 // True when the two views can form a pair: both images non-empty, of the same type and of their cameras' sizes,
-// both cameras valid, the centres apart (> 1e-9 mm).
+// both cameras valid, the centres apart (> 1e-9 mm), and each given gray / gray8 of its image's size and type.
 bool DensePairViewsUsable(const DenseView& a, const DenseView& b);
 
 // The pixels of A a dense pair visits: options.roi_a (empty = the whole image) clipped to the image and, with a
@@ -200,5 +201,8 @@ double WarpedNccPortable(const cv::Mat& gray_a, const Eigen::Vector2d& p, const 
 
 // CV_32FC1 gray of a CV_8UC1 / CV_8UC3 (BGR) image.
 cv::Mat GrayFloat(const cv::Mat& image);
+
+// CV_8UC1 gray of a CV_8UC1 (the same data, not copied) / CV_8UC3 (BGR) image; GrayFloat is this converted to float.
+cv::Mat Gray8(const cv::Mat& image);
 
 }  // namespace objscan

@@ -158,6 +158,40 @@ TEST(AffineDense, LargeTrianglesNeedTexturedWindows) {
   EXPECT_NE(why.find("strict-triangle-edge"), std::string::npos);
 }
 
+// The views' grays, given as float or 8-bit (the node makes each frame's once), give the same points as grays
+// converted per call; grays of the wrong size or type make the pair unusable instead of being read out of bounds.
+TEST(AffineDense, GivenGraysGiveTheSamePointsAndWrongOnesNone) {
+  const TiltedPlanePair pair;
+  const std::vector<PointMatch> matches = pair.scene.Matches(pair.pa, pair.pb, 40);
+  const AffineDenseOptions o;
+  const std::vector<DensePoint> own = ComputeDensePair(pair.a, pair.b, matches, o);
+  ASSERT_GT(own.size(), 10000u);
+  auto same = [&](const DenseView& a, const DenseView& b) {
+    const std::vector<DensePoint> pts = ComputeDensePair(a, b, matches, o);
+    if (pts.size() != own.size()) return false;
+    for (size_t i = 0; i < pts.size(); ++i)
+      if (pts[i].pixel_b != own[i].pixel_b || pts[i].point_in_world != own[i].point_in_world) return false;
+    return true;
+  };
+  DenseView a8 = pair.a, b8 = pair.b;
+  a8.gray8 = Gray8(a8.image), b8.gray8 = Gray8(b8.image);
+  EXPECT_TRUE(same(a8, b8));
+  DenseView af = pair.a, bf = pair.b;
+  af.gray = GrayFloat(af.image), bf.gray = GrayFloat(bf.image);
+  EXPECT_TRUE(same(af, bf));
+  EXPECT_TRUE(DensePairViewsUsable(af, b8));
+  DenseView small = bf;
+  small.gray = bf.gray(cv::Rect(0, 0, 100, 100)).clone();
+  EXPECT_FALSE(DensePairViewsUsable(af, small));
+  EXPECT_TRUE(ComputeDensePair(af, small, matches, o).empty());
+  DenseView wrong_type = b8;
+  wrong_type.gray8 = GrayFloat(b8.image);  // CV_32FC1 where CV_8UC1 belongs
+  EXPECT_FALSE(DensePairViewsUsable(a8, wrong_type));
+  DenseView wrong_float = bf;
+  wrong_float.gray = b8.gray8;  // CV_8UC1 where CV_32FC1 belongs
+  EXPECT_FALSE(DensePairViewsUsable(wrong_float, bf));
+}
+
 TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
   const TiltedPlanePair t;
   const PlaneScene& scene = t.scene;

@@ -144,6 +144,8 @@ class DenseModelerNode : public Node {
   struct FrameSlot {
     int64_t utime = 0;
     cv::Mat image;  // full resolution (empty until received)
+    cv::Mat gray8;  // CV_8UC1 gray of image, made by its first pair (as B), released after its pair as A
+    cv::Mat gray;   // CV_32FC1 gray of image, likewise
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only
     bool processed = false;                  // pairing / carving copy done
@@ -212,6 +214,7 @@ class DenseModelerNode : public Node {
   int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
+  std::vector<double> pair_ms_;  // ms, each pair's wall time: pair matches + dense pair (status pair_ms), in order
   std::deque<std::pair<int64_t, int64_t>> waiting_pairs_;  // (seq_a, seq_b) waiting for the region of interest
   int64_t pairs_without_region_ = 0;                       // pairs run unrestricted although a region was expected
   int64_t pair_matches_added_ = 0;                         // matches AddPairMatches gave the pairs so far

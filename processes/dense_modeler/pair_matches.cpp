@@ -18,13 +18,6 @@ constexpr double kMaxDistancePx = 1000.0;              // px, ValidatePairMatchO
 constexpr double kMinRangeAngleRad = 1.0 * kDegToRad;  // tracked features meeting at less give no range
 constexpr double kGridCellPx = 16.0;                   // px, cells of the nearest-feature grids
 
-cv::Mat Gray8(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat gray;
-  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  return gray;
-}
-
 }  // namespace
 
 bool ValidatePairMatchOptions(const PairMatchOptions& o, std::string* why) {
@@ -83,7 +76,8 @@ std::vector<PointMatch> AddPairMatches(const DenseView& a, const DenseView& b, c
   }
 
   // Corners of A in the rectangle, away from the tracked features (detected in the rectangle only).
-  const cv::Mat gray_a = Gray8(a.image), gray_b = Gray8(b.image);
+  const cv::Mat gray_a = a.gray8.empty() ? Gray8(a.image) : a.gray8;
+  const cv::Mat gray_b = b.gray8.empty() ? Gray8(b.image) : b.gray8;
   cv::Mat1b mask(rect.size(), uchar(255));
   for (const PointMatch& m : known)
     cv::circle(mask, cv::Point(cvRound(m.a.x()) - rect.x, cvRound(m.a.y()) - rect.y), cvRound(o.min_track_distance_px),

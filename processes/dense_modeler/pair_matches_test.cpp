@@ -272,6 +272,29 @@ TEST(PairMatches, BadInputGivesNoMatches) {
             AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), RegionOfInterest(), o).size());
 }
 
+// The views' grays, when the caller gives them (the node makes each frame's once), give the same matches; grays of
+// the wrong size or type are bad input.
+TEST(PairMatches, GivenGraysGiveTheSameMatchesAndWrongOnesNone) {
+  const GapPair& d = Pair();
+  const PairMatchOptions o;
+  const std::vector<PointMatch> own = AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), RegionOfInterest(), o);
+  ASSERT_GT(own.size(), 20u);
+  DenseView a = d.a, b = d.b;
+  a.gray8 = Gray8(a.image), b.gray8 = Gray8(b.image);
+  const std::vector<PointMatch> given = AddPairMatches(a, b, d.tracked, cv::Rect(), RegionOfInterest(), o);
+  ASSERT_EQ(given.size(), own.size());
+  for (size_t i = 0; i < own.size(); ++i) {
+    EXPECT_EQ(given[i].a, own[i].a);
+    EXPECT_EQ(given[i].b, own[i].b);
+  }
+  DenseView small_gray = b;
+  small_gray.gray8 = b.gray8(cv::Rect(0, 0, 320, 240)).clone();
+  EXPECT_TRUE(AddPairMatches(a, small_gray, d.tracked, cv::Rect(), RegionOfInterest(), o).empty());
+  DenseView float_gray = b;
+  float_gray.gray8 = GrayFloat(b.image);  // CV_32FC1 where CV_8UC1 belongs
+  EXPECT_TRUE(AddPairMatches(a, float_gray, d.tracked, cv::Rect(), RegionOfInterest(), o).empty());
+}
+
 TEST(PairMatches, OptionsAreValidated) {
   std::string why;
   EXPECT_TRUE(ValidatePairMatchOptions(PairMatchOptions(), &why)) << why;
