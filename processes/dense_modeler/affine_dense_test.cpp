@@ -187,9 +187,14 @@ TEST(AffineDense, GivenGraysGiveTheSamePointsAndWrongOnesNone) {
   DenseView wrong_type = b8;
   wrong_type.gray8 = GrayFloat(b8.image);  // CV_32FC1 where CV_8UC1 belongs
   EXPECT_FALSE(DensePairViewsUsable(a8, wrong_type));
-  DenseView wrong_float = bf;
-  wrong_float.gray = b8.gray8;  // CV_8UC1 where CV_32FC1 belongs
+  EXPECT_TRUE(DensePairViewsUsable(af, bf));
+  DenseView wrong_float = af;
+  wrong_float.gray = a8.gray8;  // CV_8UC1 where CV_32FC1 belongs
   EXPECT_FALSE(DensePairViewsUsable(wrong_float, bf));
+  // The given grays are the ones used: a flat one leaves no texture to match.
+  DenseView flat = bf;
+  flat.gray = cv::Mat(bf.image.size(), CV_32FC1, cv::Scalar(128));
+  EXPECT_LT(ComputeDensePair(af, flat, matches, o).size(), own.size() / 10);
 }
 
 TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {

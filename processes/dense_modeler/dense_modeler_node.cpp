@@ -326,7 +326,7 @@ void DenseModelerNode::OnImage(const image_t& msg) {
   FrameSlot& slot = Slot(msg.seq);
   slot.utime = msg.utime;
   slot.image = frame.image;
-  slot.gray8.release(), slot.gray.release();  // a repeated seq: its grays are made again from this image
+  slot.gray8.release(), slot.gray.release();  // (none yet: grays are made from slot.image by its pairs)
   TryProcess(msg.seq);
 }
 
@@ -482,7 +482,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   if (seq % options_.pair_every != 0) return;
   auto partner = frames_.find(seq - options_.pair_gap);
   if (partner == frames_.end() || !partner->second.processed || partner->second.image.empty()) return;
-  const FrameSlot& pa = partner->second;
+  FrameSlot& pa = partner->second;
   if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
     int na = 0, nb = 0;
     const double ea =
@@ -495,6 +495,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       LogInfo("pair " + std::to_string(partner->first) + "-" + std::to_string(seq) +
               " skipped: median landmark reprojection error " + std::to_string(ea) + " / " + std::to_string(eb) +
               " px");
+      pa.gray8.release(), pa.gray.release();  // its pair as A, the last one that would use them
       return;
     }
   }
@@ -565,7 +566,9 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   }
   DensePairStats stats;
   const std::vector<DensePoint> points = ComputeDensePair(a, b, matches, dense, &stats);
-  pa.gray8.release(), pa.gray.release();  // A's last pair (frame j is A only with j + pair_gap)
+  // Frame j is A only with j + pair_gap: A's grays are done, and so are B's when B will never be an A.
+  pa.gray8.release(), pa.gray.release();
+  if ((seq_b + options_.pair_gap) % options_.pair_every != 0) slot.gray8.release(), slot.gray.release();
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
   if (RevoteEnabled() && stored_complete_) {

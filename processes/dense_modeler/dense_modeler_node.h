@@ -144,7 +144,7 @@ class DenseModelerNode : public Node {
   struct FrameSlot {
     int64_t utime = 0;
     cv::Mat image;  // full resolution (empty until received)
-    cv::Mat gray8;  // CV_8UC1 gray of image, made by its first pair (as B), released after its pair as A
+    cv::Mat gray8;  // CV_8UC1 gray of image, made by the frame's first pair, released after its last (as A)
     cv::Mat gray;   // CV_32FC1 gray of image, likewise
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only

@@ -293,6 +293,10 @@ TEST(PairMatches, GivenGraysGiveTheSameMatchesAndWrongOnesNone) {
   DenseView float_gray = b;
   float_gray.gray8 = GrayFloat(b.image);  // CV_32FC1 where CV_8UC1 belongs
   EXPECT_TRUE(AddPairMatches(a, float_gray, d.tracked, cv::Rect(), RegionOfInterest(), o).empty());
+  // The given grays are the ones used: a flat A has no corners.
+  DenseView flat = a;
+  flat.gray8 = cv::Mat(a.image.size(), CV_8UC1, cv::Scalar(128));
+  EXPECT_TRUE(AddPairMatches(flat, b, d.tracked, cv::Rect(), RegionOfInterest(), o).empty());
 }
 
 TEST(PairMatches, OptionsAreValidated) {
