@@ -6,18 +6,13 @@
 
 #include "common/bus.h"
 #include "common/log.h"
+#include "common/statistics.h"
 #include "objscan/process_status_t.hpp"
 
 namespace objscan {
 namespace {
 constexpr size_t kLatencyWindow = 1000;
 
-double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
-  return values[k];
-}
 }  // namespace
 
 StatusReporter::StatusReporter(Bus* bus, std::string name, std::string channel, double period_s)

@@ -13,6 +13,7 @@
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/statistics.h"
 #include "common/time.h"
 #include "objscan/model_t.hpp"
 #include "objscan/process_status_t.hpp"
@@ -326,7 +327,6 @@ void DenseModelerNode::OnImage(const image_t& msg) {
   FrameSlot& slot = Slot(msg.seq);
   slot.utime = msg.utime;
   slot.image = frame.image;
-  slot.gray8.release(), slot.gray.release();  // (none yet: grays are made from slot.image by its pairs)
   TryProcess(msg.seq);
 }
 
@@ -742,13 +742,10 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
                 model.times.clean_up_s);
   LogInfo(times);
   if (!pair_ms_.empty()) {
-    std::vector<double> ms = pair_ms_;
-    std::sort(ms.begin(), ms.end());
-    auto at = [&](double q) { return ms[static_cast<size_t>(q * (ms.size() - 1) + 0.5)]; };
     std::snprintf(times, sizeof(times),
                   "dense pairs: %zu, wall time per pair (pair matches + dense pair) p50 %.1f ms, "
                   "p90 %.1f ms, max %.1f ms",
-                  ms.size(), at(0.5), at(0.9), ms.back());
+                  pair_ms_.size(), Percentile(pair_ms_, 0.5), Percentile(pair_ms_, 0.9), Percentile(pair_ms_, 1.0));
     LogInfo(times);
   }
   ModelPaths paths;

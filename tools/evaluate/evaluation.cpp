@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "common/point_grid.h"
+#include "common/statistics.h"
 
 namespace objscan {
 
@@ -279,15 +280,6 @@ std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points
     if (views[i] >= min_views) visible.push_back(static_cast<int>(i));
   return visible;
 }
-
-namespace {
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-  return v[k];
-}
-}  // namespace
 
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& truth,
                                   double completeness_threshold) {
