@@ -19,10 +19,10 @@ StatusReporter::StatusReporter(Bus* bus, std::string name, std::string channel, 
     : bus_(bus),
       name_(std::move(name)),
       channel_(std::move(channel)),
-      period_us_(static_cast<int64_t>(period_s * 1e6)) {
+      period_us_(static_cast<int64_t>(period_s * 1e6)),
+      latency_window_ms_(kLatencyWindow) {
   char host[256] = {0};
   if (gethostname(host, sizeof(host) - 1) == 0) host_ = host;
-  latency_window_ms_.reserve(kLatencyWindow);
 }
 
 void StatusReporter::Reject(const std::string& reason, const std::string& detail) {
@@ -49,14 +49,7 @@ SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
   return SeqResult::kNext;
 }
 
-void StatusReporter::RecordLatencyMs(double ms) {
-  if (latency_window_ms_.size() < kLatencyWindow) {
-    latency_window_ms_.push_back(ms);
-  } else {
-    latency_window_ms_[latency_next_] = ms;
-    latency_next_ = (latency_next_ + 1) % kLatencyWindow;
-  }
-}
+void StatusReporter::RecordLatencyMs(double ms) { latency_window_ms_.Add(ms); }
 
 void StatusReporter::SetValue(const std::string& name, double value) {
   for (auto& kv : values_) {
@@ -112,8 +105,8 @@ void StatusReporter::PublishIfDue(int64_t wall_utime, bool force) {
   }
   msg.num_rejection_reasons = static_cast<int32_t>(msg.rejection_reason.size());
   msg.dropped_inputs = dropped_inputs_;
-  msg.latency_p50_ms = Percentile(latency_window_ms_, 0.5);
-  msg.latency_p99_ms = Percentile(latency_window_ms_, 0.99);
+  msg.latency_p50_ms = Percentile(latency_window_ms_.values(), 0.5);
+  msg.latency_p99_ms = Percentile(latency_window_ms_.values(), 0.99);
   for (const auto& kv : values_) {
     msg.value_name.push_back(kv.first);
     msg.value.push_back(kv.second);

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "common/statistics.h"
+
 namespace objscan {
 
 class Bus;
@@ -66,8 +68,7 @@ class StatusReporter {
   std::map<std::string, int64_t> rejections_;
   std::map<std::string, int64_t> last_seq_;
   std::vector<std::pair<std::string, double>> values_;
-  std::vector<double> latency_window_ms_;
-  size_t latency_next_ = 0;
+  RecentValues latency_window_ms_;  // ms, the last 1000 handler latencies (kLatencyWindow)
 };
 
 }  // namespace objscan

@@ -625,22 +625,17 @@ struct PairScratch {
   SearchScratch search;
 };
 
-// GrayFloat into a reused buffer (the same conversion).
-const cv::Mat& GrayFloatInto(const cv::Mat& image, cv::Mat* gray8, cv::Mat* out) {
-  if (image.channels() == 3) {
-    cv::cvtColor(image, *gray8, cv::COLOR_BGR2GRAY);
-    gray8->convertTo(*out, CV_32F);
-  } else {
-    image.convertTo(*out, CV_32F);
-  }
-  return *out;
+// CV_8UC1 gray of image: the image itself when it is gray, else converted into *buffer (reused).
+const cv::Mat& Gray8Into(const cv::Mat& image, cv::Mat* buffer) {
+  if (image.channels() == 1) return image;
+  cv::cvtColor(image, *buffer, cv::COLOR_BGR2GRAY);
+  return *buffer;
 }
 
-// The view's float gray: its own, else its gray8 converted into *out, else its image's (the same values).
+// The view's float gray: its own, else its gray8 (or its image's gray) converted into *out; the same values.
 const cv::Mat& GrayFloatOf(const DenseView& v, cv::Mat* gray8, cv::Mat* out) {
   if (!v.gray.empty()) return v.gray;
-  if (v.gray8.empty()) return GrayFloatInto(v.image, gray8, out);
-  v.gray8.convertTo(*out, CV_32F);
+  (v.gray8.empty() ? Gray8Into(v.image, gray8) : v.gray8).convertTo(*out, CV_32F);
   return *out;
 }
 
@@ -676,16 +671,14 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
 }
 
 cv::Mat GrayFloat(const cv::Mat& image) {
-  cv::Mat gray8, out;
-  GrayFloatInto(image, &gray8, &out);
+  cv::Mat buffer, out;
+  Gray8Into(image, &buffer).convertTo(out, CV_32F);
   return out;
 }
 
 cv::Mat Gray8(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat gray;
-  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
-  return gray;
+  cv::Mat buffer;
+  return Gray8Into(image, &buffer);
 }
 
 Eigen::Matrix3d EssentialMatrix(const Eigen::Isometry3d& world_from_a, const Eigen::Isometry3d& world_from_b) {

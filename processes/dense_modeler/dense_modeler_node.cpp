@@ -495,7 +495,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       LogInfo("pair " + std::to_string(partner->first) + "-" + std::to_string(seq) +
               " skipped: median landmark reprojection error " + std::to_string(ea) + " / " + std::to_string(eb) +
               " px");
-      pa.gray8.release(), pa.gray.release();  // its pair as A, the last one that would use them
+      ReleaseGraysAfterPair(&pa, seq, nullptr);  // B's grays are not made yet
       return;
     }
   }
@@ -566,9 +566,7 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   }
   DensePairStats stats;
   const std::vector<DensePoint> points = ComputeDensePair(a, b, matches, dense, &stats);
-  // Frame j is A only with j + pair_gap: A's grays are done, and so are B's when B will never be an A.
-  pa.gray8.release(), pa.gray.release();
-  if ((seq_b + options_.pair_gap) % options_.pair_every != 0) slot.gray8.release(), slot.gray.release();
+  ReleaseGraysAfterPair(&pa, seq_b, &slot);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
   if (RevoteEnabled() && stored_complete_) {
@@ -596,12 +594,18 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   status_.SetValue("dense_points", static_cast<double>(dense_points_));
   status_.SetValue("voxels", static_cast<double>(grid_.num_voxels()));
   status_.SetValue("votes", static_cast<double>(grid_.total_votes()));
-  pair_ms_.push_back((vote_start_us - start_us) * 1e-3);
-  status_.SetValue("pair_ms", pair_ms_.back());
+  const double pair_ms = (vote_start_us - start_us) * 1e-3;
+  pair_ms_.Add(pair_ms);
+  status_.SetValue("pair_ms", pair_ms);
   status_.SetValue("vote_ms", (end_us - vote_start_us) * 1e-3);
   status_.RecordLatencyMs((end_us - start_us) * 1e-3);
   if (pairs_done_ % options_.voxel_map_every == 0) PublishVoxelMap(slot.utime, seq, false, nullptr);
   return true;
+}
+
+void DenseModelerNode::ReleaseGraysAfterPair(FrameSlot* a, int64_t seq_b, FrameSlot* b) {
+  a->gray8.release(), a->gray.release();
+  if (b && (seq_b + options_.pair_gap) % options_.pair_every != 0) b->gray8.release(), b->gray.release();
 }
 
 void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final,
@@ -744,8 +748,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (!pair_ms_.empty()) {
     std::snprintf(times, sizeof(times),
                   "dense pairs: %zu, wall time per pair (pair matches + dense pair) p50 %.1f ms, "
-                  "p90 %.1f ms, max %.1f ms",
-                  pair_ms_.size(), Percentile(pair_ms_, 0.5), Percentile(pair_ms_, 0.9), Percentile(pair_ms_, 1.0));
+                  "p90 %.1f ms (of the last %zu), max %.1f ms",
+                  pair_ms_.total(), Percentile(pair_ms_.values(), 0.5), Percentile(pair_ms_.values(), 0.9),
+                  pair_ms_.values().size(), pair_ms_.max());
     LogInfo(times);
   }
   ModelPaths paths;

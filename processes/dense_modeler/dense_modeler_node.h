@@ -59,6 +59,7 @@
 #include "common/camera_model.h"
 #include "common/node.h"
 #include "common/sensor_data.h"
+#include "common/statistics.h"
 #include "common/status.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
@@ -144,7 +145,8 @@ class DenseModelerNode : public Node {
   struct FrameSlot {
     int64_t utime = 0;
     cv::Mat image;  // full resolution (empty until received)
-    cv::Mat gray8;  // CV_8UC1 gray of image, made by the frame's first pair, released after its last (as A)
+    cv::Mat gray8;  // CV_8UC1 gray of image, made by the frame's first pair, released after its last one
+                    // (ReleaseGraysAfterPair)
     cv::Mat gray;   // CV_32FC1 gray of image, likewise
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only
@@ -180,6 +182,9 @@ class DenseModelerNode : public Node {
   // Dense points of the pair (seq_a, seq_b) with the current region, voted into grid_ (and stored for the re-vote);
   // false when a frame is gone.
   bool RunPair(int64_t seq_a, int64_t seq_b);
+  // After the pair (seq_a, seq_b) ran or was skipped: frame j is A only in the pair (j, j + pair_gap), so A's grays
+  // are done, and so are B's (b may be null) when B is never an A.
+  void ReleaseGraysAfterPair(FrameSlot* a, int64_t seq_b, FrameSlot* b);
   // A region of interest can still arrive (automatic from the landmarks, or a TARGET box to be confirmed).
   bool RegionExpected() const;
   void PublishVoxelMap(int64_t utime, int64_t seq, bool is_final, const std::vector<VoxelRecord>* final_voxels);
@@ -214,7 +219,8 @@ class DenseModelerNode : public Node {
   int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
-  std::vector<double> pair_ms_;  // ms, each pair's wall time: pair matches + dense pair (status pair_ms), in order
+  RecentValues pair_ms_{100000};  // ms, the pairs' wall times (pair matches + dense pair; status pair_ms), the last
+                                  // 100 000 kept for the final log's percentiles
   std::deque<std::pair<int64_t, int64_t>> waiting_pairs_;  // (seq_a, seq_b) waiting for the region of interest
   int64_t pairs_without_region_ = 0;                       // pairs run unrestricted although a region was expected
   int64_t pair_matches_added_ = 0;                         // matches AddPairMatches gave the pairs so far
