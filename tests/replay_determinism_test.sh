@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Deterministic replay: the checked-in log through the processing pipeline twice — the second time with both cores
-# busy — must give byte-identical output messages (PROCESS_STATUS, the wall-clock channel, excluded).
+# busy — must give byte-identical output messages (PROCESS_STATUS, the wall-clock channel, excluded) and model files.
 # Covers the in-process pipeline replay (objscan_replay) and the tracker process over file:// in and out.
 set -euo pipefail
 BIN="$1"; SRC="$2"
@@ -30,6 +30,11 @@ for p in "${LOAD_PIDS[@]}"; do kill "$p"; done; LOAD_PIDS=()
 "$BIN/objscan_logtool" compare-bytes "$WORK/t1.lcmlog" "$WORK/t2.lcmlog" || fail "tracker process output differs"
 "$BIN/objscan_logtool" count "$WORK/r1/replay.lcmlog"
 "$BIN/objscan_logtool" compare-bytes "$WORK/r1/replay.lcmlog" "$WORK/r2/replay.lcmlog" || fail "pipeline output differs"
+# The model files themselves (the issue: the replay gives the identical model twice), not only the messages.
+for f in model_voxels.ply model_mesh.ply model.bt; do
+  [ -s "$WORK/r1/$f" ] || fail "replay wrote no $f"
+  cmp -s "$WORK/r1/$f" "$WORK/r2/$f" || fail "$f differs between the two replays"
+done
 n=$("$BIN/objscan_logtool" count "$WORK/r1/replay.lcmlog" | awk '$1=="FEATURE_TRACKS" {print $2}')
 [ "${n:-0}" -gt 0 ] || fail "replay produced no tracks"
-echo "PASS: replay is byte-identical across runs (tracker process and pipeline)"
+echo "PASS: replay is byte-identical across runs (tracker process, pipeline messages and model files)"
