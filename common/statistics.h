@@ -2,15 +2,16 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
 namespace objscan {
 
 // The q-quantile (q in [0, 1]) of values by nearest rank: the element at round(q·(n−1)) of the sorted values; 0 for
-// no values. Takes a copy (values are reordered). Never throws for q out of range: it is clamped to [0, 1].
+// no values or a NaN q. Takes a copy (values are reordered). Never throws: q out of range is clamped to [0, 1].
 inline double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
+  if (values.empty() || std::isnan(q)) return 0.0;
   q = std::clamp(q, 0.0, 1.0);
   const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size() - 1) + 0.5));
   std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());

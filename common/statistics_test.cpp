@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace objscan {
 namespace {
 
@@ -16,6 +18,7 @@ TEST(Statistics, PercentileByNearestRank) {
   EXPECT_EQ(Percentile(v, 0.96), 11.0);  // round(0.96 * 10) = 10
   EXPECT_EQ(Percentile(v, 2.0), 11.0);   // clamped
   EXPECT_EQ(Percentile(v, -1.0), 1.0);
+  EXPECT_EQ(Percentile(v, std::nan("")), 0.0);  // not an index
 }
 
 TEST(Statistics, RecentValuesKeepTheLastCapacityAndTheMaxOfAll) {

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "common/bus.h"
 #include "common/log.h"
@@ -12,6 +13,7 @@
 namespace objscan {
 namespace {
 constexpr size_t kLatencyWindow = 1000;
+constexpr size_t kMaxRejectedAhead = 64;  // rejected seqs ahead of a stream remembered at most
 
 }  // namespace
 
@@ -34,19 +36,37 @@ void StatusReporter::Reject(const std::string& reason, const std::string& detail
 }
 
 SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
-  auto it = last_seq_.find(stream);
-  if (it == last_seq_.end()) {
-    last_seq_.emplace(stream, seq);
+  auto it = streams_.find(stream);
+  if (it == streams_.end()) {
+    streams_[stream].last = seq;
     return SeqResult::kFirst;
   }
-  if (seq <= it->second) return SeqResult::kRepeatedOrOld;
-  const int64_t missing = seq - it->second - 1;
-  it->second = seq;
+  SeqStream& st = it->second;
+  if (seq <= st.last) return SeqResult::kRepeatedOrOld;
+  // seq > last: the difference fits an unsigned 64-bit value (no signed overflow for extreme seqs). Rejected inputs
+  // in between were received, not dropped.
+  uint64_t missing = static_cast<uint64_t>(seq) - static_cast<uint64_t>(st.last) - 1;
+  auto end = std::upper_bound(st.rejected_ahead.begin(), st.rejected_ahead.end(), seq);
+  for (auto r = st.rejected_ahead.begin(); r != end; ++r)
+    if (*r < seq && missing > 0) --missing;
+  st.rejected_ahead.erase(st.rejected_ahead.begin(), end);
+  st.last = seq;
   if (missing > 0) {
-    dropped_inputs_ += missing;
+    const uint64_t room = static_cast<uint64_t>(std::numeric_limits<int64_t>::max() - dropped_inputs_);
+    dropped_inputs_ += static_cast<int64_t>(std::min(missing, room));  // saturates
     return SeqResult::kGap;
   }
   return SeqResult::kNext;
+}
+
+void StatusReporter::NoteRejectedSeq(const std::string& stream, int64_t seq) {
+  auto it = streams_.find(stream);
+  if (it == streams_.end() || seq <= it->second.last) return;
+  std::vector<int64_t>& ahead = it->second.rejected_ahead;
+  auto pos = std::lower_bound(ahead.begin(), ahead.end(), seq);
+  if (pos != ahead.end() && *pos == seq) return;
+  ahead.insert(pos, seq);
+  if (ahead.size() > kMaxRejectedAhead) ahead.pop_back();  // the farthest ahead go first
 }
 
 void StatusReporter::RecordLatencyMs(double ms) { latency_window_ms_.Add(ms); }

@@ -31,8 +31,13 @@ class StatusReporter {
   // The on_malformed handler of Bus::SubscribeMessage for input `what`: rejects as "<what>: malformed" with the
   // size and channel as detail. The reporter must outlive the subscription.
   std::function<void(const RawMessage&)> MalformedHandler(const std::string& what);
-  // Tracks the sequence numbers of one input stream; a gap adds the missing count to dropped_inputs.
+  // Tracks the sequence numbers of one input stream's usable inputs; a gap adds the seqs neither seen nor noted as
+  // rejected (NoteRejectedSeq) to dropped_inputs (saturating at INT64_MAX). Call it once an input is otherwise
+  // usable: a rejected one (perhaps with a wild seq) must not move the stream on.
   SeqResult ObserveSeq(const std::string& stream, int64_t seq);
+  // An input of the stream that was received but rejected: its seq is not counted as dropped by the next gap, and it
+  // does not move the stream on. At most 64 such seqs ahead of the stream are remembered (the nearest).
+  void NoteRejectedSeq(const std::string& stream, int64_t seq);
   void RecordLatencyMs(double ms);
   void SetLastDataUtime(int64_t utime) { last_data_utime_ = utime; }
   void SetValue(const std::string& name, double value);
@@ -66,7 +71,11 @@ class StatusReporter {
   int64_t messages_out_ = 0;
   int64_t dropped_inputs_ = 0;
   std::map<std::string, int64_t> rejections_;
-  std::map<std::string, int64_t> last_seq_;
+  struct SeqStream {
+    int64_t last = 0;                     // seq of the last usable input
+    std::vector<int64_t> rejected_ahead;  // sorted seqs > last received but rejected (NoteRejectedSeq)
+  };
+  std::map<std::string, SeqStream> streams_;
   std::vector<std::pair<std::string, double>> values_;
   RecentValues latency_window_ms_;  // ms, the last 1000 handler latencies (kLatencyWindow)
 };

@@ -2,11 +2,41 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "common/bus.h"
 #include "objscan/process_status_t.hpp"
 
 namespace objscan {
 namespace {
+
+// A rejected input was received, not dropped, and does not move the stream on (a wild seq would block it).
+TEST(StatusTest, RejectedSeqsAreNeitherDroppedNorMoveTheStreamOn) {
+  StatusReporter status(nullptr, "unit");
+  status.NoteRejectedSeq("img", 7);  // before the first usable one: no baseline, ignored
+  EXPECT_EQ(status.ObserveSeq("img", 1), SeqResult::kFirst);
+  status.NoteRejectedSeq("img", 2);
+  status.NoteRejectedSeq("img", 2);  // the same twice
+  status.NoteRejectedSeq("img", int64_t{1} << 50);
+  EXPECT_EQ(status.ObserveSeq("img", 3), SeqResult::kNext);  // 2 came (rejected)
+  EXPECT_EQ(status.dropped_inputs(), 0);
+  status.NoteRejectedSeq("img", 1);                         // behind the stream: nothing
+  EXPECT_EQ(status.ObserveSeq("img", 6), SeqResult::kGap);  // 4 and 5 never came
+  EXPECT_EQ(status.dropped_inputs(), 2);
+  for (int64_t s = 100; s < 300; ++s) status.NoteRejectedSeq("img", s);  // only the nearest 64 are kept
+  EXPECT_EQ(status.ObserveSeq("img", 300), SeqResult::kGap);
+  EXPECT_EQ(status.dropped_inputs(), 2 + (299 - 6) - 64);
+}
+
+TEST(StatusTest, ExtremeSequenceJumpsSaturateTheDroppedCount) {
+  StatusReporter status(nullptr, "unit");
+  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::min()), SeqResult::kFirst);
+  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::max()), SeqResult::kGap);  // no overflow
+  EXPECT_EQ(status.dropped_inputs(), std::numeric_limits<int64_t>::max());
+  EXPECT_EQ(status.ObserveSeq("odo", -1), SeqResult::kFirst);
+  EXPECT_EQ(status.ObserveSeq("odo", 1), SeqResult::kGap);
+  EXPECT_EQ(status.dropped_inputs(), std::numeric_limits<int64_t>::max());  // saturated, not wrapped
+}
 
 TEST(StatusTest, CountsGapsRejectionsAndPublishesFullState) {
   auto bus = MakeLcmBus("memq://");

@@ -165,10 +165,6 @@ void TrackerNode::OnCameraInfo(const camera_info_t& msg) {
 
 void TrackerNode::OnImage(const image_t& msg) {
   const int64_t start_us = MonotonicMicros();
-  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
-    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
-    return;
-  }
   ImageFrame frame;
   std::string error;
   if (!ImageFromMessage(msg, &frame, &error, expected_width_, expected_height_)) {
@@ -178,6 +174,12 @@ void TrackerNode::OnImage(const image_t& msg) {
       detail += ", expected " + std::to_string(expected_width_) + "x" + std::to_string(expected_height_) +
                 (size_from_info_ ? " (camera_info)" : " (first frame)");
     status_.Reject(error, detail);
+    status_.NoteRejectedSeq("image", msg.seq);  // received, not dropped
+    return;
+  }
+  // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).
+  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
+    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
     return;
   }
   status_.CountIn();
