@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "common/adapters.h"
 #include "common/bus.h"
@@ -49,6 +50,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "pixel matches kept for the re-vote at most (20 bytes each; beyond, the live votes are kept)");
   p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
   p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
+  p.Add("max-central-track-ids", &o->max_central_track_ids,
+        "track ids whose central views are counted at most (beyond, ids neither landmarks nor in view are forgotten)");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
   p.Add("target-margin", &o->target_margin_mm, "mm, margin around the target box");
   p.Add("roi-box", &o->roi_box, "mm, world region xmin,ymin,zmin,xmax,ymax,zmax when no TARGET box (\"\" = none)");
@@ -214,6 +217,7 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.max_map_voxels < 1) e << "max-map-voxels must be >= 1; ";
   if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving-downsample must be in [1, 8]; ";
   if (o.max_stored_matches < 0) e << "max-stored-matches must be >= 0; ";
+  if (o.max_central_track_ids < 1) e << "max-central-track-ids must be >= 1; ";
   if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
   {
@@ -281,18 +285,20 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); }, malformed("control"));
 }
 
-DenseModelerNode::FrameSlot& DenseModelerNode::Slot(int64_t seq) {
+DenseModelerNode::FrameSlot* DenseModelerNode::Slot(int64_t seq) {
+  if (frames_.count(seq) == 0 && static_cast<int>(frames_.size()) >= options_.buffer_frames &&
+      seq < frames_.begin()->first)
+    return nullptr;  // older than every frame of a full buffer: it would be evicted at once
   frames_[seq];
   while (static_cast<int>(frames_.size()) > options_.buffer_frames) {
     auto oldest = frames_.begin();
-    if (oldest->first == seq) break;
     if (!waiting_pairs_.empty() && waiting_pairs_.front().first <= oldest->first)
       RunWaitingPairs(false, oldest->first);  // its pairs cannot wait any longer
     if (!oldest->second.pose && !oldest->second.processed)
       status_.Reject("frame: evicted without pose", "seq " + std::to_string(oldest->first));
     frames_.erase(oldest);
   }
-  return frames_[seq];
+  return &frames_.at(seq);
 }
 
 void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
@@ -307,26 +313,33 @@ void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void DenseModelerNode::OnImage(const image_t& msg) {
-  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
-    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
-    return;
-  }
   if (!camera_) {
     status_.Reject("image: no camera_info yet", "seq " + std::to_string(msg.seq));
+    status_.NoteRejectedSeq("image", msg.seq);  // received, not dropped
     return;
   }
   ImageFrame frame;
   std::string error;
   if (!ImageFromMessage(msg, &frame, &error, camera_->width, camera_->height)) {
     status_.Reject(error, "seq " + std::to_string(msg.seq));
+    status_.NoteRejectedSeq("image", msg.seq);
+    return;
+  }
+  // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).
+  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
+    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  FrameSlot* slot = Slot(msg.seq);
+  if (!slot) {
+    status_.Reject("image: older than the ring buffer", "seq " + std::to_string(msg.seq));
     return;
   }
   status_.CountIn();
   status_.SetLastDataUtime(msg.utime);
   if (frame.image.channels() == 1) cv::cvtColor(frame.image, frame.image, cv::COLOR_GRAY2BGR);
-  FrameSlot& slot = Slot(msg.seq);
-  slot.utime = msg.utime;
-  slot.image = frame.image;
+  slot->utime = msg.utime;
+  slot->image = frame.image;
   TryProcess(msg.seq);
 }
 
@@ -337,9 +350,13 @@ void DenseModelerNode::OnTracks(const feature_tracks_t& msg) {
     status_.Reject(error, "seq " + std::to_string(msg.seq));
     return;
   }
+  FrameSlot* slot = Slot(msg.seq);
+  if (!slot) {
+    status_.Reject("tracks: older than the ring buffer", "seq " + std::to_string(msg.seq));
+    return;
+  }
   status_.CountIn();
-  FrameSlot& slot = Slot(msg.seq);
-  slot.tracks = std::move(tracks);
+  slot->tracks = std::move(tracks);
   TryProcess(msg.seq);
 }
 
@@ -347,11 +364,11 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
   CameraPoseEstimate pose;
   std::string error;
   if (!PoseFromMessage(msg, &pose, &error)) {
-    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    status_.Reject(final_pose ? "final " + error : error, "seq " + std::to_string(msg.seq));
     return;
   }
   if (!UsableStatus(pose.status)) {
-    status_.Reject("pose: not tracking",
+    status_.Reject(final_pose ? "final pose: not tracking" : "pose: not tracking",
                    "seq " + std::to_string(msg.seq) + " status " + std::to_string(static_cast<int>(pose.status)));
     return;
   }
@@ -383,6 +400,12 @@ void DenseModelerNode::OnTarget(const target_t& msg) {
   const Eigen::Vector3d half(0.5 * (c * msg.size_mm[0] + s * msg.size_mm[1]) + options_.target_margin_mm,
                              0.5 * (s * msg.size_mm[0] + c * msg.size_mm[1]) + options_.target_margin_mm,
                              0.5 * msg.size_mm[2] + options_.target_margin_mm);
+  if (!(half.array() > 0).all()) {  // a flat box with no margin: no point could lie inside it
+    status_.Reject("target: empty box", "size " + std::to_string(msg.size_mm[0]) + " x " +
+                                            std::to_string(msg.size_mm[1]) + " x " + std::to_string(msg.size_mm[2]) +
+                                            " mm and target-margin 0");
+    return;
+  }
   const Eigen::Vector3d center(msg.center_mm[0], msg.center_mm[1], msg.center_mm[2]);
   box_min_ = center - half;
   box_max_ = center + half;
@@ -473,33 +496,49 @@ void DenseModelerNode::TryProcess(int64_t seq) {
     tracks.reserve(slot.tracks->features.size());
     for (const TrackedFeature& f : slot.tracks->features) tracks.emplace_back(f.id, Eigen::Vector2d(f.u, f.v));
     CountCentralTracks(*camera_, tracks, options_.roi.central_fraction, &central_counts_);
+    if (static_cast<int64_t>(central_counts_.size()) > options_.max_central_track_ids) {
+      std::unordered_set<int64_t> current;
+      for (const auto& t : tracks) current.insert(t.first);
+      for (auto c = central_counts_.begin(); c != central_counts_.end();)
+        c = (landmark_by_id_.count(c->first) || current.count(c->first)) ? std::next(c) : central_counts_.erase(c);
+    }
+    status_.SetValue("central_track_ids", static_cast<double>(central_counts_.size()));
     region_dirty_ = true;
   }
   status_.SetValue("carving_views", static_cast<double>(carving_views_.size()));
   if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
     status_.SetState(+process_status_t::STATE_RUNNING);
 
-  if (seq % options_.pair_every != 0) return;
-  auto partner = frames_.find(seq - options_.pair_gap);
-  if (partner == frames_.end() || !partner->second.processed || partner->second.image.empty()) return;
-  FrameSlot& pa = partner->second;
+  // A pair is queued when the second of its two frames is complete (frames can complete out of order).
+  if (seq % options_.pair_every == 0) QueuePair(seq - options_.pair_gap, seq);
+  if ((seq + options_.pair_gap) % options_.pair_every == 0) QueuePair(seq, seq + options_.pair_gap);
+}
+
+void DenseModelerNode::QueuePair(int64_t seq_a, int64_t seq_b) {
+  auto ia = frames_.find(seq_a), ib = frames_.find(seq_b);
+  if (ia == frames_.end() || ib == frames_.end()) return;
+  FrameSlot& pa = ia->second;
+  FrameSlot& pb = ib->second;
+  if (!pa.processed || !pb.processed || pa.image.empty() || pb.image.empty()) return;
   if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
     int na = 0, nb = 0;
     const double ea =
         MedianLandmarkReprojectionPx(*camera_, pa.pose->world_from_camera, *pa.tracks, landmark_by_id_, &na);
     const double eb =
-        MedianLandmarkReprojectionPx(*camera_, slot.pose->world_from_camera, *slot.tracks, landmark_by_id_, &nb);
+        MedianLandmarkReprojectionPx(*camera_, pb.pose->world_from_camera, *pb.tracks, landmark_by_id_, &nb);
     if (std::max(ea, eb) > options_.max_pair_landmark_error_px) {
       ++pairs_skipped_inconsistent_;
       status_.SetValue("pairs_skipped_inconsistent", static_cast<double>(pairs_skipped_inconsistent_));
-      LogInfo("pair " + std::to_string(partner->first) + "-" + std::to_string(seq) +
+      LogInfo("pair " + std::to_string(seq_a) + "-" + std::to_string(seq_b) +
               " skipped: median landmark reprojection error " + std::to_string(ea) + " / " + std::to_string(eb) +
               " px");
-      ReleaseGraysAfterPair(&pa, seq, nullptr);  // B's grays are not made yet
+      ReleaseGraysAfterPair(&pa, seq_b, &pb);
       return;
     }
   }
-  waiting_pairs_.emplace_back(partner->first, seq);
+  // Oldest first (RunWaitingPairs runs the front ones before their older frame leaves the buffer).
+  const std::pair<int64_t, int64_t> pair(seq_a, seq_b);
+  waiting_pairs_.insert(std::upper_bound(waiting_pairs_.begin(), waiting_pairs_.end(), pair), pair);
   RunWaitingPairs(false);
 }
 
@@ -569,7 +608,7 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   ReleaseGraysAfterPair(&pa, seq_b, &slot);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);
-  if (RevoteEnabled() && stored_complete_) {
+  if (RevoteEnabled() && stored_complete_ && !points.empty()) {  // an empty pair has nothing to re-vote
     if (stored_matches_ + static_cast<int64_t>(points.size()) > options_.max_stored_matches) {
       stored_complete_ = false;
       std::vector<StoredPair>().swap(stored_pairs_);

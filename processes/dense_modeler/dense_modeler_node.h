@@ -12,39 +12,41 @@
 // wait for it (without the region a pair votes the whole scene: the sim sphere's first pair gave 125 k points, 84 %
 // of them floor, against ~17 k for the others), in order, and run once it is
 // known - or unrestricted when the older frame would leave the ring buffer, or at the final phase. Frames (image +
-// tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. When frame j is complete with
-// a usable pose (tracking, relocalized or ground truth) and j % pair_every == 0, it is paired with frame j - pair_gap
-// (if complete): dense points (affine_dense.h) from the tracks both frames share, plus the pair's own LK matches where
-// the tracker left the region bare (pair_matches.h, model.pair_matches), are voted into the voxel grid (voxel_votes.h).
-// Every complete frame also keeps a downsampled copy for the final carving (at most max_carving_views; when full, every
-// second one is dropped, deterministic). Outputs: VOXEL_MAP every voxel_map_every pairs (voxels over the threshold, at
-// most max_map_voxels, strongest first, truncated flag), and at the end the final VOXEL_MAP (is_final), MODEL and
-// control_t COMMAND_FINISHED. Final phase: on control_t COMMAND_FINISHED from finish_sender (or COMMAND_FINALIZE aimed
-// at this process): with revote_final_poses and a final_pose_channel, every pair's pixel matches (kept, 20 bytes each,
-// up to max_stored_matches) are triangulated again with the final poses where both frames have one (else with the live
-// poses) and the geometric checks, the final region included, and voted into a fresh grid, which replaces the live
-// one unless no pair had final poses or it holds under half the live votes (then a warning; the live grid stays);
-// seeds = voxels over the threshold (inside the target box
-// when known), space carving with the stored views, using the final poses where they arrived, marching tetrahedra
-// mesh, files written to output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the
-// re-voted one) to control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves
-// output_dir/votes_snapshot.bin when output_dir is set.
-// Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated",
-// adapter reasons for images/camera info/tracks/poses, "image: no camera_info yet", "image: wrong size" (differs from
-// camera_info), "tracks: malformed", "pose: malformed", "final pose: malformed", "pose: unknown frame" (no image
-// for that seq in the buffer), "pose: not tracking" (initializing or lost),
-// "frame: evicted without pose", "target: malformed", "landmarks: malformed", "landmarks: not in world frame",
-// "control: malformed", "snapshot: no path", "snapshot: write failed". Pair check: when landmarks are known, a pair
-// whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped (the
-// pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
+// tracks + pose, matched by seq) live in a bounded ring buffer of buffer_frames entries. Frame j with j % pair_every
+// == 0 is paired with frame j - pair_gap once both are complete with a usable pose (tracking, relocalized or ground
+// truth), in whichever order they complete: dense points (affine_dense.h) from the tracks both frames share, plus the
+// pair's own LK matches where the tracker left the region bare (pair_matches.h, model.pair_matches), are voted into the
+// voxel grid (voxel_votes.h). Every complete frame also keeps a downsampled copy for the final carving (at most
+// max_carving_views; when full, every second one is dropped, deterministic). Outputs: VOXEL_MAP every voxel_map_every
+// pairs (voxels over the threshold, at most max_map_voxels, strongest first, truncated flag), and at the end the final
+// VOXEL_MAP (is_final), MODEL and control_t COMMAND_FINISHED. Final phase: on control_t COMMAND_FINISHED from
+// finish_sender (or COMMAND_FINALIZE aimed at this process): with revote_final_poses and a final_pose_channel, every
+// pair's pixel matches (kept, 20 bytes each, up to max_stored_matches) are triangulated again with the final poses
+// where both frames have one (else with the live poses) and the geometric checks, the final region included, and voted
+// into a fresh grid, which replaces the live one unless no pair had final poses or it holds under half the live votes
+// (then a warning; the live grid stays); seeds = voxels over the threshold (inside the target box when known), space
+// carving with the stored views, using the final poses where they arrived, marching tetrahedra mesh, files written to
+// output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the re-voted one) to
+// control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves output_dir/votes_snapshot.bin when output_dir
+// is set. Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated" (only
+// usable images move the stream's sequence on), adapter reasons for images/camera info/tracks/poses, "image: no
+// camera_info yet", "image: wrong size" (differs from camera_info), "image: older than the ring buffer", "tracks:
+// malformed", "tracks: older than the ring buffer" (the buffer is full of newer frames), "pose: malformed",
+// "pose: unknown frame" (no image for that seq in the buffer), "pose: not tracking" (initializing or lost), the same
+// for final poses prefixed "final ", "frame: evicted without pose", "pair: frame gone" (a waiting pair whose frame
+// left the buffer), "target: malformed", "target: empty box", "landmarks: malformed", "landmarks: not in world
+// frame", "control: malformed", "snapshot: no path", "snapshot: write failed". Pair check: when landmarks are known, a
+// pair whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped
+// (the pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
 // pairs_skipped_inconsistent, pairs_waiting (for the region), pairs_without_region (run unrestricted although a
 // region was expected), dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels, votes,
-// pair_ms, vote_ms, carving_views, roi_source (0 none, 1 target, 2 configuration, 3 automatic), roi_floor (1 when the
-// floor cuts the region); after the final phase final_ms, final_seeds, final_voxels, final_triangles,
-// final_floor_band_dropped, final_crevice_band_dropped, final_carved, final_hidden_vertices, final_curled_triangles,
-// final_voxels_off_mesh, final_carving_s, final_visibility_s, final_revoted_pairs (pairs triangulated with final poses;
-// 0 = the live votes were kept), final_revote_rejected (matches the re-triangulation's checks rejected, the final
-// region's included) and final_revote_s. Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+// pair_ms, vote_ms, carving_views, central_track_ids (track ids whose central views are counted), roi_source (0 none, 1
+// target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase final_ms,
+// final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_crevice_band_dropped, final_carved,
+// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,
+// final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
+// (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s. Handlers run inside
+// Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
 #include <cstdint>
@@ -101,13 +103,16 @@ struct DenseModelerNodeOptions {
                                                          // with the final poses and vote them into a fresh grid
   int max_stored_matches = 8000000;                      // pixel matches kept for that at most (20 bytes each; when
                                                          // exceeded, the final phase keeps the live votes), >= 0
-  int carving_downsample = 2;                            // integer downsampling of the images kept for carving (>= 1)
+  int carving_downsample = 2;                            // integer downsampling of the images kept for carving, [1, 8]
   int max_carving_views = 200;                           // images kept for carving at most (>= 2)
   bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
   double target_margin_mm = 30.0;                        // mm, added on every side of the target box (>= 0)
   std::string roi_box;                                   // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
   bool auto_roi = true;                                  // derive the region from landmarks when no box is known
   AutoRoiOptions roi;                                    // automatic region and floor detection
+  int max_central_track_ids = 200000;                    // track ids whose central views are counted at most; beyond,
+                                                         // ids neither landmarks nor in the current frame are
+                                                         // forgotten (bounds a long run's memory; >= 1)
   int image_queue_capacity = 60;                         // frames buffered by the image subscription (>= 1)
   int threads = 1;                                       // OpenCV threads (cv::setNumThreads)
   double status_period_s = 1.0;                          // s, status publication period (> 0)
@@ -173,8 +178,13 @@ class DenseModelerNode : public Node {
   // Recomputes region_ from the sources (see the header comment) when something changed or force is set.
   void UpdateRegion(bool force);
   void OnControl(const control_t& msg);
-  FrameSlot& Slot(int64_t seq);
+  // The slot of frame seq, made (evicting the oldest frames beyond buffer_frames) when new; null when the buffer is
+  // full and seq is older than all its frames (it would be evicted at once).
+  FrameSlot* Slot(int64_t seq);
   void TryProcess(int64_t seq);
+  // Queues the pair (seq_a, seq_b) when both frames are complete, unless its frames disagree with the landmarks
+  // (max_pair_landmark_error_px: then skipped and counted), and runs the waiting pairs that can run.
+  void QueuePair(int64_t seq_a, int64_t seq_b);
   // Updates the region, then runs the waiting pairs, oldest first: all once the region is known or when force is
   // set (final phase), otherwise only those whose older frame is evicting_seq or older (about to leave the ring
   // buffer).

@@ -61,10 +61,9 @@ class NodeFixture : public ::testing::Test {
     }
   }
   void PublishInfo() { bus_->PublishMessage("CAMERA_INFO", CameraToMessage(scene_.camera, 0)); }
-  // live_scale: the live pose's camera centre is scaled about the world origin (a map the pose solver rescales
-  // later); the image and tracks are those of the true pose.
-  void PublishFrame(int seq, int n_views, const std::vector<Eigen::Vector3d>& features,
-                    PoseStatus status = PoseStatus::kGroundTruth, double live_scale = 1.0) {
+  // The frame's image and tracks (track ids + id_offset), of the true pose.
+  void PublishImageAndTracks(int seq, int n_views, const std::vector<Eigen::Vector3d>& features,
+                             int64_t id_offset = 0) {
     const Eigen::Isometry3d pose = scene_.RingPose(seq, n_views);
     ImageFrame frame;
     frame.seq = seq;
@@ -72,14 +71,26 @@ class NodeFixture : public ::testing::Test {
     frame.camera_name = "sim";
     frame.image = scene_.Render(pose);
     bus_->PublishMessage("CAMERA_IMAGE", ImageToMessage(frame, +image_t::ENCODING_BGR8));
-    bus_->PublishMessage("FEATURE_TRACKS", TracksToMessage(scene_.Tracks(pose, features, seq)));
+    TrackFrame tracks = scene_.Tracks(pose, features, seq);
+    for (TrackedFeature& f : tracks.features) f.id += id_offset;
+    bus_->PublishMessage("FEATURE_TRACKS", TracksToMessage(tracks));
+  }
+  // live_scale: the live pose's camera centre is scaled about the world origin (a map the pose solver rescales
+  // later).
+  void PublishPose(int seq, int n_views, PoseStatus status = PoseStatus::kGroundTruth, double live_scale = 1.0) {
     CameraPoseEstimate est;
     est.seq = seq;
-    est.utime = frame.utime;
-    est.world_from_camera = pose;
+    est.utime = std::llround(seq * 1e6 / 30);
+    est.world_from_camera = scene_.RingPose(seq, n_views);
     est.world_from_camera.translation() *= live_scale;
     est.status = status;
     bus_->PublishMessage("CAMERA_POSE", PoseToMessage(est));
+  }
+  // Image, tracks and live pose of frame seq; the image and tracks are those of the true pose.
+  void PublishFrame(int seq, int n_views, const std::vector<Eigen::Vector3d>& features,
+                    PoseStatus status = PoseStatus::kGroundTruth, double live_scale = 1.0) {
+    PublishImageAndTracks(seq, n_views, features);
+    PublishPose(seq, n_views, status, live_scale);
     Drain();
   }
   void PublishFinalPose(int seq, int n_views) {
@@ -342,6 +353,93 @@ TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
   EXPECT_TRUE(encoded[0] == encoded[1]);
 }
 
+// A rejected image with a wild sequence number must not move the stream on (it blocked every later image); tracks
+// for frames older than a full ring buffer are rejected instead of growing it.
+TEST_F(NodeFixture, WildSequenceNumbersAndStaleTracksNeitherBlockNorGrow) {
+  options_.output_dir.clear();
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  PublishTarget();
+  const auto features = scene_.SurfacePoints(1000);
+  PublishFrame(0, 16, features);
+  PublishFrame(1, 16, features);
+  ImageFrame wild;
+  wild.seq = int64_t{1} << 50;
+  wild.image = cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3));  // wrong size: rejected
+  bus_->PublishMessage("CAMERA_IMAGE", ImageToMessage(wild, +image_t::ENCODING_BGR8));
+  Drain();
+  EXPECT_EQ(node.status().rejected("image: wrong size"), 1);
+  for (int i = 2; i < 8; ++i) PublishFrame(i, 16, features);
+  EXPECT_EQ(node.pairs_done(), 7);
+  EXPECT_EQ(node.status().rejected("image: out of order or repeated"), 0);
+  EXPECT_EQ(node.status().dropped_inputs(), 0);
+  // 500 tracks messages for ever older frames (a replayed or restarted tracker): all rejected, none kept.
+  const TrackFrame tracks = scene_.Tracks(scene_.RingPose(0, 16), features, 0);
+  for (int k = 0; k < 500; ++k) {
+    TrackFrame stale = tracks;
+    stale.seq = -1 - k;
+    bus_->PublishMessage("FEATURE_TRACKS", TracksToMessage(stale));
+  }
+  Drain();
+  EXPECT_EQ(node.status().rejected("tracks: older than the ring buffer"), 500);
+  EXPECT_EQ(node.status().rejected("frame: evicted without pose"), 0);  // nothing stale got in to be evicted
+  PublishFrame(8, 16, features);
+  EXPECT_EQ(node.pairs_done(), 8);
+}
+
+// Frames complete in whichever order their poses come: frame 1's pose arrives after frame 2 is complete, and both
+// of frame 1's pairs (0-1 and 1-2) still run.
+TEST_F(NodeFixture, FramesCompletingOutOfOrderKeepTheirPairs) {
+  options_.output_dir.clear();
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  PublishTarget();
+  const auto features = scene_.SurfacePoints(1000);
+  PublishFrame(0, 16, features);
+  PublishImageAndTracks(1, 16, features);
+  Drain();
+  PublishFrame(2, 16, features);
+  EXPECT_EQ(node.pairs_done(), 0);  // both pairs need frame 1
+  PublishPose(1, 16);
+  Drain();
+  EXPECT_EQ(node.pairs_done(), 2);
+  PublishFrame(3, 16, features);
+  EXPECT_EQ(node.pairs_done(), 3);
+  EXPECT_EQ(node.status().rejected_total(), 0);
+}
+
+// Track ids whose central views are counted stay bounded in a long run: beyond max_central_track_ids, ids that are
+// neither landmarks nor in the current frame are forgotten.
+TEST_F(NodeFixture, CentralTrackCountsStayBounded) {
+  options_.output_dir.clear();
+  options_.max_central_track_ids = 300;
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  PublishTarget();
+  const auto features = scene_.SurfacePoints(200);
+  for (int i = 0; i < 12; ++i) {
+    PublishImageAndTracks(i, 16, features, int64_t{100000} * i);  // every frame's tracks are new
+    PublishPose(i, 16);
+    Drain();
+  }
+  const double ids = node.status().value("central_track_ids");
+  EXPECT_GT(ids, 0);
+  EXPECT_LE(ids, 300 + 200);  // the limit plus one frame's new ids, not 12 frames' (up to 2 400)
+}
+
+TEST_F(NodeFixture, EmptyTargetBoxIsRejected) {
+  options_.output_dir.clear();
+  options_.target_margin_mm = 0;
+  DenseModelerNode node(*bus_, options_);
+  target_t target{};
+  target.state = target_t::STATE_CONFIRMED;
+  target.frame = "world";
+  target.size_mm[0] = 100;  // flat in y and z
+  bus_->PublishMessage("TARGET", target);
+  Drain();
+  EXPECT_EQ(node.status().rejected("target: empty box"), 1);
+}
+
 TEST(DenseModelerNodeOptions, Validation) {
   DenseModelerNodeOptions o;
   std::string why;
@@ -352,6 +450,11 @@ TEST(DenseModelerNodeOptions, Validation) {
   o = DenseModelerNodeOptions();
   o.model.votes.neighbourhood = 5;
   EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
+  o = DenseModelerNodeOptions();
+  o.max_central_track_ids = 0;
+  EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
+  EXPECT_NE(why.find("max-central-track-ids"), std::string::npos);
+  o.model.votes.neighbourhood = 5;
   auto bus = MakeLcmBus("memq://");
   EXPECT_THROW(DenseModelerNode(*bus, o), std::invalid_argument);
 }
