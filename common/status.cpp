@@ -46,10 +46,10 @@ SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
   // seq > last: the difference fits an unsigned 64-bit value (no signed overflow for extreme seqs). Rejected inputs
   // in between were received, not dropped.
   uint64_t missing = static_cast<uint64_t>(seq) - static_cast<uint64_t>(st.last) - 1;
-  auto end = std::upper_bound(st.rejected_ahead.begin(), st.rejected_ahead.end(), seq);
-  for (auto r = st.rejected_ahead.begin(); r != end; ++r)
-    if (*r < seq && missing > 0) --missing;
-  st.rejected_ahead.erase(st.rejected_ahead.begin(), end);
+  auto& ahead = st.rejected_ahead;  // sorted, distinct, all > last: those < seq lie in the gap
+  const auto in_gap = std::lower_bound(ahead.begin(), ahead.end(), seq);
+  missing -= static_cast<uint64_t>(in_gap - ahead.begin());
+  ahead.erase(ahead.begin(), std::upper_bound(in_gap, ahead.end(), seq));
   st.last = seq;
   if (missing > 0) {
     const uint64_t room = static_cast<uint64_t>(std::numeric_limits<int64_t>::max() - dropped_inputs_);
@@ -57,6 +57,12 @@ SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
     return SeqResult::kGap;
   }
   return SeqResult::kNext;
+}
+
+void StatusReporter::Reject(const std::string& reason, const std::string& detail, const std::string& stream,
+                            int64_t seq) {
+  Reject(reason, detail);
+  NoteRejectedSeq(stream, seq);
 }
 
 void StatusReporter::NoteRejectedSeq(const std::string& stream, int64_t seq) {

@@ -38,6 +38,8 @@ class StatusReporter {
   // An input of the stream that was received but rejected: its seq is not counted as dropped by the next gap, and it
   // does not move the stream on. At most 64 such seqs ahead of the stream are remembered (the nearest).
   void NoteRejectedSeq(const std::string& stream, int64_t seq);
+  // Reject(reason, detail) of an input with sequence number seq on stream, which NoteRejectedSeq records as received.
+  void Reject(const std::string& reason, const std::string& detail, const std::string& stream, int64_t seq);
   void RecordLatencyMs(double ms);
   void SetLastDataUtime(int64_t utime) { last_data_utime_ = utime; }
   void SetValue(const std::string& name, double value);

@@ -286,8 +286,8 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
 }
 
 DenseModelerNode::FrameSlot* DenseModelerNode::Slot(int64_t seq) {
-  if (frames_.count(seq) == 0 && static_cast<int>(frames_.size()) >= options_.buffer_frames &&
-      seq < frames_.begin()->first)
+  if (auto found = frames_.find(seq); found != frames_.end()) return &found->second;
+  if (static_cast<int>(frames_.size()) >= options_.buffer_frames && seq < frames_.begin()->first)
     return nullptr;  // older than every frame of a full buffer: it would be evicted at once
   frames_[seq];
   while (static_cast<int>(frames_.size()) > options_.buffer_frames) {
@@ -314,15 +314,13 @@ void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
 
 void DenseModelerNode::OnImage(const image_t& msg) {
   if (!camera_) {
-    status_.Reject("image: no camera_info yet", "seq " + std::to_string(msg.seq));
-    status_.NoteRejectedSeq("image", msg.seq);  // received, not dropped
+    status_.Reject("image: no camera_info yet", "seq " + std::to_string(msg.seq), "image", msg.seq);
     return;
   }
   ImageFrame frame;
   std::string error;
   if (!ImageFromMessage(msg, &frame, &error, camera_->width, camera_->height)) {
-    status_.Reject(error, "seq " + std::to_string(msg.seq));
-    status_.NoteRejectedSeq("image", msg.seq);
+    status_.Reject(error, "seq " + std::to_string(msg.seq), "image", msg.seq);  // received, not dropped
     return;
   }
   // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).

@@ -61,6 +61,14 @@ class NodeFixture : public ::testing::Test {
     }
   }
   void PublishInfo() { bus_->PublishMessage("CAMERA_INFO", CameraToMessage(scene_.camera, 0)); }
+  // A node without output files that knows the camera and the target box (pairs run as soon as frames come).
+  std::unique_ptr<DenseModelerNode> StartWithTarget() {
+    options_.output_dir.clear();
+    auto node = std::make_unique<DenseModelerNode>(*bus_, options_);
+    PublishInfo();
+    PublishTarget();
+    return node;
+  }
   // The frame's image and tracks (track ids + id_offset), of the true pose.
   void PublishImageAndTracks(int seq, int n_views, const std::vector<Eigen::Vector3d>& features,
                              int64_t id_offset = 0) {
@@ -356,10 +364,8 @@ TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
 // A rejected image with a wild sequence number must not move the stream on (it blocked every later image); tracks
 // for frames older than a full ring buffer are rejected instead of growing it.
 TEST_F(NodeFixture, WildSequenceNumbersAndStaleTracksNeitherBlockNorGrow) {
-  options_.output_dir.clear();
-  DenseModelerNode node(*bus_, options_);
-  PublishInfo();
-  PublishTarget();
+  const auto node_ptr = StartWithTarget();
+  const DenseModelerNode& node = *node_ptr;
   const auto features = scene_.SurfacePoints(1000);
   PublishFrame(0, 16, features);
   PublishFrame(1, 16, features);
@@ -390,10 +396,8 @@ TEST_F(NodeFixture, WildSequenceNumbersAndStaleTracksNeitherBlockNorGrow) {
 // Frames complete in whichever order their poses come: frame 1's pose arrives after frame 2 is complete, and both
 // of frame 1's pairs (0-1 and 1-2) still run.
 TEST_F(NodeFixture, FramesCompletingOutOfOrderKeepTheirPairs) {
-  options_.output_dir.clear();
-  DenseModelerNode node(*bus_, options_);
-  PublishInfo();
-  PublishTarget();
+  const auto node_ptr = StartWithTarget();
+  const DenseModelerNode& node = *node_ptr;
   const auto features = scene_.SurfacePoints(1000);
   PublishFrame(0, 16, features);
   PublishImageAndTracks(1, 16, features);
@@ -411,11 +415,9 @@ TEST_F(NodeFixture, FramesCompletingOutOfOrderKeepTheirPairs) {
 // Track ids whose central views are counted stay bounded in a long run: beyond max_central_track_ids, ids that are
 // neither landmarks nor in the current frame are forgotten.
 TEST_F(NodeFixture, CentralTrackCountsStayBounded) {
-  options_.output_dir.clear();
   options_.max_central_track_ids = 300;
-  DenseModelerNode node(*bus_, options_);
-  PublishInfo();
-  PublishTarget();
+  const auto node_ptr = StartWithTarget();
+  const DenseModelerNode& node = *node_ptr;
   const auto features = scene_.SurfacePoints(200);
   for (int i = 0; i < 12; ++i) {
     PublishImageAndTracks(i, 16, features, int64_t{100000} * i);  // every frame's tracks are new

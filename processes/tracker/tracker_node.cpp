@@ -173,8 +173,7 @@ void TrackerNode::OnImage(const image_t& msg) {
     if (expected_width_ > 0)
       detail += ", expected " + std::to_string(expected_width_) + "x" + std::to_string(expected_height_) +
                 (size_from_info_ ? " (camera_info)" : " (first frame)");
-    status_.Reject(error, detail);
-    status_.NoteRejectedSeq("image", msg.seq);  // received, not dropped
+    status_.Reject(error, detail, "image", msg.seq);  // received, not dropped
     return;
   }
   // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).
