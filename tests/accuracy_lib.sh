@@ -14,6 +14,9 @@ render_orbit() {
 # value KEY FILE: the number after KEY in an objscan_evaluate output.
 value() { awk -v k="$1" '$1==k {print $2}' "$2"; }
 
+# info LABEL TEXT: a figure reported for comparison only (never fails).
+info() { printf '  %-52s %10s  (reported only)\n' "$1" "$2"; }
+
 # check LABEL VALUE OP BOUND [target]: OP is <= or >=; "target" only reports (MET / NOT MET), a bound fails the test.
 check() {
   local label="$1" v="$2" op="$3" bound="$4" kind="${5:-bound}" ok

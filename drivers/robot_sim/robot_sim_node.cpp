@@ -238,6 +238,10 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
     }
     if (!WritePly(dir + "/target_surface.ply", points, normals, {}))
       throw std::runtime_error("cannot write " + dir + "/target_surface.ply");
+    // The surface as rendered (the tessellation, within 0.05 mm of a curved primitive): exact surface distances.
+    const TriangleMesh& target_mesh = scene_->target().mesh;
+    if (!WritePly(dir + "/target_mesh.ply", target_mesh.positions, {}, target_mesh.triangles))
+      throw std::runtime_error("cannot write " + dir + "/target_mesh.ply");
     std::ofstream scene_txt(dir + "/scene.txt");
     scene_txt << scene_->Describe();
     scene_txt << "# robot_sim: seed=" << options_.seed << " mode=" << options_.mode << " frames=" << options_.frames

@@ -22,7 +22,7 @@
 // "robot_sim" or "*" on OBJSCAN_CONTROL ends the stream early (END_OF_STREAM follows).
 // Determinism: messages depend only on the scene, options and seed (and in command mode on the commands received
 // before each frame), never on timing, except PROCESS_STATUS.
-// --ground-truth-dir DIR writes target_surface.ply, scene.txt at start-up and poses_gt.txt, robot_gt.txt per frame.
+// --ground-truth-dir DIR writes target_surface.ply, target_mesh.ply, scene.txt at start-up and poses_gt.txt, robot_gt.txt per frame.
 #pragma once
 
 #include <cstdint>

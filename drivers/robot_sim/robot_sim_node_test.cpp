@@ -179,6 +179,13 @@ TEST(RobotSimNodeTest, PublishesTenFramesWithTruthAndErroneousOdometry) {
   const auto ply_size = std::filesystem::file_size(gt_dir + "/target_surface.ply");
   EXPECT_GT(ply_size, 24u * 120000u);  // ~4 pi 100^2 points of 24 bytes
   EXPECT_LT(ply_size, 24u * 132000u);
+  // The rendered surface: the target's tessellation, every vertex on the true sphere (r 100 mm around its centre).
+  RawMesh truth_mesh;
+  ASSERT_TRUE(LoadMeshFile(gt_dir + "/target_mesh.ply", &truth_mesh, &error)) << error;
+  EXPECT_EQ(truth_mesh.triangles.size(), node.scene().target().mesh.triangles.size());
+  ASSERT_GT(truth_mesh.positions.size(), 100u);
+  for (const Eigen::Vector3d& p : truth_mesh.positions)
+    EXPECT_NEAR((p - node.scene().target().center_mm).norm(), node.scene().target().radius_mm, 1e-3);
 }
 
 TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {

@@ -89,20 +89,27 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
   return true;
 }
 
-bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
-                   std::vector<Eigen::Vector3d>* normals) {
+namespace {
+
+// The PLY reader behind ReadPlyPoints and ReadPlyMesh: the vertex element (x y z, and nx ny nz when normals is
+// given) and, when triangles is given, the face element that follows it (a list property vertex_indices or
+// vertex_index; polygons fan-triangulated).
+bool ReadPly(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
+             std::vector<Eigen::Vector3d>* normals, std::vector<Eigen::Vector3i>* triangles) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     *error = "cannot read " + path;
     return false;
   }
   std::string line, format;
-  long vertex_count = -1;
-  bool in_vertex = false;
+  long vertex_count = -1, face_count = -1;
+  bool in_vertex = false, in_face = false, face_before_vertex = false;
   struct Prop {
     std::string name, type;
   };
   std::vector<Prop> props;
+  std::string face_count_type, face_index_type;  // the face list's types
+  bool face_has_other_properties = false;
   std::getline(in, line);
   if (line.rfind("ply", 0) != 0) {
     *error = path + ": not a PLY file";
@@ -120,7 +127,21 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
       long count;
       ss >> name >> count;
       in_vertex = name == "vertex";
+      in_face = name == "face";
       if (in_vertex) vertex_count = count;
+      if (in_face) {
+        face_count = count;
+        face_before_vertex = vertex_count < 0;
+      }
+    } else if (word == "property" && in_face) {
+      std::string type, name;
+      ss >> type;
+      if (type == "list") {
+        ss >> face_count_type >> face_index_type >> name;
+        if (name != "vertex_indices" && name != "vertex_index") face_has_other_properties = true;
+      } else {
+        face_has_other_properties = true;
+      }
     } else if (word == "property" && in_vertex) {
       Prop p;
       ss >> p.type;
@@ -221,7 +242,179 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
              " vertices";
     return false;
   }
+  if (!triangles) return true;
+  triangles->clear();
+  if (face_count < 0 || face_index_type.empty()) {
+    *error = path + ": no face element with vertex_indices";
+    return false;
+  }
+  if (face_before_vertex || face_has_other_properties) {
+    *error = path + ": only a face element after the vertices, holding only vertex_indices, is supported";
+    return false;
+  }
+  const int count_size = type_size(face_count_type), index_size = type_size(face_index_type);
+  if (count_size == 0 || index_size == 0 || index_size == 8) {
+    *error = path + ": unsupported face list types " + face_count_type + " " + face_index_type;
+    return false;
+  }
+  std::vector<long> polygon;
+  long faces_read = 0;
+  for (long f = 0; f < face_count; ++f) {
+    polygon.clear();
+    if (format == "ascii") {
+      if (!std::getline(in, line)) break;
+      std::istringstream ss(line);
+      long n = 0;
+      ss >> n;
+      for (long k = 0; k < n && ss; ++k) {
+        long index;
+        if (ss >> index) polygon.push_back(index);
+      }
+      if (!ss || n < 3) {
+        *error = path + ": bad face line " + std::to_string(f);
+        return false;
+      }
+    } else {
+      uint64_t n = 0;
+      if (!in.read(reinterpret_cast<char*>(&n), count_size)) break;  // little endian
+      if (n < 3 || n > 1000) {
+        *error = path + ": face " + std::to_string(f) + " has " + std::to_string(n) + " vertices";
+        return false;
+      }
+      for (uint64_t k = 0; k < n; ++k) {
+        int64_t index = 0;
+        if (!in.read(reinterpret_cast<char*>(&index), index_size)) break;
+        if (index_size < 8 && face_index_type[0] != 'u' && (index >> (8 * index_size - 1)) & 1)
+          index -= int64_t{1} << (8 * index_size);  // sign extension
+        polygon.push_back(static_cast<long>(index));
+      }
+      if (!in) break;
+    }
+    for (long index : polygon)
+      if (index < 0 || index >= vertex_count) {
+        *error = path + ": face " + std::to_string(f) + " has vertex index " + std::to_string(index) + " out of range";
+        return false;
+      }
+    for (size_t k = 1; k + 1 < polygon.size(); ++k)
+      triangles->emplace_back(static_cast<int>(polygon[0]), static_cast<int>(polygon[k]),
+                              static_cast<int>(polygon[k + 1]));
+    ++faces_read;
+  }
+  if (faces_read != face_count) {
+    *error = path + ": file ends after " + std::to_string(faces_read) + " of " + std::to_string(face_count) + " faces";
+    return false;
+  }
   return true;
+}
+
+// Closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double denom = va + vb + vc;
+  if (!(std::abs(denom) > 0)) return a;  // degenerate triangle
+  const double v = vb / denom, w = vc / denom;
+  return a + v * ab + w * ac;
+}
+
+}  // namespace
+
+bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
+                   std::vector<Eigen::Vector3d>* normals) {
+  return ReadPly(path, points, error, normals, nullptr);
+}
+
+bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices,
+                 std::vector<Eigen::Vector3i>* triangles, std::string* error) {
+  return ReadPly(path, vertices, error, nullptr, triangles);
+}
+
+MeshDistance::MeshDistance(const std::vector<Eigen::Vector3d>& vertices, const std::vector<Eigen::Vector3i>& triangles)
+    : vertices_(vertices) {
+  for (const Eigen::Vector3i& t : triangles) {
+    if ((t.array() < 0).any() || (t.array() >= static_cast<int>(vertices.size())).any()) continue;
+    const Eigen::Vector3d &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    if (!a.allFinite() || !b.allFinite() || !c.allFinite()) continue;
+    triangles_.push_back(t);
+  }
+  if (triangles_.empty()) return;
+  // Cells about twice the mean edge: a few triangles per cell, few cells per triangle.
+  double edges = 0;
+  Eigen::Vector3d lo = vertices_[triangles_[0][0]], hi = lo;
+  for (const Eigen::Vector3i& t : triangles_)
+    for (int k = 0; k < 3; ++k) {
+      edges += (vertices_[t[k]] - vertices_[t[(k + 1) % 3]]).norm();
+      lo = lo.cwiseMin(vertices_[t[k]]);
+      hi = hi.cwiseMax(vertices_[t[k]]);
+    }
+  cell_ = std::max(2.0 * edges / (3.0 * triangles_.size()), 1e-6);
+  // At most ~4M cells over the bounding box (a few large triangles would otherwise make it huge).
+  cell_ = std::max(cell_, (hi - lo).maxCoeff() / 160.0);
+  for (size_t i = 0; i < triangles_.size(); ++i) {
+    const Eigen::Vector3i& t = triangles_[i];
+    const Eigen::Vector3d tlo = vertices_[t[0]].cwiseMin(vertices_[t[1]]).cwiseMin(vertices_[t[2]]);
+    const Eigen::Vector3d thi = vertices_[t[0]].cwiseMax(vertices_[t[1]]).cwiseMax(vertices_[t[2]]);
+    const Eigen::Vector3i c0 = Cell(tlo), c1 = Cell(thi);
+    for (int z = c0.z(); z <= c1.z(); ++z)
+      for (int y = c0.y(); y <= c1.y(); ++y)
+        for (int x = c0.x(); x <= c1.x(); ++x) cells_[Key(Eigen::Vector3i(x, y, z))].push_back(static_cast<int>(i));
+  }
+  bounds_lo_ = Cell(lo);
+  bounds_hi_ = Cell(hi);
+}
+
+Eigen::Vector3i MeshDistance::Cell(const Eigen::Vector3d& p) const { return (p / cell_).array().floor().cast<int>(); }
+
+uint64_t MeshDistance::Key(const Eigen::Vector3i& c) {
+  const auto u = [](int v) { return static_cast<uint64_t>(static_cast<uint32_t>(v + (1 << 20))) & 0x1fffff; };
+  return (u(c.x()) << 42) | (u(c.y()) << 21) | u(c.z());
+}
+
+double MeshDistance::TriangleDistance(const Eigen::Vector3d& q, int i) const {
+  const Eigen::Vector3i& t = triangles_[static_cast<size_t>(i)];
+  return (q - ClosestPointOnTriangle(q, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]])).norm();
+}
+
+double MeshDistance::Distance(const Eigen::Vector3d& q) const {
+  double best = std::numeric_limits<double>::infinity();
+  if (triangles_.empty() || !q.allFinite()) return best;
+  const Eigen::Vector3i c = Cell(q);
+  // Rings of cells around q's cell until the best distance is within the ring already searched (a triangle only in
+  // cells of ring r + 1 or farther is at least r cells away); far queries (outside the grid's reach) search all.
+  const Eigen::Vector3i below = bounds_lo_ - c, above = c - bounds_hi_;
+  const int outside = std::max(0, std::max(below.maxCoeff(), above.maxCoeff()));
+  constexpr int kMaxRings = 12;
+  if (outside > kMaxRings / 2) {
+    for (size_t i = 0; i < triangles_.size(); ++i) best = std::min(best, TriangleDistance(q, static_cast<int>(i)));
+    return best;
+  }
+  for (int r = 0; r <= kMaxRings; ++r) {
+    for (int dz = -r; dz <= r; ++dz)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;  // the ring's shell only
+          auto it = cells_.find(Key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (int i : it->second) best = std::min(best, TriangleDistance(q, i));
+        }
+    if (best <= r * cell_) return best;
+  }
+  for (size_t i = 0; i < triangles_.size(); ++i) best = std::min(best, TriangleDistance(q, static_cast<int>(i)));
+  return best;
 }
 
 std::vector<int> VisibleSurfacePoints(const std::vector<Eigen::Vector3d>& points,
@@ -286,6 +479,40 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, con
   return EvaluateSurface(model, truth, truth, completeness_threshold);
 }
 
+namespace {
+
+void SetAccuracy(std::vector<double> d, SurfaceEvaluation* r) {
+  r->accuracy_p50 = Percentile(d, 0.5);
+  r->accuracy_p90 = Percentile(d, 0.9);
+  r->accuracy_max = *std::max_element(d.begin(), d.end());
+}
+
+double Completeness(const std::vector<Eigen::Vector3d>& model, const std::vector<Eigen::Vector3d>& completeness_truth,
+                    double threshold) {
+  const PointGrid model_grid(model, std::max(threshold, 1e-9));
+  int covered = 0;
+  for (const auto& p : completeness_truth)
+    if (model_grid.Nearest(p, 1) <= threshold) ++covered;
+  return double(covered) / double(completeness_truth.size());
+}
+
+}  // namespace
+
+SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& model, const MeshDistance& truth_mesh,
+                                        const std::vector<Eigen::Vector3d>& completeness_truth,
+                                        double completeness_threshold) {
+  SurfaceEvaluation r;
+  r.num_model = static_cast<int>(model.size());
+  r.num_truth = static_cast<int>(completeness_truth.size());
+  if (model.empty() || truth_mesh.empty() || completeness_truth.empty()) return r;
+  std::vector<double> d;
+  d.reserve(model.size());
+  for (const auto& p : model) d.push_back(truth_mesh.Distance(p));
+  SetAccuracy(std::move(d), &r);
+  r.completeness = Completeness(model, completeness_truth, completeness_threshold);
+  return r;
+}
+
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth,
@@ -299,14 +526,8 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
   std::vector<double> d;
   d.reserve(model.size());
   for (const auto& p : model) d.push_back(truth_grid.NearestExact(p));
-  r.accuracy_p50 = Percentile(d, 0.5);
-  r.accuracy_p90 = Percentile(d, 0.9);
-  r.accuracy_max = *std::max_element(d.begin(), d.end());
-  const PointGrid model_grid(model, cell);
-  int covered = 0;
-  for (const auto& p : completeness_truth)
-    if (model_grid.Nearest(p, 1) <= completeness_threshold) ++covered;
-  r.completeness = double(covered) / double(completeness_truth.size());
+  SetAccuracy(std::move(d), &r);
+  r.completeness = Completeness(model, completeness_truth, completeness_threshold);
   return r;
 }
 

@@ -4,7 +4,9 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "common/geometry.h"
@@ -38,6 +40,33 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
 // non-null, also the vertex normals (nx ny nz); false when the file has none.
 bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
                    std::vector<Eigen::Vector3d>* normals = nullptr);
+
+// Reads the vertices (x y z) and faces of an ASCII or binary_little_endian PLY: the face element must follow the
+// vertex element and hold only a list property vertex_indices (or vertex_index; any integer types); polygons are
+// fan-triangulated. False with *error on an unreadable or malformed file or an index out of range.
+bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices,
+                 std::vector<Eigen::Vector3i>* triangles, std::string* error);
+
+// Exact distance from a point to a triangle mesh (the nearest point of any of its triangles), over a uniform grid
+// of the triangles (cells about twice the mean edge): exact, not an approximation by samples. Triangles with an
+// index out of range or a non-finite vertex are ignored. Units: those of the vertices.
+class MeshDistance {
+ public:
+  MeshDistance(const std::vector<Eigen::Vector3d>& vertices, const std::vector<Eigen::Vector3i>& triangles);
+  // Infinity for an empty mesh or a non-finite q.
+  double Distance(const Eigen::Vector3d& q) const;
+  bool empty() const { return triangles_.empty(); }
+
+ private:
+  Eigen::Vector3i Cell(const Eigen::Vector3d& p) const;
+  static uint64_t Key(const Eigen::Vector3i& c);
+  double TriangleDistance(const Eigen::Vector3d& q, int i) const;
+  std::vector<Eigen::Vector3d> vertices_;
+  std::vector<Eigen::Vector3i> triangles_;
+  double cell_ = 1.0;
+  Eigen::Vector3i bounds_lo_ = Eigen::Vector3i::Zero(), bounds_hi_ = Eigen::Vector3i::Zero();  // cells
+  std::unordered_map<uint64_t, std::vector<int>> cells_;  // triangles whose bounding box touches the cell
+};
 
 // Pinhole intrinsics of the views used to decide which part of a true surface was visible.
 struct ViewIntrinsics {
@@ -81,5 +110,13 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth,
                                   double completeness_threshold);
+
+// Accuracy as the exact distance from every model point to the true surface (truth_mesh: the surface the simulator
+// rendered), completeness as in EvaluateSurface (truth points within completeness_threshold of a model point). The
+// point-to-sample accuracy of EvaluateSurface carries the samples' spacing: with 1 random sample per mm^2 a model
+// lying exactly on the surface scores p50 0.47, p90 0.86 and, over 10^5 points, max ~1.9 (mm).
+SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& model, const MeshDistance& truth_mesh,
+                                        const std::vector<Eigen::Vector3d>& completeness_truth,
+                                        double completeness_threshold);
 
 }  // namespace objscan

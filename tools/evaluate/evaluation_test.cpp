@@ -273,3 +273,135 @@ TEST(EvaluationTest, VisibleSurfacePointsAtGrazingAnglesDoNotHideThemselves) {
 
 }  // namespace
 }  // namespace objscan
+
+namespace objscan {
+namespace {
+
+// A UV sphere (radius r, centre c): rings x segments quads as triangles, poles fanned.
+void UvSphere(double r, const Eigen::Vector3d& c, int rings, int segments, std::vector<Eigen::Vector3d>* v,
+              std::vector<Eigen::Vector3i>* t) {
+  v->clear();
+  t->clear();
+  v->push_back(c + Eigen::Vector3d(0, 0, r));
+  for (int i = 1; i < rings; ++i) {
+    const double th = M_PI * i / rings;
+    for (int j = 0; j < segments; ++j) {
+      const double ph = 2 * M_PI * j / segments;
+      v->push_back(c + r * Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  }
+  v->push_back(c - Eigen::Vector3d(0, 0, r));
+  const int south = static_cast<int>(v->size()) - 1;
+  auto at = [&](int ring, int seg) { return 1 + (ring - 1) * segments + (seg % segments); };
+  for (int j = 0; j < segments; ++j) t->emplace_back(0, at(1, j), at(1, j + 1));
+  for (int i = 1; i + 1 < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      t->emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      t->emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  for (int j = 0; j < segments; ++j) t->emplace_back(south, at(rings - 1, j + 1), at(rings - 1, j));
+}
+
+TEST(MeshDistanceTest, ExactOnAPlaneAndItsEdgesAndCorners) {
+  // Two triangles: the square [0, 10]^2 at z = 0.
+  const std::vector<Eigen::Vector3d> v = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
+  const std::vector<Eigen::Vector3i> t = {{0, 1, 2}, {0, 2, 3}};
+  const MeshDistance d(v, t);
+  EXPECT_NEAR(d.Distance({3, 4, 2.5}), 2.5, 1e-12);   // above the face
+  EXPECT_NEAR(d.Distance({5, 5, -1}), 1.0, 1e-12);    // below
+  EXPECT_NEAR(d.Distance({13, 5, 4}), 5.0, 1e-12);    // beyond an edge: to the edge
+  EXPECT_NEAR(d.Distance({-3, -4, 0}), 5.0, 1e-12);   // beyond a corner: to the corner
+  EXPECT_NEAR(d.Distance({7, 7, 0}), 0.0, 1e-12);     // on it
+  EXPECT_NEAR(d.Distance({500, 5, 0}), 490.0, 1e-9);  // far outside the grid: searched exhaustively
+  EXPECT_TRUE(std::isinf(d.Distance({std::nan(""), 0, 0})));
+  EXPECT_TRUE(std::isinf(MeshDistance(v, {}).Distance({0, 0, 0})));
+  EXPECT_TRUE(MeshDistance(v, {{0, 1, 7}}).empty());  // index out of range: ignored
+}
+
+// Against a finely tessellated sphere the mesh distance is the radial distance (to within the chords' sagitta),
+// while the distance to 1 random sample per mm^2 of the same surface carries the samples' spacing.
+TEST(MeshDistanceTest, SurfaceAccuracyToTheMeshHasNoSamplingFloor) {
+  const Eigen::Vector3d c(0, 0, 100);
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  UvSphere(100, c, 200, 400, &v, &t);  // chords ~1.6 mm: sagitta < 0.004 mm
+  const MeshDistance mesh(v, t);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1), offset(-0.5, 0.5);
+  std::vector<Eigen::Vector3d> model, samples;
+  double worst = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Eigen::Vector3d dir(u(rng), u(rng), u(rng));
+    if (dir.norm() < 0.1 || dir.norm() > 1) continue;
+    dir.normalize();
+    const double off = i % 100 == 0 ? 3.0 : offset(rng);  // every 100th point 3 mm out
+    model.push_back(c + (100 + off) * dir);
+    worst = std::max(worst, std::abs(std::abs(off) - mesh.Distance(model.back())));
+  }
+  EXPECT_LT(worst, 0.01);
+  for (int i = 0; i < 125664; ++i) {  // 1 per mm^2, uniform random
+    Eigen::Vector3d dir(u(rng), u(rng), u(rng));
+    while (dir.norm() < 0.1 || dir.norm() > 1) dir = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    samples.push_back(c + 100 * dir.normalized());
+  }
+  const SurfaceEvaluation to_mesh = EvaluateSurfaceToMesh(model, mesh, samples, 2.0);
+  const SurfaceEvaluation to_samples = EvaluateSurface(model, samples, 2.0);
+  // |offset| uniform on [0, 0.5]: p50 0.25, p90 0.45; max 3 (the outliers).
+  EXPECT_NEAR(to_mesh.accuracy_p50, 0.25, 0.02);
+  EXPECT_NEAR(to_mesh.accuracy_p90, 0.45, 0.02);
+  EXPECT_NEAR(to_mesh.accuracy_max, 3.0, 0.01);
+  EXPECT_GT(to_samples.accuracy_p90, to_mesh.accuracy_p90 + 0.3);  // the sampling floor
+  EXPECT_DOUBLE_EQ(to_mesh.completeness, to_samples.completeness);
+}
+
+TEST(MeshDistanceTest, ReadsAsciiAndBinaryPlyMeshes) {
+  const std::string ascii = Temp("mesh_ascii.ply"), binary = Temp("mesh_bin.ply"), bad = Temp("mesh_bad.ply");
+  {
+    std::ofstream f(ascii);
+    f << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+  }
+  {
+    std::ofstream f(binary, std::ios::binary);
+    f << "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const float xyz[9] = {0, 0, 0, 2, 0, 0, 0, 2, 0};
+    f.write(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+    const uint8_t n = 3;
+    const int32_t idx[3] = {0, 1, 2};
+    f.write(reinterpret_cast<const char*>(&n), 1);
+    f.write(reinterpret_cast<const char*>(idx), sizeof(idx));
+  }
+  {
+    std::ofstream f(bad);
+    f << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n3 0 1 9\n";
+  }
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector3i> t;
+  std::string error;
+  ASSERT_TRUE(ReadPlyMesh(ascii, &v, &t, &error)) << error;
+  EXPECT_EQ(v.size(), 4u);
+  ASSERT_EQ(t.size(), 2u);  // the quad, fanned
+  EXPECT_EQ(t[1], Eigen::Vector3i(0, 2, 3));
+  ASSERT_TRUE(ReadPlyMesh(binary, &v, &t, &error)) << error;
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_NEAR(MeshDistance(v, t).Distance({0.5, 0.5, 1}), 1.0, 1e-9);
+  EXPECT_FALSE(ReadPlyMesh(bad, &v, &t, &error));
+  EXPECT_NE(error.find("out of range"), std::string::npos) << error;
+  EXPECT_FALSE(ReadPlyMesh(Temp("missing.ply"), &v, &t, &error));
+  // A point cloud has no faces.
+  std::vector<Eigen::Vector3d> points;
+  {
+    std::ofstream f(bad);
+    f << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+         "end_header\n0 0 0\n";
+  }
+  EXPECT_TRUE(ReadPlyPoints(bad, &points, &error));
+  EXPECT_FALSE(ReadPlyMesh(bad, &v, &t, &error));
+  EXPECT_NE(error.find("no face"), std::string::npos) << error;
+  for (const auto& p : {ascii, binary, bad}) std::remove(p.c_str());
+}
+
+}  // namespace
+}  // namespace objscan
