@@ -32,6 +32,7 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
   if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
   if (!ValidateMeshVisibilityOptions(o.visibility, &w)) e << w << "; ";
+  if (!ValidatePhotometricRefinementOptions(o.refinement, &w)) e << w << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -74,7 +75,7 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
 }
 
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views, const DenseModelOptions& o,
-                           const RegionOfInterest& region) {
+                           const RegionOfInterest& region, const std::vector<CarvingView>* refinement_views) {
   FinalModel model;
   using Clock = std::chrono::steady_clock;
   auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
@@ -188,12 +189,14 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
         ++model.voxels_without_mesh;
     }
     model.voxels.swap(supported);
+    model.times.clean_up_s = since(t0);
+    t0 = Clock::now();
+    model.refinement = RefineMeshPhotometric(&model.mesh, refinement_views ? *refinement_views : views, o.refinement);
+    model.times.refinement_s = since(t0);
   } else {
     model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
     model.times.meshing_s = since(t0);
-    t0 = Clock::now();
   }
-  model.times.clean_up_s = since(t0);
   if (!model.voxels.empty()) {
     Eigen::Vector3i lo = model.voxels[0].ijk, hi = lo;
     for (const CarvedVoxel& v : model.voxels) {

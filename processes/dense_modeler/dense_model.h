@@ -13,6 +13,7 @@
 #include "processes/dense_modeler/marching_cubes.h"
 #include "processes/dense_modeler/mesh_visibility.h"
 #include "processes/dense_modeler/pair_matches.h"
+#include "processes/dense_modeler/photometric_refinement.h"
 #include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/surface_extraction.h"
@@ -45,8 +46,9 @@ struct DenseModelOptions {
                                   // crevice under its overhang, seen at grazing angles past the dark underside, where
                                   // the only dense points are chords of floor-junction triangles (the sim sphere's and
                                   // blob's 4-5.4 mm skirts; a wall standing on the floor is vertical and stays)
-  double crevice_normal_deg = 30.0;  // deg, see crevice_band_mm, (0, 90)
-  MeshVisibilityOptions visibility;  // removal of mesh parts no view sees (inner sheets; surface_method 1)
+  double crevice_normal_deg = 30.0;         // deg, see crevice_band_mm, (0, 90)
+  MeshVisibilityOptions visibility;         // removal of mesh parts no view sees (inner sheets; surface_method 1)
+  PhotometricRefinementOptions refinement;  // multi-view photometric refinement of the final mesh (surface_method 1)
 };
 
 bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
@@ -69,17 +71,19 @@ struct FinalPhaseTimes {
   double meshing_s = 0;     // surface fit and mesh
   double visibility_s = 0;  // hidden mesh parts (mesh_visibility.h)
   double clean_up_s = 0;    // border rings, small pieces, voxels off the mesh
+  double refinement_s = 0;  // photometric refinement of the mesh (photometric_refinement.h)
 };
 
 struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  RidgeStats ridge;                  // surface_method 1 only
-  MeshVisibilityStats visibility;    // surface_method 1 only
-  int64_t seeds = 0;                 // voxels over the vote threshold (inside the box)
-  int64_t floor_band_dropped = 0;    // ridge voxels dropped as floor (floor_band_mm)
-  int64_t crevice_band_dropped = 0;  // ridge voxels dropped as the crevice under an overhang (crevice_band_mm)
+  RidgeStats ridge;                       // surface_method 1 only
+  MeshVisibilityStats visibility;         // surface_method 1 only
+  PhotometricRefinementStats refinement;  // surface_method 1 only
+  int64_t seeds = 0;                      // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;         // ridge voxels dropped as floor (floor_band_mm)
+  int64_t crevice_band_dropped = 0;       // ridge voxels dropped as the crevice under an overhang (crevice_band_mm)
   FinalPhaseTimes times;
   int64_t voxels_without_mesh = 0;  // carved voxels dropped because the final mesh has no vertex near them
                                     // (surface_method 1)
@@ -94,9 +98,12 @@ struct FinalModel {
 // views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
 // oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh
 // parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces, and the
-// voxels keep only the surface the mesh kept (a mesh vertex within 1.5 voxels).
+// voxels keep only the surface the mesh kept (a mesh vertex within 1.5 voxels); last, the mesh's vertices are refined
+// photometrically along their normals (photometric_refinement.h) in refinement_views (full-resolution images are
+// best; nullptr: views).
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
-                           const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
+                           const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest(),
+                           const std::vector<CarvingView>* refinement_views = nullptr);
 
 struct ModelPaths {
   std::string voxels_ply, mesh_ply, octomap;

@@ -50,6 +50,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
         "pixel matches kept for the re-vote at most (20 bytes each; beyond, the live votes are kept)");
   p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
   p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
+  p.Add("refinement-downsample", &o->refinement_downsample,
+        "integer downsampling of the gray images kept for the mesh's photometric refinement");
   p.Add("max-central-track-ids", &o->max_central_track_ids,
         "track ids whose central views are counted at most (beyond, ids neither landmarks nor in view are forgotten)");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
@@ -121,6 +123,24 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("mesh-visibility-min-facing-cos", &m->visibility.min_facing_cos,
         "cos of the largest angle between a mesh vertex normal and the ray to a camera that sees it");
   p.Add("mesh-visibility-max-views", &m->visibility.max_views, "views rendered for the mesh visibility at most");
+  PhotometricRefinementOptions* pr = &m->refinement;
+  p.Add("refine-mesh", &pr->enabled, "move the final mesh's vertices along their normals to where the views agree");
+  p.Add("refine-max-views", &pr->max_views, "views rendered for the refinement's visibility at most");
+  p.Add("refine-min-facing-cos", &pr->min_facing_cos,
+        "cos of the largest angle between a vertex normal and a view ray");
+  p.Add("refine-views-per-sample", &pr->views_per_sample, "views scored per refined sample at most");
+  p.Add("refine-min-views", &pr->min_views, "samples seen by fewer views are not refined");
+  p.Add("refine-sample-spacing", &pr->sample_spacing_mm, "mm, one refined sample vertex per cell of this size");
+  p.Add("refine-search", &pr->search_mm, "mm, half range of the search along the normal");
+  p.Add("refine-step", &pr->step_mm, "mm, step of the search along the normal");
+  p.Add("refine-patch-half", &pr->patch_half, "points each side of the centre of the tangent-plane patch");
+  p.Add("refine-patch-spacing", &pr->patch_spacing_mm, "mm, spacing of the patch's points");
+  p.Add("refine-min-score", &pr->min_score, "mean pairwise NCC a sample's best offset needs");
+  p.Add("refine-min-gain", &pr->min_gain, "NCC the best offset must gain over the mesh's own");
+  p.Add("refine-min-patch-stddev", &pr->min_patch_stddev, "gray levels, texture every view's patch needs");
+  p.Add("refine-smoothing-radius", &pr->smoothing_radius_mm, "mm, samples within this vote on a vertex's offset");
+  p.Add("refine-min-normal-cos", &pr->min_normal_cos, "their normals within acos(this) of the vertex's");
+  p.Add("refine-min-neighbour-samples", &pr->min_neighbour_samples, "vertices with fewer samples around stay");
   AffineDenseOptions* d = &m->dense;
   p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
   p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
@@ -219,6 +239,7 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.max_stored_matches < 0) e << "max-stored-matches must be >= 0; ";
   if (o.max_central_track_ids < 1) e << "max-central-track-ids must be >= 1; ";
   if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
+  if (o.refinement_downsample < 1 || o.refinement_downsample > 8) e << "refinement-downsample must be in [1, 8]; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
   {
     RegionOfInterest box;
@@ -484,9 +505,21 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       carving_views_.swap(kept);
       carving_keep_stride_ *= 2;
     }
-    if (complete_frames_ % carving_keep_stride_ == 0)
-      carving_views_.push_back(
-          {seq, MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample)});
+    if (complete_frames_ % carving_keep_stride_ == 0) {
+      StoredView stored;
+      stored.seq = seq;
+      stored.view = MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample);
+      if (options_.model.refinement.enabled && options_.model.surface_method == 1) {
+        cv::Mat gray;
+        if (slot.image.channels() == 3)
+          cv::cvtColor(slot.image, gray, cv::COLOR_BGR2GRAY);
+        else
+          gray = slot.image;
+        stored.refine_view =
+            MakeCarvingView(*camera_, slot.pose->world_from_camera, gray, options_.refinement_downsample);
+      }
+      carving_views_.push_back(std::move(stored));
+    }
   }
   ++complete_frames_;
   if (options_.auto_roi) {
@@ -731,16 +764,17 @@ void DenseModelerNode::RevoteWithFinalPoses() {
 void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (finished_) return;
   const int64_t start_us = MonotonicMicros();
-  std::vector<CarvingView> views;
+  std::vector<CarvingView> views, refine_views;
   int final_used = 0;
   for (const StoredView& sv : carving_views_) {
-    CarvingView v = sv.view;
+    CarvingView v = sv.view, r = sv.refine_view;
     auto it = final_poses_.find(sv.seq);
     if (it != final_poses_.end()) {
-      v.world_from_camera = it->second;
+      v.world_from_camera = r.world_from_camera = it->second;
       ++final_used;
     }
     views.push_back(std::move(v));
+    if (!r.image.empty()) refine_views.push_back(std::move(r));
   }
   final_poses_used_ = final_used;
   UpdateRegion(true);
@@ -756,7 +790,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     LogWarning("no region of interest: the model is not restricted");
   }
   RevoteWithFinalPoses();
-  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
+  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_, &refine_views);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
@@ -769,6 +803,18 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
             std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
+  if (options_.model.surface_method == 1 && options_.model.refinement.enabled) {
+    char line[300];
+    std::snprintf(
+        line, sizeof(line),
+        "mesh refinement: %zu views, %lld samples, %lld scored, %lld kept; %lld vertices moved, mean |offset| "
+        "%.2f mm, max %.2f mm",
+        refine_views.size(), static_cast<long long>(model.refinement.samples),
+        static_cast<long long>(model.refinement.samples_scored), static_cast<long long>(model.refinement.samples_kept),
+        static_cast<long long>(model.refinement.vertices_moved), model.refinement.mean_abs_offset_mm,
+        model.refinement.max_abs_offset_mm);
+    LogInfo(line);
+  }
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
@@ -776,11 +822,13 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   std::string per_pass;
   for (int64_t r : model.carving.removed_per_iteration) per_pass += (per_pass.empty() ? "" : " ") + std::to_string(r);
   LogInfo("carving: " + std::to_string(model.carving.iterations) + " passes, removed per pass: " + per_pass);
-  char times[200];
-  std::snprintf(times, sizeof(times),
-                "final phase times: surface %.2f s, carving %.2f s, meshing %.2f s, visibility %.2f s, clean-up %.2f s",
-                model.times.surface_s, model.times.carving_s, model.times.meshing_s, model.times.visibility_s,
-                model.times.clean_up_s);
+  char times[300];
+  std::snprintf(
+      times, sizeof(times),
+      "final phase times: surface %.2f s, carving %.2f s, meshing %.2f s, visibility %.2f s, clean-up %.2f s, "
+      "refinement %.2f s",
+      model.times.surface_s, model.times.carving_s, model.times.meshing_s, model.times.visibility_s,
+      model.times.clean_up_s, model.times.refinement_s);
   LogInfo(times);
   if (!pair_ms_.empty()) {
     std::snprintf(times, sizeof(times),
@@ -844,6 +892,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_voxels_off_mesh", static_cast<double>(model.voxels_without_mesh));
   status_.SetValue("final_carving_s", model.times.carving_s);
   status_.SetValue("final_visibility_s", model.times.visibility_s);
+  status_.SetValue("final_refinement_samples", static_cast<double>(model.refinement.samples_scored));
+  status_.SetValue("final_refined_vertices", static_cast<double>(model.refinement.vertices_moved));
+  status_.SetValue("final_refinement_s", model.times.refinement_s);
   status_.SetState(+process_status_t::STATE_FINISHED, "model written");
   status_.PublishIfDue(WallTimeMicros(), true);
 }

@@ -105,6 +105,8 @@ struct DenseModelerNodeOptions {
                                                          // exceeded, the final phase keeps the live votes), >= 0
   int carving_downsample = 2;                            // integer downsampling of the images kept for carving, [1, 8]
   int max_carving_views = 200;                           // images kept for carving at most (>= 2)
+  int refinement_downsample = 1;                         // integer downsampling of the gray copies kept with them for
+                                                         // the mesh's photometric refinement, [1, 8]
   bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
   double target_margin_mm = 30.0;                        // mm, added on every side of the target box (>= 0)
   std::string roi_box;                                   // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
@@ -159,7 +161,8 @@ class DenseModelerNode : public Node {
   };
   struct StoredView {
     int64_t seq = 0;
-    CarvingView view;
+    CarvingView view;         // colour, carving_downsample
+    CarvingView refine_view;  // gray, refinement_downsample (empty image when the refinement is off)
   };
   struct StoredPair {  // a dense pair's pixel matches, for the final phase's re-triangulation
     int64_t seq_a = 0, seq_b = 0;

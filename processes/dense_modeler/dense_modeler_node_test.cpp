@@ -205,6 +205,39 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/votes_snapshot.bin"));
 }
 
+// With --refine-mesh the node keeps full-resolution gray copies of its carving views and the final phase refines
+// the mesh in them (photometric_refinement.h); off (the default) nothing is scored.
+TEST_F(NodeFixture, MeshRefinementUsesTheKeptViewsWhenOn) {
+  const int n = 16;
+  const auto features = scene_.SurfacePoints(2000);
+  for (const bool refine : {false, true}) {
+    out_ = Collected();
+    auto bus = MakeLcmBus("memq://");  // the bus cannot unsubscribe: a fresh one per node
+    bus_.swap(bus);
+    SetUp();
+    DenseModelerNodeOptions options = options_;
+    options.model.refinement.enabled = refine;
+    options.model.refinement.sample_spacing_mm = 6.0;  // fewer samples: the test stays fast
+    DenseModelerNode node(*bus_, options);
+    PublishInfo();
+    PublishTarget();
+    for (int i = 0; i <= n; ++i) PublishFrame(i, n, features);
+    PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+    ASSERT_TRUE(node.final_phase_done());
+    ASSERT_FALSE(out_.statuses.empty());
+    const process_status_t& last = out_.statuses.back();
+    if (refine) {
+      EXPECT_GT(StatusValue(last, "final_refinement_samples"), 100);
+      EXPECT_GT(StatusValue(last, "final_refined_vertices"), 100);
+    } else {
+      EXPECT_EQ(StatusValue(last, "final_refinement_samples"), 0);
+      EXPECT_EQ(StatusValue(last, "final_refined_vertices"), 0);
+    }
+    ASSERT_EQ(out_.models.size(), 1u);
+    EXPECT_GT(out_.models[0].num_mesh_triangles, 5000);
+  }
+}
+
 // The live poses belong to a map 3 % too large (the pose solver rescales it later, as after a loop or a scale
 // correction): the live votes make a sphere 3 % too large, 3-6 mm off; the final poses, true here, give the
 // final phase's re-triangulated votes the true sphere (0.55 mm median). With the re-vote off the final model keeps

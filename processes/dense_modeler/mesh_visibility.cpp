@@ -57,17 +57,18 @@ void RenderDepth(const TriangleMesh& mesh, const std::vector<Projected>& p, int 
   }
 }
 
-}  // namespace
-
-std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
-                                          const MeshVisibilityOptions& o, int* views_used) {
-  std::vector<VertexViews> seen(mesh.vertices.size());
-  if (views_used) *views_used = 0;
-  if (mesh.vertices.empty() || views.empty() || !ValidateMeshVisibilityOptions(o, nullptr)) return seen;
+// Calls fn(vertex, view index, seen) for every vertex (with (*wanted)[vertex] when wanted is given) and every used
+// view it faces, in front of the camera and inside the image; seen: not hidden by the mesh (see the header). Returns
+// the views used.
+template <typename Fn>
+int VisitFacingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views, const MeshVisibilityOptions& o,
+                     const std::vector<char>* wanted, Fn&& fn) {
+  if (mesh.vertices.empty() || views.empty() || !ValidateMeshVisibilityOptions(o, nullptr)) return 0;
   const std::vector<Eigen::Vector3f> normals = VertexNormals(mesh);
   const size_t stride = (views.size() + static_cast<size_t>(o.max_views) - 1) / static_cast<size_t>(o.max_views);
   std::vector<Projected> projected(mesh.vertices.size());
   std::vector<float> depth;
+  int used = 0;
   for (size_t vi = 0; vi < views.size(); vi += stride) {
     const CarvingView& view = views[vi];
     const PinholeCamera& cam = view.camera;
@@ -86,11 +87,11 @@ std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::v
     }
     RenderDepth(mesh, projected, cam.width, cam.height, &depth);
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      if (wanted && !(*wanted)[i]) continue;
       const Projected& pr = projected[i];
       if (!(pr.z > 0) || !cam.InImage(Eigen::Vector2d(pr.u, pr.v))) continue;
       const Eigen::Vector3f to_camera = centre - mesh.vertices[i];
       if (normals[i].squaredNorm() > 0 && normals[i].dot(to_camera) < o.min_facing_cos * to_camera.norm()) continue;
-      ++seen[i].facing;
       // The farthest rendered depth of the pixel centres around the vertex: a vertex on the surface is level with
       // its own neighbourhood whatever the slope; an empty pixel (no surface there) hides nothing.
       const int x0 = static_cast<int>(std::floor(pr.u)), y0 = static_cast<int>(std::floor(pr.v));
@@ -100,11 +101,35 @@ std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::v
           const int x = std::clamp(x0 + dx, 0, cam.width - 1), y = std::clamp(y0 + dy, 0, cam.height - 1);
           around = std::max(around, depth[static_cast<size_t>(y) * cam.width + x]);
         }
-      if (pr.z <= around + static_cast<float>(o.depth_tolerance_mm)) ++seen[i].seen;
+      fn(i, static_cast<int>(vi), pr.z <= around + static_cast<float>(o.depth_tolerance_mm));
     }
-    if (views_used) ++*views_used;
+    ++used;
   }
+  return used;
+}
+
+}  // namespace
+
+std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
+                                          const MeshVisibilityOptions& o, int* views_used) {
+  std::vector<VertexViews> seen(mesh.vertices.size());
+  const int used = VisitFacingViews(mesh, views, o, nullptr, [&](size_t i, int, bool is_seen) {
+    ++seen[i].facing;
+    if (is_seen) ++seen[i].seen;
+  });
+  if (views_used) *views_used = used;
   return seen;
+}
+
+std::vector<std::vector<int>> SeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
+                                          const MeshVisibilityOptions& o, const std::vector<char>* wanted,
+                                          int* views_used) {
+  std::vector<std::vector<int>> seeing(mesh.vertices.size());
+  const int used = VisitFacingViews(mesh, views, o, wanted, [&](size_t i, int view, bool is_seen) {
+    if (is_seen) seeing[i].push_back(view);
+  });
+  if (views_used) *views_used = used;
+  return seeing;
 }
 
 MeshVisibilityStats RemoveOccludedMeshParts(TriangleMesh* mesh, const std::vector<CarvingView>& views,

@@ -49,6 +49,12 @@ struct VertexViews {
 std::vector<VertexViews> CountSeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
                                           const MeshVisibilityOptions& options, int* views_used = nullptr);
 
+// The indices (into views, ascending) of the views that see each vertex (with (*wanted)[vertex] when wanted is given,
+// one flag per vertex; empty lists for the others), by the test of CountSeeingViews.
+std::vector<std::vector<int>> SeeingViews(const TriangleMesh& mesh, const std::vector<CarvingView>& views,
+                                          const MeshVisibilityOptions& options,
+                                          const std::vector<char>* wanted = nullptr, int* views_used = nullptr);
+
 // Removes the vertices seen by too few views (see the top), the triangles using them and the vertices no kept
 // triangle uses (renumbered as KeepMeshTriangles does). No-op when both limits are 0 or there are no views.
 MeshVisibilityStats RemoveOccludedMeshParts(TriangleMesh* mesh, const std::vector<CarvingView>& views,
