@@ -616,11 +616,10 @@ inline uint64_t FloatPairKey(float x, float y) {
   return (static_cast<uint64_t>(bx) << 32) | by;
 }
 
-// Per-thread buffers reused from pair to pair (gray images, visited mask, points): no page faults per pair.
+// Per-thread buffers reused from pair to pair (gray images, visited mask, search): no page faults per pair.
 struct PairScratch {
   cv::Mat gray8, gray_a, gray_b;
   cv::Mat1b visited;
-  std::vector<DensePoint> points;
   std::vector<double> scores;
   SearchScratch search;
 };
@@ -744,11 +743,17 @@ cv::Rect DensePairRoi(const PinholeCamera& camera_a, const Eigen::Isometry3d& wo
 
 std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
                                          const AffineDenseOptions& o, DensePairStats* stats_out) {
-  DensePairStats stats;
   std::vector<DensePoint> out;
+  ComputeDensePair(a, b, matches, o, &out, stats_out);
+  return out;
+}
+
+void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
+                      const AffineDenseOptions& o, std::vector<DensePoint>* out, DensePairStats* stats_out) {
+  DensePairStats stats;
+  out->clear();
   auto finish = [&]() {
     if (stats_out) *stats_out = stats;
-    return out;
   };
   if (!DensePairViewsUsable(a, b) || !ValidateAffineDenseOptions(o, nullptr)) return finish();
   const Eigen::Vector3d center_a = a.world_from_camera.translation();
@@ -818,8 +823,7 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   cv::Mat1b& visited = scratch.visited;
   visited.create(a.image.rows, a.image.cols);
   visited.setTo(0);
-  std::vector<DensePoint>& points = scratch.points;
-  points.clear();
+  std::vector<DensePoint>& points = *out;
   const PinholeCamera& cam_a = a.camera;
   const PinholeCamera& cam_b = b.camera;
   const PairTriangulator triangulator(cam_a, a.world_from_camera, cam_b, b.world_from_camera, o);
@@ -1046,7 +1050,6 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
     }
   }
   if (refine_count > 0) stats.mean_refine_shift_px = refine_shift_sum / refine_count;
-  out.assign(points.begin(), points.end());
   // Triangles come from Subdiv2D in its own order; sort output into raster order of the source pixel is not
   // needed for determinism (Subdiv2D is deterministic for the same input), so keep the order as produced.
   return finish();

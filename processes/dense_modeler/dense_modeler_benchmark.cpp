@@ -48,6 +48,22 @@ void BM_DensePairSphere(benchmark::State& state) {
 }
 BENCHMARK(BM_DensePairSphere)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// The same pair into one output buffer kept from call to call, as the node does (no allocation, no page faults).
+void BM_DensePairSphereReusedOutput(benchmark::State& state) {
+  const PairData& d = SpherePair();
+  AffineDenseOptions o;
+  o.refine_along_epipolar = state.range(0) != 0;
+  DensePairStats st;
+  std::vector<DensePoint> points;
+  for (auto _ : state) {
+    ComputeDensePair(d.a, d.b, d.matches, o, &points, &st);
+    benchmark::DoNotOptimize(points.data());
+  }
+  state.counters["pixels"] = static_cast<double>(st.pixels);
+  state.counters["points"] = static_cast<double>(st.accepted);
+}
+BENCHMARK(BM_DensePairSphereReusedOutput)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 // The pair's own matches (pair_matches.h) with the tracker's matches left of the image centre removed: corner
 // detection and LK both ways for the bare half.
 void BM_AddPairMatches(benchmark::State& state) {

@@ -635,7 +635,8 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
     status_.SetValue("pair_matches_added", static_cast<double>(pair_matches_added_));
   }
   DensePairStats stats;
-  const std::vector<DensePoint> points = ComputeDensePair(a, b, matches, dense, &stats);
+  std::vector<DensePoint>& points = pair_points_;  // reused from pair to pair (no allocation, no page faults)
+  ComputeDensePair(a, b, matches, dense, &points, &stats);
   ReleaseGraysAfterPair(&pa, seq_b, &slot);
   const int64_t vote_start_us = MonotonicMicros();
   grid_.AddPoints(points);

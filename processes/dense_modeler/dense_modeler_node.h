@@ -215,6 +215,7 @@ class DenseModelerNode : public Node {
   VoxelVoteGrid grid_;
   std::optional<PinholeCamera> camera_;
   std::map<int64_t, FrameSlot> frames_;
+  std::vector<DensePoint> pair_points_;  // the last dense pair's points (buffer reused from pair to pair)
   std::vector<StoredView> carving_views_;
   std::vector<StoredPair> stored_pairs_;  // every pair so far while stored_complete_
   int64_t stored_matches_ = 0;
