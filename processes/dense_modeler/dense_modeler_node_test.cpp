@@ -56,6 +56,13 @@ class NodeFixture : public ::testing::Test {
     options_.target_channel = "TARGET";
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
+  // A fresh bus and empty collected output for the next node of the same test (a bus cannot unsubscribe; the old one
+  // is kept alive until the test ends).
+  void Restart() {
+    out_ = Collected();
+    retired_buses_.push_back(std::move(bus_));
+    SetUp();
+  }
   void Drain() {
     while (bus_->Handle(0) > 0) {
     }
@@ -144,6 +151,7 @@ class NodeFixture : public ::testing::Test {
 
   SphereScene scene_;
   std::unique_ptr<Bus> bus_;
+  std::vector<std::unique_ptr<Bus>> retired_buses_;
   Collected out_;
   DenseModelerNodeOptions options_;
   std::string dir_;
@@ -211,10 +219,7 @@ TEST_F(NodeFixture, MeshRefinementUsesTheKeptViewsWhenOn) {
   const int n = 16;
   const auto features = scene_.SurfacePoints(2000);
   for (const bool refine : {false, true}) {
-    out_ = Collected();
-    auto bus = MakeLcmBus("memq://");  // the bus cannot unsubscribe: a fresh one per node
-    bus_.swap(bus);
-    SetUp();
+    Restart();
     DenseModelerNodeOptions options = options_;
     options.model.refinement.enabled = refine;
     options.model.refinement.sample_spacing_mm = 6.0;  // fewer samples: the test stays fast
@@ -247,10 +252,7 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
   const auto features = scene_.SurfacePoints(2000);
   double error_mm[2] = {0, 0};
   for (const bool revote : {true, false}) {
-    out_ = Collected();
-    auto bus = MakeLcmBus("memq://");  // the bus cannot unsubscribe: a fresh one per node
-    bus_.swap(bus);
-    SetUp();
+    Restart();
     DenseModelerNodeOptions options = options_;
     options.revote_final_poses = revote;
     DenseModelerNode node(*bus_, options);
