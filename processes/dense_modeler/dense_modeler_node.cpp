@@ -510,13 +510,8 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       stored.seq = seq;
       stored.view = MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample);
       if (options_.model.refinement.enabled && options_.model.surface_method == 1) {
-        cv::Mat gray;
-        if (slot.image.channels() == 3)
-          cv::cvtColor(slot.image, gray, cv::COLOR_BGR2GRAY);
-        else
-          gray = slot.image;
         stored.refine_view =
-            MakeCarvingView(*camera_, slot.pose->world_from_camera, gray, options_.refinement_downsample);
+            MakeCarvingView(*camera_, slot.pose->world_from_camera, Gray8(slot.image), options_.refinement_downsample);
       }
       carving_views_.push_back(std::move(stored));
     }

@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
 
 #include "common/point_grid.h"
+#include "processes/dense_modeler/affine_dense.h"
 #include "processes/dense_modeler/mesh_visibility.h"
+#include "processes/dense_modeler/voxel_votes.h"
 
 namespace objscan {
 
@@ -76,12 +77,8 @@ PhotometricRefinementStats RefineMeshPhotometric(TriangleMesh* mesh, const std::
     const double inv = 1.0 / o.sample_spacing_mm;
     for (size_t i = 0; i < n_vertices; ++i) {
       if (normals[i].squaredNorm() == 0) continue;
-      const Eigen::Vector3f& v = mesh->vertices[i];
-      const auto c = [&](float x) {
-        return static_cast<uint64_t>(static_cast<int64_t>(std::floor(x * inv)) + (1 << 20));
-      };
-      const uint64_t key = (c(v.x()) << 42) | (c(v.y()) << 21) | c(v.z());
-      if (taken.emplace(key, 1).second) {
+      const Eigen::Vector3i cell = (mesh->vertices[i].cast<double>() * inv).array().floor().cast<int>();
+      if (taken.emplace(VoxelKey(cell), 1).second) {
         is_sample[i] = 1;
         ++stats.samples;
       }
@@ -105,15 +102,11 @@ PhotometricRefinementStats RefineMeshPhotometric(TriangleMesh* mesh, const std::
     if (!used[vi] || !v.camera.IsValid() || v.image.empty() || v.image.cols != v.camera.width ||
         v.image.rows != v.camera.height || v.image.depth() != CV_8U)
       continue;
+    if (v.image.channels() != 1 && v.image.channels() != 3) continue;
     GrayView& g = gray[vi];
     g.camera = &v.camera;
     g.camera_from_world = v.world_from_camera.inverse();
-    if (v.image.channels() == 1)
-      g.gray = v.image;
-    else if (v.image.channels() == 3)
-      cv::cvtColor(v.image, g.gray, cv::COLOR_BGR2GRAY);
-    else
-      g.camera = nullptr;
+    g.gray = Gray8(v.image);
   }
 
   const int n_steps = static_cast<int>(std::floor(o.search_mm / o.step_mm + 1e-9));

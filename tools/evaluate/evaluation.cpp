@@ -496,39 +496,39 @@ double Completeness(const std::vector<Eigen::Vector3d>& model, const std::vector
   return double(covered) / double(completeness_truth.size());
 }
 
+// Accuracy from distance_to_truth(model point) over every model point, completeness over completeness_truth.
+template <typename DistanceFn>
+SurfaceEvaluation Evaluate(const std::vector<Eigen::Vector3d>& model,
+                           const std::vector<Eigen::Vector3d>& completeness_truth, double completeness_threshold,
+                           bool truth_empty, DistanceFn&& distance_to_truth) {
+  SurfaceEvaluation r;
+  r.num_model = static_cast<int>(model.size());
+  r.num_truth = static_cast<int>(completeness_truth.size());
+  if (model.empty() || truth_empty || completeness_truth.empty()) return r;
+  std::vector<double> d;
+  d.reserve(model.size());
+  for (const auto& p : model) d.push_back(distance_to_truth(p));
+  SetAccuracy(std::move(d), &r);
+  r.completeness = Completeness(model, completeness_truth, completeness_threshold);
+  return r;
+}
+
 }  // namespace
 
 SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& model, const MeshDistance& truth_mesh,
                                         const std::vector<Eigen::Vector3d>& completeness_truth,
                                         double completeness_threshold) {
-  SurfaceEvaluation r;
-  r.num_model = static_cast<int>(model.size());
-  r.num_truth = static_cast<int>(completeness_truth.size());
-  if (model.empty() || truth_mesh.empty() || completeness_truth.empty()) return r;
-  std::vector<double> d;
-  d.reserve(model.size());
-  for (const auto& p : model) d.push_back(truth_mesh.Distance(p));
-  SetAccuracy(std::move(d), &r);
-  r.completeness = Completeness(model, completeness_truth, completeness_threshold);
-  return r;
+  return Evaluate(model, completeness_truth, completeness_threshold, truth_mesh.empty(),
+                  [&](const Eigen::Vector3d& p) { return truth_mesh.Distance(p); });
 }
 
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth,
                                   double completeness_threshold) {
-  SurfaceEvaluation r;
-  r.num_model = static_cast<int>(model.size());
-  r.num_truth = static_cast<int>(completeness_truth.size());
-  if (model.empty() || accuracy_truth.empty() || completeness_truth.empty()) return r;
-  const double cell = std::max(completeness_threshold, 1e-9);
-  const PointGrid truth_grid(accuracy_truth, cell);
-  std::vector<double> d;
-  d.reserve(model.size());
-  for (const auto& p : model) d.push_back(truth_grid.NearestExact(p));
-  SetAccuracy(std::move(d), &r);
-  r.completeness = Completeness(model, completeness_truth, completeness_threshold);
-  return r;
+  const PointGrid truth_grid(accuracy_truth, std::max(completeness_threshold, 1e-9));
+  return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(),
+                  [&](const Eigen::Vector3d& p) { return truth_grid.NearestExact(p); });
 }
 
 }  // namespace objscan
