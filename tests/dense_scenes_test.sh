@@ -49,6 +49,11 @@ scene() {
   check "$name mesh completeness" "$(value completeness "$d/mesh.txt")" ">=" 0.95 target
 }
 
+# Measured 3 Dec (weakly voted mesh vertices refitted to their strong neighbours' surface, flared weak rims removed,
+# weak_surface_refit.h; mesh p50, p90, max, completeness; voxel centres p90): box 0.109, 0.377, 2.96, 0.959, 1.02;
+# cylinder 0.085, 0.308, 2.52, 0.986, 1.04; mesh (blob) 0.108, 0.382, 3.85, 0.952, 1.11 (over 3 mm: ~30 vertices
+# of its flat cap, which the views see at grazing angles only, 3.0-3.8 mm inside, and 6 at the floor contact). The
+# mesh max bounds of the box and the cylinder are the issue's 3 mm since then (the replay is deterministic).
 # Accuracy is the exact distance to the surface the simulator rendered (--truth-mesh) since 2 Dec, night; the figures
 # before were distances to the nearest of 1 random truth sample per mm^2, which add the samples' spacing (p90 0.86 mm
 # for a perfect model) and are still printed. Measured 2 Dec, night (mesh p50, p90, max; voxel centres p90): box
@@ -84,9 +89,9 @@ scene() {
 # Before the surface-point smoothing and the relative fragment filter: box mesh p90 3.22, voxels 1.43, completeness
 # 0.900 / 0.857; cylinder 1.94, 1.40, 0.937 / 0.903; blob 1.10, 1.33, 0.904 / 0.881. (Before the refinement-border
 # check: box 4.92, 1.68; cylinder 2.21, 1.52; blob 2.48, 1.44.)
-scene box 0.5 4.5 1.3 0.945 0.91
-scene cylinder 0.5 4.5 1.3 0.97 0.94
-scene mesh 0.5 5.0 1.3 0.94 0.93
+scene box 0.5 3.0 1.3 0.945 0.91
+scene cylinder 0.5 3.0 1.3 0.97 0.94
+scene mesh 0.5 4.5 1.3 0.94 0.93
 
 [ "$FAILED" = 0 ] || fail "accuracy below the bounds above"
 echo "PASS: dense model accuracy on the box, cylinder and mesh scenes"

@@ -34,6 +34,9 @@ done
 # Accuracy is the exact distance of the model to the surface the simulator rendered (--truth-mesh) since 2 Dec,
 # night; before, it was the distance to the nearest of 1 random truth sample per mm^2, which adds the samples'
 # spacing (a perfect model scores p90 0.86 mm that way); those figures are still printed (sample_accuracy_*).
+# Measured 3 Dec (weakly voted mesh vertices refitted to their strong neighbours' surface, flared weak rims removed,
+# weak_surface_refit.h): mesh p50 0.085, p90 0.345, max 2.80, completeness 0.969; voxel centres p90 1.11,
+# completeness 0.943. The mesh max bound is the issue's 3 mm since then.
 # Measured 2 Dec, night: mesh p50 0.085, p90 0.349, max 3.49 (one vertex at the bottom of a 3.5 mm dent; to the
 # samples: p90 0.940, max 3.56), completeness 0.968; voxel centres p90 1.11 (to the samples 1.32), completeness 0.943.
 # Earlier figures below are to the samples.
@@ -49,7 +52,7 @@ done
 # (before the curled rims: max 10.3).
 info "mesh accuracy to the truth samples p90 / max (mm)" "$(value sample_accuracy_p90 "$WORK/mesh.txt") / $(value sample_accuracy_max "$WORK/mesh.txt")"
 check "mesh accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/mesh.txt")" "<=" 0.5
-check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 4.5
+check "mesh accuracy max (mm)" "$(value accuracy_max "$WORK/mesh.txt")" "<=" 3.0
 check "voxel centres accuracy p90 (mm)" "$(value accuracy_p90 "$WORK/voxels.txt")" "<=" 1.3
 check "mesh completeness (visible surface, 2 mm)" "$(value completeness "$WORK/mesh.txt")" ">=" 0.95
 check "voxel completeness (visible surface, 2 mm)" "$(value completeness "$WORK/voxels.txt")" ">=" 0.92

@@ -32,6 +32,7 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
   if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
   if (!ValidateMeshVisibilityOptions(o.visibility, &w)) e << w << "; ";
+  if (!ValidateWeakRefitOptions(o.weak_refit, &w)) e << w << "; ";
   if (!ValidatePhotometricRefinementOptions(o.refinement, &w)) e << w << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
@@ -172,6 +173,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
     // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
     model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
+    // Where few points voted (one pair's biased points, the shadowed floor junction) the surface around decides.
+    model.weak_refit = RefitWeakMeshVertices(&model.mesh, model.voxels, grid.voxel_size(), o.weak_refit);
     // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
     // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a curled rim or a border ring, or in a
     // small piece).

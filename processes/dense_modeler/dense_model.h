@@ -18,6 +18,7 @@
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/surface_extraction.h"
 #include "processes/dense_modeler/voxel_votes.h"
+#include "processes/dense_modeler/weak_surface_refit.h"
 
 namespace objscan {
 
@@ -48,6 +49,8 @@ struct DenseModelOptions {
                                   // blob's 4-5.4 mm skirts; a wall standing on the floor is vertical and stays)
   double crevice_normal_deg = 30.0;         // deg, see crevice_band_mm, (0, 90)
   MeshVisibilityOptions visibility;         // removal of mesh parts no view sees (inner sheets; surface_method 1)
+  WeakRefitOptions weak_refit;              // weakly voted mesh vertices refitted to their strong neighbours' surface
+                                            // (weak_surface_refit.h; surface_method 1)
   PhotometricRefinementOptions refinement;  // multi-view photometric refinement of the final mesh (surface_method 1)
 };
 
@@ -80,6 +83,7 @@ struct FinalModel {
   SpaceCarvingStats carving;
   RidgeStats ridge;                       // surface_method 1 only
   MeshVisibilityStats visibility;         // surface_method 1 only
+  WeakRefitStats weak_refit;              // surface_method 1 only
   PhotometricRefinementStats refinement;  // surface_method 1 only
   int64_t seeds = 0;                      // voxels over the vote threshold (inside the box)
   int64_t floor_band_dropped = 0;         // ridge voxels dropped as floor (floor_band_mm)
@@ -97,10 +101,10 @@ struct FinalModel {
 // Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
 // views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
 // oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh
-// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces, and the
-// voxels keep only the surface the mesh kept (a mesh vertex within 1.5 voxels); last, the mesh's vertices are refined
-// photometrically along their normals (photometric_refinement.h) in refinement_views (full-resolution images are
-// best; nullptr: views).
+// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces; weakly
+// voted vertices move onto the surface of their strong neighbours (weak_surface_refit.h), and the voxels keep only the
+// surface the mesh kept (a mesh vertex within 1.5 voxels); last, the mesh's vertices are refined photometrically along
+// their normals (photometric_refinement.h) in refinement_views (full-resolution images are best; nullptr: views).
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
                            const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest(),
                            const std::vector<CarvingView>* refinement_views = nullptr);

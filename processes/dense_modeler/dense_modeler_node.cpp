@@ -123,6 +123,19 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("mesh-visibility-min-facing-cos", &m->visibility.min_facing_cos,
         "cos of the largest angle between a mesh vertex normal and the ray to a camera that sees it");
   p.Add("mesh-visibility-max-views", &m->visibility.max_views, "views rendered for the mesh visibility at most");
+  WeakRefitOptions* wr = &m->weak_refit;
+  p.Add("weak-refit-relative-votes", &wr->relative_votes,
+        "mesh vertices with less than this fraction of the median vertex votes are refitted (0 = off)");
+  p.Add("weak-refit-radius", &wr->radius_mm, "mm, strong vertices within this of a weak one fit its surface");
+  p.Add("weak-refit-min-neighbours", &wr->min_neighbours, "strong vertices a weak vertex's fit needs at least");
+  p.Add("weak-refit-min-normal-cos", &wr->min_normal_cos,
+        "strong vertices need normals within acos(this) of the weak one's");
+  p.Add("weak-refit-max-gap", &wr->max_gap_deg, "deg, largest angle around a weak vertex without a strong one");
+  p.Add("weak-refit-max-residual", &wr->max_residual_mm, "mm, weighted RMS residual of the fit at most");
+  p.Add("weak-refit-max-move", &wr->max_move_mm, "mm, a weak vertex moves at most this far");
+  p.Add("weak-refit-min-move", &wr->min_move_mm, "mm, a weak vertex closer than this to the fitted surface stays");
+  p.Add("weak-refit-rim-drop", &wr->rim_drop_mm,
+        "mm, weak unsurrounded border vertices farther than this off the extrapolated fit are removed (0 = off)");
   PhotometricRefinementOptions* pr = &m->refinement;
   p.Add("refine-mesh", &pr->enabled, "move the final mesh's vertices along their normals to where the views agree");
   p.Add("refine-max-views", &pr->max_views, "views rendered for the refinement's visibility at most");
@@ -799,6 +812,21 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
             std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
+  if (options_.model.surface_method == 1) {
+    const WeakRefitStats& w = model.weak_refit;
+    char line[300];
+    std::snprintf(line, sizeof(line),
+                  "weak vertices (< %.0f votes, median %.0f): %lld of %lld; %lld moved onto their strong neighbours' "
+                  "surface (mean %.2f mm, max %.2f mm), %lld on flared rims removed (%lld triangles); left: %lld "
+                  "close, %lld few neighbours, %lld not surrounded, %lld poor fit, %lld too far",
+                  options_.model.weak_refit.relative_votes * w.median_votes, w.median_votes,
+                  static_cast<long long>(w.weak), static_cast<long long>(w.vertices), static_cast<long long>(w.moved),
+                  w.mean_abs_move_mm, w.max_abs_move_mm, static_cast<long long>(w.rim_vertices_dropped),
+                  static_cast<long long>(w.rim_triangles_dropped), static_cast<long long>(w.close),
+                  static_cast<long long>(w.few_neighbours), static_cast<long long>(w.not_surrounded),
+                  static_cast<long long>(w.poor_fit), static_cast<long long>(w.too_far));
+    LogInfo(line);
+  }
   if (options_.model.surface_method == 1 && options_.model.refinement.enabled) {
     char line[300];
     std::snprintf(

@@ -240,10 +240,7 @@ int64_t RemoveSmallMeshPieces(TriangleMesh* mesh, double min_fraction) {
   return KeepMeshTriangles(mesh, keep);
 }
 
-namespace {
-
-// border[v] = 1 for the vertices on an edge that exactly one kept triangle uses; false when there is none. The edges
-// are bucketed by their lower vertex (counting sort) and each bucket sorted: no hash map for the ~10^6 edges.
+// The edges are bucketed by their lower vertex (counting sort) and each bucket sorted: no hash map for the ~10^6 edges.
 bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep, std::vector<char>* border) {
   const size_t n = mesh.vertices.size();
   std::vector<int32_t> first(n + 1, 0), upper;
@@ -275,6 +272,8 @@ bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep,
   }
   return any;
 }
+
+namespace {
 
 // (*ring_of)[v] = edges on the kept triangles from v to the nearest border vertex (breadth first), max_ring for
 // vertices max_ring or more edges away and for unused ones.

@@ -49,6 +49,10 @@ bool IsClosedOrientedMesh(const TriangleMesh& mesh);
 // oriented inside -> outside); zero for vertices no such triangle uses (or whose triangles have zero area).
 std::vector<Eigen::Vector3f> VertexNormals(const TriangleMesh& mesh, const std::vector<char>* keep = nullptr);
 
+// border[v] = 1 for the vertices on an edge that exactly one triangle t with keep[t] uses (an open border); returns
+// false when there is none.
+bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep, std::vector<char>* border);
+
 // Keeps the triangles t with keep[t] (one flag per triangle), in their order, and the vertices they use, renumbered
 // in the order the kept triangles first use them. Returns the triangles dropped; the mesh is unchanged when none is.
 int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep);

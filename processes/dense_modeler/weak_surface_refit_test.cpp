@@ -1,0 +1,327 @@
+#include "processes/dense_modeler/weak_surface_refit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+
+namespace objscan {
+namespace {
+
+constexpr double kVoxel = 2.0;     // mm
+constexpr double kRadius = 100.0;  // mm, the sim sphere's radius
+const Eigen::Vector3d kCentre(110.3, 109.7, 110.9);
+
+// Closed mesh of the sphere (marching cubes of its exact signed distance, 2 mm samples).
+TriangleMesh SphereMesh() {
+  ScalarVolume vol;
+  vol.nx = vol.ny = vol.nz = 111;
+  vol.spacing = kVoxel;
+  vol.origin = Eigen::Vector3d(0.37, 0.61, 0.83);  // samples off the voxel faces: every vertex has one nearest voxel
+  for (int z = 0; z < vol.nz; ++z)
+    for (int y = 0; y < vol.ny; ++y)
+      for (int x = 0; x < vol.nx; ++x) {
+        vol.values.push_back(
+            static_cast<float>(kRadius - (vol.origin + Eigen::Vector3d(x, y, z) * kVoxel - kCentre).norm()));
+        vol.bgr.push_back({{128, 128, 128}});
+      }
+  return ExtractIsosurface(vol, 0.f);
+}
+
+double RadialError(const Eigen::Vector3f& v) { return (v.cast<double>() - kCentre).norm() - kRadius; }
+
+std::array<int, 3> CellOf(const Eigen::Vector3f& p) {
+  return {{static_cast<int>(std::floor(p.x() / kVoxel)), static_cast<int>(std::floor(p.y() / kVoxel)),
+           static_cast<int>(std::floor(p.z() / kVoxel))}};
+}
+
+// The vertices whose voxel holds a vertex of `patch`: they are the weak ones for the voxels of WeakVoxels (a
+// vertex's nearest voxel centre is its own cell's).
+std::vector<char> WeakCells(const TriangleMesh& mesh, const std::vector<char>& patch) {
+  std::set<std::array<int, 3>> weak;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i)
+    if (patch[i]) weak.insert(CellOf(mesh.vertices[i]));
+  std::vector<char> flags(mesh.vertices.size(), 0);
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) flags[i] = weak.count(CellOf(mesh.vertices[i])) > 0;
+  return flags;
+}
+
+// One voxel per cell holding a mesh vertex: 3 votes where a vertex of `patch` is, 200 elsewhere.
+std::vector<CarvedVoxel> WeakVoxels(const TriangleMesh& mesh, const std::vector<char>& patch) {
+  std::map<std::array<int, 3>, int32_t> cells;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    auto it = cells.emplace(CellOf(mesh.vertices[i]), 200).first;
+    if (patch[i]) it->second = 3;
+  }
+  std::vector<CarvedVoxel> voxels;
+  for (const auto& [c, v] : cells) {
+    CarvedVoxel x;
+    x.ijk = Eigen::Vector3i(c[0], c[1], c[2]);
+    x.votes = v;
+    voxels.push_back(x);
+  }
+  return voxels;
+}
+
+// Vertices within `reach` mm of the sphere's point in direction `dir` (unit).
+std::vector<char> Patch(const TriangleMesh& mesh, const Eigen::Vector3d& dir, double reach) {
+  const Eigen::Vector3d pole = kCentre + kRadius * dir;
+  std::vector<char> in(mesh.vertices.size(), 0);
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) in[i] = (mesh.vertices[i].cast<double>() - pole).norm() < reach;
+  return in;
+}
+
+// Moves the flagged vertices radially by offset(vertex) mm (negative: inwards).
+template <class Offset>
+void Displace(TriangleMesh* mesh, const std::vector<char>& flagged, Offset offset) {
+  for (size_t i = 0; i < mesh->vertices.size(); ++i)
+    if (flagged[i]) {
+      const Eigen::Vector3d d = (mesh->vertices[i].cast<double>() - kCentre).normalized();
+      const double by = offset(mesh->vertices[i].cast<double>());
+      mesh->vertices[i] += (d * by).cast<float>();
+    }
+}
+
+// A smooth dent, depth mm at the sphere's point in direction dir, zero at reach mm from it.
+auto Dent(const Eigen::Vector3d& dir, double depth, double reach) {
+  const Eigen::Vector3d pole = kCentre + kRadius * dir;
+  return [=](const Eigen::Vector3d& p) {
+    const double d = std::min((p - pole).norm(), reach);
+    return -depth * 0.5 * (1 + std::cos(M_PI * d / reach));
+  };
+}
+
+TEST(WeakSurfaceRefit, WeakDentPulledOntoTheStrongSurfaceAround) {
+  TriangleMesh mesh = SphereMesh();
+  ASSERT_GT(mesh.vertices.size(), 10000u);
+  const Eigen::Vector3d dir = Eigen::Vector3d(1, 0.5, 0.7).normalized();
+  const std::vector<char> patch = Patch(mesh, dir, 10.0);
+  Displace(&mesh, patch, Dent(dir, 3.0, 10.0));
+  // The voxels under the dented mesh, weak where the dent is; the weak vertices share their voxels.
+  const std::vector<char> weak = WeakCells(mesh, patch);
+  const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, patch);
+  const TriangleMesh before = mesh;
+  WeakRefitOptions every;  // every weak vertex moves, however close it already is
+  every.min_move_mm = 0;
+  const WeakRefitStats s = RefitWeakMeshVertices(&mesh, voxels, kVoxel, every);
+
+  int64_t n_weak = 0;
+  double worst_weak_before = 0, worst_weak = 0, worst_strong = 0;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    if (weak[i]) {
+      ++n_weak;
+      worst_weak_before = std::max(worst_weak_before, std::abs(RadialError(before.vertices[i])));
+      worst_weak = std::max(worst_weak, std::abs(RadialError(mesh.vertices[i])));
+    } else {
+      worst_strong = std::max(worst_strong, std::abs(RadialError(before.vertices[i])));
+      EXPECT_EQ(mesh.vertices[i], before.vertices[i]) << "strong vertex " << i << " moved";
+    }
+  }
+  ASSERT_GT(n_weak, 100);
+  EXPECT_GT(worst_weak_before, 2.5);
+  EXPECT_DOUBLE_EQ(s.median_votes, 200);
+  EXPECT_EQ(s.weak, n_weak);
+  EXPECT_EQ(s.moved, s.weak);
+  EXPECT_GT(s.max_abs_move_mm, 2.5);
+  EXPECT_LT(s.max_abs_move_mm, 3.5);
+  // Back on the sphere (3 mm off before): within the marching cubes' own error (0.015 mm) plus the quadratic's
+  // (the sphere is not one); measured 0.010 mm.
+  EXPECT_LT(worst_weak, 0.05);
+
+  // Default: only vertices more than min_move_mm (1 mm) off the fit move; the dent's shallow rim stays.
+  TriangleMesh outliers = before;
+  std::vector<WeakRefitOutcome> outcome;
+  const WeakRefitStats d = RefitWeakMeshVertices(&outliers, voxels, kVoxel, WeakRefitOptions(), &outcome);
+  ASSERT_EQ(outcome.size(), outliers.vertices.size());
+  EXPECT_GT(d.moved, 0);
+  EXPECT_GT(d.close, 0);
+  EXPECT_EQ(d.moved + d.close, d.weak);
+  for (size_t i = 0; i < outliers.vertices.size(); ++i) {
+    const double was = std::abs(RadialError(before.vertices[i])), now = std::abs(RadialError(outliers.vertices[i]));
+    if (outcome[i] == WeakRefitOutcome::kMoved) {
+      EXPECT_GT(was, 0.9) << "vertex " << i;
+      EXPECT_LT(now, 0.05) << "vertex " << i;
+    } else {
+      EXPECT_EQ(outliers.vertices[i], before.vertices[i]) << "vertex " << i;
+      EXPECT_LT(now, 1.1) << "vertex " << i;
+    }
+  }
+}
+
+TEST(WeakSurfaceRefit, OffOrNothingWeakLeavesTheMeshIdentical) {
+  TriangleMesh mesh = SphereMesh();
+  const std::vector<char> patch = Patch(mesh, Eigen::Vector3d::UnitX(), 8.0);
+  const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, patch);
+  Displace(&mesh, WeakCells(mesh, patch), Dent(Eigen::Vector3d::UnitX(), 3.0, 10.0));
+  const TriangleMesh before = mesh;
+  WeakRefitOptions off;
+  off.relative_votes = 0;
+  WeakRefitStats s = RefitWeakMeshVertices(&mesh, voxels, kVoxel, off);
+  EXPECT_EQ(s.weak, 0);
+  EXPECT_EQ(mesh.vertices, before.vertices);
+  // Uniform votes: nothing is weak.
+  s = RefitWeakMeshVertices(&mesh, WeakVoxels(mesh, std::vector<char>(mesh.vertices.size(), 0)), kVoxel,
+                            WeakRefitOptions());
+  EXPECT_EQ(s.weak, 0);
+  EXPECT_EQ(mesh.vertices, before.vertices);
+  // A NaN vertex (in the dent) is left alone and does not disturb the others.
+  TriangleMesh with_nan = before;
+  size_t bad = 0;
+  while (!patch[bad]) ++bad;
+  with_nan.vertices[bad] = Eigen::Vector3f::Constant(std::nanf(""));
+  std::vector<WeakRefitOutcome> outcome;
+  s = RefitWeakMeshVertices(&with_nan, voxels, kVoxel, WeakRefitOptions(), &outcome);
+  EXPECT_GT(s.moved, 0);
+  EXPECT_EQ(outcome[bad], WeakRefitOutcome::kUnused);
+  EXPECT_TRUE(std::isnan(with_nan.vertices[bad].x()));
+  for (size_t i = 0; i < with_nan.vertices.size(); ++i)
+    if (i != bad) {
+      EXPECT_TRUE(with_nan.vertices[i].allFinite()) << "vertex " << i;
+    }
+  // No voxels, no triangles.
+  EXPECT_EQ(RefitWeakMeshVertices(&mesh, {}, kVoxel, WeakRefitOptions()).weak, 0);
+  TriangleMesh empty;
+  EXPECT_EQ(RefitWeakMeshVertices(&empty, voxels, kVoxel, WeakRefitOptions()).weak, 0);
+}
+
+// The upper half of the sphere, weak along its open rim (within 3 mm of the cut): strong vertices lie on one side
+// of the rim's vertices only, so they are extrapolated, never moved.
+TriangleMesh UpperHalf(std::vector<char>* rim) {
+  TriangleMesh mesh = SphereMesh();
+  std::vector<char> keep(mesh.triangles.size(), 0);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    float z = 0;
+    for (int k = 0; k < 3; ++k) z += mesh.vertices[mesh.triangles[t][k]].z() / 3;
+    keep[t] = z > kCentre.z();
+  }
+  KeepMeshTriangles(&mesh, keep);
+  rim->assign(mesh.vertices.size(), 0);
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) (*rim)[i] = mesh.vertices[i].z() < kCentre.z() + 3;
+  return mesh;
+}
+
+TEST(WeakSurfaceRefit, WeakRimStaysOnTheSurfaceAndIsDroppedOffIt) {
+  std::vector<char> rim;
+  TriangleMesh mesh = UpperHalf(&rim);
+  const std::vector<char> weak = WeakCells(mesh, rim);
+  const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, rim);
+  std::vector<char> border;
+  ASSERT_TRUE(MarkBorderVertices(mesh, std::vector<char>(mesh.triangles.size(), 1), &border));
+
+  // On the surface: nothing moves, nothing is dropped.
+  TriangleMesh kept = mesh;
+  WeakRefitStats s = RefitWeakMeshVertices(&kept, voxels, kVoxel, WeakRefitOptions());
+  EXPECT_GT(s.weak, 100);
+  EXPECT_EQ(s.moved, 0);
+  EXPECT_EQ(s.rim_vertices_dropped, 0);
+  EXPECT_EQ(kept.vertices, mesh.vertices);
+  EXPECT_EQ(kept.triangles, mesh.triangles);
+
+  // Flared 2 mm outwards: still never moved; with rim_drop_mm off nothing changes, by default the border's weak
+  // vertices (2 mm off the extrapolated fit) go with their triangles.
+  Displace(&mesh, weak, [](const Eigen::Vector3d&) { return 2.0; });
+  TriangleMesh flared = mesh;
+  WeakRefitOptions no_drop;
+  no_drop.rim_drop_mm = 0;
+  s = RefitWeakMeshVertices(&flared, voxels, kVoxel, no_drop);
+  EXPECT_EQ(s.moved, 0);
+  EXPECT_EQ(s.not_surrounded, s.weak);
+  EXPECT_EQ(flared.vertices, mesh.vertices);
+
+  std::vector<WeakRefitOutcome> outcome;
+  s = RefitWeakMeshVertices(&flared, voxels, kVoxel, WeakRefitOptions(), &outcome);
+  int64_t weak_border = 0;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) weak_border += weak[i] && border[i];
+  EXPECT_EQ(s.moved, 0);
+  EXPECT_EQ(s.rim_vertices_dropped, weak_border);
+  EXPECT_GT(s.rim_triangles_dropped, weak_border);
+  EXPECT_EQ(static_cast<int64_t>(flared.triangles.size()),
+            static_cast<int64_t>(mesh.triangles.size()) - s.rim_triangles_dropped);
+  ASSERT_EQ(outcome.size(), flared.vertices.size());
+  for (size_t i = 0; i < flared.vertices.size(); ++i) {
+    EXPECT_NE(outcome[i], WeakRefitOutcome::kRimDropped);
+    // The surviving vertices are the input's, unmoved (the inner rows of the flared band among them).
+    EXPECT_LT(std::abs(RadialError(flared.vertices[i])), 2.1);
+  }
+}
+
+TEST(WeakSurfaceRefit, NoisyOrSparseStrongSurfaceLeavesTheWeakVertex) {
+  const Eigen::Vector3d dir = Eigen::Vector3d(0.2, -1, 0.4).normalized();
+  {
+    // Strong vertices 1 mm rough (uniform +-1.7 mm along the radius): the fit does not explain them.
+    TriangleMesh mesh = SphereMesh();
+    const std::vector<char> patch = Patch(mesh, dir, 8.0), weak = WeakCells(mesh, patch);
+    const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, patch);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> noise(-1.7, 1.7);
+    Displace(&mesh, std::vector<char>(mesh.vertices.size(), 1), [&](const Eigen::Vector3d&) { return noise(rng); });
+    const TriangleMesh before = mesh;
+    const WeakRefitStats s = RefitWeakMeshVertices(&mesh, voxels, kVoxel, WeakRefitOptions());
+    EXPECT_GT(s.weak, 20);
+    EXPECT_EQ(s.moved, 0);
+    EXPECT_GT(s.poor_fit, s.weak * 9 / 10);
+    EXPECT_EQ(mesh.vertices, before.vertices);
+  }
+  {
+    // A weak patch wider than the fit's radius: its middle has too few strong vertices near and stays.
+    TriangleMesh mesh = SphereMesh();
+    const std::vector<char> patch = Patch(mesh, dir, 40.0);
+    const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, patch);
+    Displace(&mesh, WeakCells(mesh, patch), Dent(dir, 3.0, 45.0));
+    const TriangleMesh before = mesh;
+    const WeakRefitStats s = RefitWeakMeshVertices(&mesh, voxels, kVoxel, WeakRefitOptions());
+    EXPECT_GT(s.few_neighbours, 100);
+    EXPECT_LT(s.moved, s.weak);
+    const Eigen::Vector3d pole = kCentre + kRadius * dir;
+    for (size_t i = 0; i < mesh.vertices.size(); ++i)
+      if ((before.vertices[i].cast<double>() - pole).norm() < 15) {
+        EXPECT_EQ(mesh.vertices[i], before.vertices[i]) << "vertex " << i << " in the patch's middle moved";
+      }
+  }
+}
+
+TEST(WeakSurfaceRefit, MoveLimitKeepsFarVertices) {
+  TriangleMesh mesh = SphereMesh();
+  const Eigen::Vector3d dir = Eigen::Vector3d::UnitY();
+  const std::vector<char> patch = Patch(mesh, dir, 6.0);
+  const std::vector<CarvedVoxel> voxels = WeakVoxels(mesh, patch);
+  Displace(&mesh, WeakCells(mesh, patch), Dent(dir, 3.0, 8.0));
+  WeakRefitOptions o;
+  o.max_move_mm = 1.0;
+  o.min_move_mm = 0;
+  o.rim_drop_mm = 0;
+  const WeakRefitStats s = RefitWeakMeshVertices(&mesh, voxels, kVoxel, o);
+  EXPECT_GT(s.too_far, 10);
+  EXPECT_GT(s.moved, 0);  // the dent's shallow edge
+  EXPECT_LE(s.max_abs_move_mm, 1.0);
+}
+
+TEST(WeakSurfaceRefit, OptionsValidated) {
+  std::string why;
+  EXPECT_TRUE(ValidateWeakRefitOptions(WeakRefitOptions(), &why)) << why;
+  WeakRefitOptions o;
+  o.relative_votes = 1.0;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  EXPECT_NE(why.find("relative_votes"), std::string::npos);
+  o = WeakRefitOptions();
+  o.min_neighbours = 5;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.max_gap_deg = 0;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.min_move_mm = o.max_move_mm;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.rim_drop_mm = -1;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.max_residual_mm = std::nan("");
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+}
+
+}  // namespace
+}  // namespace objscan
