@@ -812,9 +812,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
             std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
-  if (options_.model.surface_method == 1) {
+  if (options_.model.surface_method == 1 && options_.model.weak_refit.relative_votes > 0) {
     const WeakRefitStats& w = model.weak_refit;
-    char line[300];
+    char line[512];
     std::snprintf(line, sizeof(line),
                   "weak vertices (< %.0f votes, median %.0f): %lld of %lld; %lld moved onto their strong neighbours' "
                   "surface (mean %.2f mm, max %.2f mm), %lld on flared rims removed (%lld triangles); left: %lld "

@@ -16,7 +16,7 @@ namespace objscan {
 bool ValidateWeakRefitOptions(const WeakRefitOptions& o, std::string* why) {
   std::ostringstream e;
   if (!(o.relative_votes >= 0 && o.relative_votes < 1)) e << "weak refit relative_votes must be in [0, 1); ";
-  if (!(o.radius_mm > 0) || !std::isfinite(o.radius_mm)) e << "weak refit radius_mm must be > 0; ";
+  if (!(o.radius_mm >= 1) || !std::isfinite(o.radius_mm)) e << "weak refit radius_mm must be >= 1; ";
   if (o.min_neighbours < 6) e << "weak refit min_neighbours must be >= 6; ";
   if (!(o.min_normal_cos >= -1 && o.min_normal_cos < 1)) e << "weak refit min_normal_cos must be in [-1, 1); ";
   if (!(o.max_gap_deg > 0 && o.max_gap_deg <= 360)) e << "weak refit max_gap_deg must be in (0, 360]; ";
@@ -26,21 +26,24 @@ bool ValidateWeakRefitOptions(const WeakRefitOptions& o, std::string* why) {
     e << "weak refit min_move_mm must be in [0, max_move_mm); ";
   if (!(o.rim_drop_mm >= 0 && o.rim_drop_mm < o.max_move_mm))
     e << "weak refit rim_drop_mm must be in [0, max_move_mm); ";
-  if (why) *why = e.str();
-  return e.str().empty();
+  const std::string msg = e.str();
+  if (why) *why = msg.empty() ? msg : msg.substr(0, msg.size() - 2);
+  return msg.empty();
 }
 
 namespace {
 
-// Votes of the final voxel whose centre is nearest to each point (within two voxels; 0 when none is).
-std::vector<double> VertexSupport(const std::vector<Eigen::Vector3d>& points, const std::vector<CarvedVoxel>& voxels,
-                                  double voxel_size) {
+// Votes of the final voxel whose centre is nearest to each used point (within two voxels; 0 when none is or the
+// point is unused).
+std::vector<double> VertexSupport(const std::vector<Eigen::Vector3d>& points, const std::vector<char>& used,
+                                  const std::vector<CarvedVoxel>& voxels, double voxel_size) {
   std::vector<Eigen::Vector3d> centres;
   centres.reserve(voxels.size());
   for (const CarvedVoxel& v : voxels) centres.push_back((v.ijk.cast<double>().array() + 0.5).matrix() * voxel_size);
   const PointGrid grid(centres, voxel_size);
   std::vector<double> support(points.size(), 0.0);
   for (size_t i = 0; i < points.size(); ++i) {
+    if (!used[i]) continue;
     double best = std::numeric_limits<double>::infinity();
     grid.ForEachWithin(points[i], 2 * voxel_size, [&](int j) {
       const double d = (centres[j] - points[i]).squaredNorm();
@@ -71,29 +74,36 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
   std::vector<char> used(n, 0);
   for (const auto& t : mesh->triangles)
     for (int k = 0; k < 3; ++k) used[t[k]] = 1;
+  // Non-finite vertices, and those beyond the voxel keys' range (2^20 voxels from the origin), are never moved and
+  // never a neighbour; nor are the others of their triangles' normals.
+  const float max_coordinate = static_cast<float>(voxel_size) * float{1 << 20};
+  std::vector<char> valid_triangle(mesh->triangles.size(), 1);
   for (size_t i = 0; i < n; ++i)
-    if (!mesh->vertices[i].allFinite()) used[i] = 0;  // never moved, never a neighbour
+    if (!mesh->vertices[i].allFinite() || !(mesh->vertices[i].cwiseAbs().maxCoeff() < max_coordinate)) used[i] = 0;
+  for (size_t t = 0; t < valid_triangle.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (!mesh->vertices[mesh->triangles[t][k]].allFinite() ||
+          !(mesh->vertices[mesh->triangles[t][k]].cwiseAbs().maxCoeff() < max_coordinate))
+        valid_triangle[t] = 0;
+  stats.vertices = std::count(used.begin(), used.end(), 1);
   if (outcomes) {
     outcomes->assign(n, WeakRefitOutcome::kUnused);
     for (size_t i = 0; i < n; ++i)
       if (used[i]) (*outcomes)[i] = WeakRefitOutcome::kStrong;
   }
-  if (o.relative_votes <= 0 || mesh->triangles.empty() || voxels.empty() ||
-      std::find(used.begin(), used.end(), 1) == used.end())
-    return stats;
+  if (o.relative_votes <= 0 || !(voxel_size > 0) || voxels.empty() || stats.vertices == 0) return stats;
   const auto leave = [&](size_t i, WeakRefitOutcome why, int64_t* count) {
     ++*count;
     if (outcomes) (*outcomes)[i] = why;
   };
-  const std::vector<Eigen::Vector3f> normal_f = VertexNormals(*mesh);
+  const std::vector<Eigen::Vector3f> normal_f = VertexNormals(*mesh, &valid_triangle);
   std::vector<Eigen::Vector3d> points(n);
   for (size_t i = 0; i < n; ++i) points[i] = mesh->vertices[i].cast<double>();
-  const std::vector<double> support = VertexSupport(points, voxels, voxel_size);
+  const std::vector<double> support = VertexSupport(points, used, voxels, voxel_size);
 
   std::vector<double> used_support;
   for (size_t i = 0; i < n; ++i)
     if (used[i]) used_support.push_back(support[i]);
-  stats.vertices = static_cast<int64_t>(used_support.size());
   std::nth_element(used_support.begin(), used_support.begin() + used_support.size() / 2, used_support.end());
   stats.median_votes = used_support[used_support.size() / 2];
   const double weak_below = o.relative_votes * stats.median_votes;
@@ -123,7 +133,7 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
     if (!used[i] || support[i] >= weak_below) continue;
     ++stats.weak;
     const Eigen::Vector3d p = points[i], nrm = normal_f[i].cast<double>();
-    if (nrm.squaredNorm() == 0) {
+    if (!(nrm.squaredNorm() > 0)) {
       leave(i, WeakRefitOutcome::kPoorFit, &stats.poor_fit);
       continue;
     }
@@ -176,7 +186,7 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
     }
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(normal_matrix.selfadjointView<Eigen::Lower>());
     const Eigen::Matrix<double, 6, 1> lambda = eig.eigenvalues();  // ascending
-    bool fitted = eig.info() == Eigen::Success && weight_sum > 0 && lambda[0] > 1e-12 * lambda[5];
+    bool fitted = eig.info() == Eigen::Success && weight_sum > 0 && lambda[0] > 1e-8 * lambda[5];
     Eigen::Matrix<double, 6, 1> c = Eigen::Matrix<double, 6, 1>::Zero();
     if (fitted) {
       c = eig.eigenvectors() * (eig.eigenvectors().transpose() * rhs).cwiseQuotient(lambda);

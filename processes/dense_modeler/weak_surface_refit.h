@@ -2,10 +2,12 @@
 // The mesh's largest errors sit where few dense points voted: a dent where one pair's biased points made the ridge,
 // the shadowed junction with the floor. The surface fit before meshing (SmoothSurfacePoints) cannot pull such a spot
 // back when most points around it are as weak as it is. RefitWeakMeshVertices looks at the final mesh instead: a
-// vertex's support is the votes of the final voxel nearest to it; a vertex with less than relative_votes x the
-// median support is weak. A weak vertex surrounded by strong vertices of the same surface side (normals within
-// acos(min_normal_cos) of its own, their directions around it in its tangent plane leaving no gap wider than
-// max_gap_deg, at least min_neighbours within radius_mm) gets the surface they define: a quadratic height field
+// vertex's support is the votes of the final voxel whose centre is nearest to it, within two voxels (0 when none is:
+// the vertex is weak); a vertex with less than relative_votes x the median support is weak. The fits use one strong
+// vertex per voxel (the first in vertex order). A weak vertex surrounded by them on the same surface side (normals
+// strictly closer than acos(min_normal_cos) to its own, their directions around it in the tangent plane leaving no
+// gap wider than max_gap_deg, at least min_neighbours within radius_mm) gets the surface they define: a quadratic
+// height field
 // h(u, v) = a + b u + c v + d u^2 + e u v + f v^2 over the vertex, in the frame of the strong vertices' mean normal
 // (its own normal is as unreliable as its position), weighted by votes x a Gaussian of the distance (sigma
 // radius_mm / 2), fitted by least squares. The vertex moves along that normal by h(0, 0) when the fit explains
@@ -15,6 +17,8 @@
 // (same gates) puts it more than rim_drop_mm off, it is a rim flared off the surface (the shadowed junction with the
 // floor) and is removed with its triangles.
 // Only weak vertices move, and they are fitted to strong vertices alone, so the result does not depend on their order.
+// Vertices that are not finite or lie 2^20 voxels or more from the origin are left as they are and take no part
+// (nor do the triangles they belong to in the normals).
 // Mesh in mm, world frame; voxel (i, j, k) has its centre at (i + 0.5, j + 0.5, k + 0.5) x voxel_size_mm. Never throws
 // beyond std::bad_alloc.
 #pragma once
@@ -30,8 +34,9 @@ namespace objscan {
 
 struct WeakRefitOptions {
   double relative_votes = 0.1;   // a vertex is weak below this fraction of the median vertex support (0 = off), [0, 1)
-  double radius_mm = 25.0;       // mm, strong vertices within this of a weak one fit its surface, > 0
-  int min_neighbours = 20;       // strong vertices the fit needs at least (>= 6, the height field's parameters)
+  double radius_mm = 25.0;       // mm, strong vertices within this of a weak one fit its surface, >= 1
+  int min_neighbours = 20;       // strong vertices (one per voxel) the fit needs at least (>= 6, the height field's
+                                 // parameters)
   double min_normal_cos = 0.8;   // strong vertices need normals within acos(this) of the weak one's, [-1, 1)
   double max_gap_deg = 120.0;    // deg, largest angle around the weak vertex (tangent plane) without a strong one:
                                  // a vertex at a rim or a hole's edge is extrapolated, not interpolated, (0, 360]
@@ -80,7 +85,8 @@ enum class WeakRefitOutcome : int8_t {
 // voxels are the final model's voxels (their votes give the support). Nothing changes when options.relative_votes
 // is 0, the mesh has no triangles or voxels is empty (outcomes then say kStrong for every used vertex). outcomes
 // (optional) gets one entry per vertex of the output mesh (renumbered as KeepMeshTriangles does when rim triangles
-// were removed; dropped vertices are counted in the stats only).
+// were removed). Removing a rim vertex's triangles can leave a neighbour with no triangle: it leaves the mesh too,
+// uncounted, and may be among those counted as moved.
 WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<CarvedVoxel>& voxels, double voxel_size_mm,
                                      const WeakRefitOptions& options,
                                      std::vector<WeakRefitOutcome>* outcomes = nullptr);

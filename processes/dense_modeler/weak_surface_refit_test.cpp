@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -182,7 +183,11 @@ TEST(WeakSurfaceRefit, OffOrNothingWeakLeavesTheMeshIdentical) {
       EXPECT_TRUE(with_nan.vertices[i].allFinite()) << "vertex " << i;
     }
   // No voxels, no triangles.
-  EXPECT_EQ(RefitWeakMeshVertices(&mesh, {}, kVoxel, WeakRefitOptions()).weak, 0);
+  s = RefitWeakMeshVertices(&mesh, {}, kVoxel, WeakRefitOptions(), &outcome);
+  EXPECT_EQ(s.weak, 0);
+  EXPECT_EQ(mesh.vertices, before.vertices);
+  EXPECT_EQ(mesh.triangles, before.triangles);
+  EXPECT_EQ(outcome, std::vector<WeakRefitOutcome>(mesh.vertices.size(), WeakRefitOutcome::kStrong));
   TriangleMesh empty;
   EXPECT_EQ(RefitWeakMeshVertices(&empty, voxels, kVoxel, WeakRefitOptions()).weak, 0);
 }
@@ -220,32 +225,49 @@ TEST(WeakSurfaceRefit, WeakRimStaysOnTheSurfaceAndIsDroppedOffIt) {
   EXPECT_EQ(kept.vertices, mesh.vertices);
   EXPECT_EQ(kept.triangles, mesh.triangles);
 
-  // Flared 2 mm outwards: still never moved; with rim_drop_mm off nothing changes, by default the border's weak
-  // vertices (2 mm off the extrapolated fit) go with their triangles.
-  Displace(&mesh, weak, [](const Eigen::Vector3d&) { return 2.0; });
+  // The rim flared 2 mm outwards, the voxels under the flared mesh (weak where a rim vertex is): still never moved;
+  // with rim_drop_mm off nothing changes, by default the border's flared vertices (2 mm off the extrapolated fit)
+  // go with their triangles.
+  Displace(&mesh, rim, [](const Eigen::Vector3d&) { return 2.0; });
+  const std::vector<char> weak_flared = WeakCells(mesh, rim);
+  const std::vector<CarvedVoxel> voxels_flared = WeakVoxels(mesh, rim);
   TriangleMesh flared = mesh;
   WeakRefitOptions no_drop;
   no_drop.rim_drop_mm = 0;
-  s = RefitWeakMeshVertices(&flared, voxels, kVoxel, no_drop);
+  s = RefitWeakMeshVertices(&flared, voxels_flared, kVoxel, no_drop);
   EXPECT_EQ(s.moved, 0);
   EXPECT_EQ(s.not_surrounded, s.weak);
   EXPECT_EQ(flared.vertices, mesh.vertices);
 
   std::vector<WeakRefitOutcome> outcome;
-  s = RefitWeakMeshVertices(&flared, voxels, kVoxel, WeakRefitOptions(), &outcome);
-  int64_t weak_border = 0;
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) weak_border += weak[i] && border[i];
+  s = RefitWeakMeshVertices(&flared, voxels_flared, kVoxel, WeakRefitOptions(), &outcome);
+  int64_t flared_border = 0;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) flared_border += rim[i] && border[i];
   EXPECT_EQ(s.moved, 0);
-  EXPECT_EQ(s.rim_vertices_dropped, weak_border);
-  EXPECT_GT(s.rim_triangles_dropped, weak_border);
+  EXPECT_EQ(s.rim_vertices_dropped, flared_border);
+  EXPECT_GT(s.rim_triangles_dropped, flared_border);
   EXPECT_EQ(static_cast<int64_t>(flared.triangles.size()),
             static_cast<int64_t>(mesh.triangles.size()) - s.rim_triangles_dropped);
+  // The surviving vertices are the input's, unmoved (found by position), and the outcomes follow the renumbering:
+  // weak ones (the inner rows of the flared band, and unflared vertices sharing their voxels) not surrounded, the
+  // others strong.
+  std::map<std::array<float, 3>, size_t> input_index;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i)
+    input_index[{{mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z()}}] = i;
   ASSERT_EQ(outcome.size(), flared.vertices.size());
+  int64_t strong = 0, flared_left = 0;
   for (size_t i = 0; i < flared.vertices.size(); ++i) {
-    EXPECT_NE(outcome[i], WeakRefitOutcome::kRimDropped);
-    // The surviving vertices are the input's, unmoved (the inner rows of the flared band among them).
-    EXPECT_LT(std::abs(RadialError(flared.vertices[i])), 2.1);
+    const auto it = input_index.find({{flared.vertices[i].x(), flared.vertices[i].y(), flared.vertices[i].z()}});
+    ASSERT_NE(it, input_index.end()) << "vertex " << i << " moved";
+    const size_t j = it->second;
+    EXPECT_FALSE(rim[j] && border[j]) << "flared border vertex " << j << " kept";
+    EXPECT_EQ(outcome[i], weak_flared[j] ? WeakRefitOutcome::kNotSurrounded : WeakRefitOutcome::kStrong)
+        << "vertex " << i;
+    strong += !weak_flared[j];
+    flared_left += rim[j];
   }
+  EXPECT_GT(strong, 1000);
+  EXPECT_GT(flared_left, 100);
 }
 
 TEST(WeakSurfaceRefit, NoisyOrSparseStrongSurfaceLeavesTheWeakVertex) {
@@ -318,6 +340,19 @@ TEST(WeakSurfaceRefit, OptionsValidated) {
   o = WeakRefitOptions();
   o.rim_drop_mm = -1;
   EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.rim_drop_mm = o.max_move_mm;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.radius_mm = 0.5;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.min_normal_cos = 1;
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  o = WeakRefitOptions();
+  o.max_move_mm = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  EXPECT_NE(why.substr(why.size() - 2), "; ") << why;  // no trailing separator
   o = WeakRefitOptions();
   o.max_residual_mm = std::nan("");
   EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
