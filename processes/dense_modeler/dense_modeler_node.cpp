@@ -914,6 +914,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_hidden_vertices", static_cast<double>(model.visibility.vertices_removed));
   status_.SetValue("final_curled_triangles", static_cast<double>(model.ridge.curled_triangles_dropped));
   status_.SetValue("final_voxels_off_mesh", static_cast<double>(model.voxels_without_mesh));
+  status_.SetValue("final_weak_vertices", static_cast<double>(model.weak_refit.weak));
+  status_.SetValue("final_weak_moved", static_cast<double>(model.weak_refit.moved));
+  status_.SetValue("final_rim_vertices_removed", static_cast<double>(model.weak_refit.rim_vertices_dropped));
   status_.SetValue("final_carving_s", model.times.carving_s);
   status_.SetValue("final_visibility_s", model.times.visibility_s);
   status_.SetValue("final_refinement_samples", static_cast<double>(model.refinement.samples_scored));

@@ -43,7 +43,8 @@
 // pair_ms, vote_ms, carving_views, central_track_ids (track ids whose central views are counted), roi_source (0 none, 1
 // target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase final_ms,
 // final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_crevice_band_dropped, final_carved,
-// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_carving_s, final_visibility_s,
+// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_weak_vertices, final_weak_moved,
+// final_rim_vertices_removed (weak_surface_refit.h), final_carving_s, final_visibility_s,
 // final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
 // (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s. Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.

@@ -201,7 +201,8 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_EQ(StatusValue(last, "final_voxels"), m.num_voxels);
   EXPECT_EQ(StatusValue(last, "final_triangles"), m.num_mesh_triangles);
   for (const char* name : {"final_floor_band_dropped", "final_carved", "final_hidden_vertices",
-                           "final_curled_triangles", "final_voxels_off_mesh", "final_carving_s", "final_visibility_s"})
+                           "final_curled_triangles", "final_voxels_off_mesh", "final_weak_vertices", "final_weak_moved",
+                           "final_rim_vertices_removed", "final_carving_s", "final_visibility_s"})
     EXPECT_GE(StatusValue(last, name), 0.0) << name;
   // Snapshot on request, loadable, same content.
   PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer", dir_ + "/snap.bin");
