@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <numeric>
 #include <unordered_map>
 #include <utility>
 
@@ -189,7 +190,7 @@ bool IsClosedOrientedMesh(const TriangleMesh& mesh) {
   return !mesh.triangles.empty();
 }
 
-int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep) {
+int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep, std::vector<int32_t>* new_index_out) {
   std::vector<int32_t> new_index(mesh->vertices.size(), -1);
   TriangleMesh out;
   int64_t dropped = 0;
@@ -211,6 +212,10 @@ int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep) {
     out.triangles.push_back(u);
   }
   if (dropped > 0) *mesh = std::move(out);
+  if (new_index_out) {
+    if (dropped == 0) std::iota(new_index.begin(), new_index.end(), 0);  // the mesh, unused vertices too, stays
+    new_index_out->swap(new_index);
+  }
   return dropped;
 }
 
@@ -314,14 +319,13 @@ void RingsFromBorder(const TriangleMesh& mesh, const std::vector<char>& keep, co
   }
 }
 
-// Drops the kept triangles touching a flagged vertex.
+}  // namespace
+
 void DropTrianglesAt(const TriangleMesh& mesh, const std::vector<char>& flagged, std::vector<char>* keep) {
   for (size_t t = 0; t < keep->size(); ++t)
     if ((*keep)[t] && (flagged[mesh.triangles[t][0]] || flagged[mesh.triangles[t][1]] || flagged[mesh.triangles[t][2]]))
       (*keep)[t] = 0;
 }
-
-}  // namespace
 
 int64_t TrimMeshBorder(TriangleMesh* mesh, int rings) {
   if (rings <= 0 || mesh->triangles.empty()) return 0;

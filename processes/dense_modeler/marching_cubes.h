@@ -55,7 +55,12 @@ bool MarkBorderVertices(const TriangleMesh& mesh, const std::vector<char>& keep,
 
 // Keeps the triangles t with keep[t] (one flag per triangle), in their order, and the vertices they use, renumbered
 // in the order the kept triangles first use them. Returns the triangles dropped; the mesh is unchanged when none is.
-int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep);
+// new_index (optional) gets, per input vertex, its index in the output mesh (-1: gone; the identity when nothing was
+// dropped).
+int64_t KeepMeshTriangles(TriangleMesh* mesh, const std::vector<char>& keep, std::vector<int32_t>* new_index = nullptr);
+
+// Clears keep[t] for the triangles t with a vertex v with flagged[v].
+void DropTrianglesAt(const TriangleMesh& mesh, const std::vector<char>& flagged, std::vector<char>* keep);
 
 // Drops the connected pieces of the mesh (triangles sharing vertices) with fewer triangles than min_fraction of the
 // largest piece. When any is dropped, the vertices are renumbered in the order the kept triangles first use them

@@ -125,6 +125,28 @@ TEST(MarchingCubes, SmallMeshPiecesRemoved) {
 
 // The upper half of a sphere (open along its equator): each ring peeled off its border lowers the rim by about a
 // triangle; a closed sphere has no border and stays as it is.
+TEST(MarchingCubes, KeepMeshTrianglesReportsWhereVerticesWent) {
+  TriangleMesh mesh = ExtractIsosurface(SphereVolume(20, 1.0, Eigen::Vector3d(10, 10, 10), 6), 0.f);
+  const TriangleMesh before = mesh;
+  std::vector<char> keep(mesh.triangles.size(), 1);
+  std::vector<int32_t> new_index;
+  EXPECT_EQ(KeepMeshTriangles(&mesh, keep, &new_index), 0);
+  ASSERT_EQ(new_index.size(), before.vertices.size());
+  for (size_t i = 0; i < new_index.size(); ++i) EXPECT_EQ(new_index[i], static_cast<int32_t>(i));
+  for (size_t t = 0; t < keep.size(); t += 2) keep[t] = 0;
+  const int64_t dropped = KeepMeshTriangles(&mesh, keep, &new_index);
+  EXPECT_EQ(dropped, static_cast<int64_t>((keep.size() + 1) / 2));
+  ASSERT_EQ(new_index.size(), before.vertices.size());
+  size_t kept = 0;
+  for (size_t i = 0; i < new_index.size(); ++i) {
+    if (new_index[i] < 0) continue;
+    ++kept;
+    ASSERT_LT(new_index[i], static_cast<int32_t>(mesh.vertices.size()));
+    EXPECT_EQ(mesh.vertices[new_index[i]], before.vertices[i]) << "vertex " << i;
+  }
+  EXPECT_EQ(kept, mesh.vertices.size());
+}
+
 TEST(MarchingCubes, TrimMeshBorderPeelsRingsOffOpenBordersOnly) {
   const double spacing = 2.0, radius = 25.0;
   const Eigen::Vector3d center(31.3, 30.7, 32.1);

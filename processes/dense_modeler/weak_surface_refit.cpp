@@ -77,14 +77,12 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
   // Non-finite vertices, and those beyond the voxel keys' range (2^20 voxels from the origin), are never moved and
   // never a neighbour; nor are the others of their triangles' normals.
   const float max_coordinate = static_cast<float>(voxel_size) * float{1 << 20};
-  std::vector<char> valid_triangle(mesh->triangles.size(), 1);
-  for (size_t i = 0; i < n; ++i)
-    if (!mesh->vertices[i].allFinite() || !(mesh->vertices[i].cwiseAbs().maxCoeff() < max_coordinate)) used[i] = 0;
-  for (size_t t = 0; t < valid_triangle.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      if (!mesh->vertices[mesh->triangles[t][k]].allFinite() ||
-          !(mesh->vertices[mesh->triangles[t][k]].cwiseAbs().maxCoeff() < max_coordinate))
-        valid_triangle[t] = 0;
+  std::vector<char> invalid(n, 0), valid_triangle(mesh->triangles.size(), 1);
+  for (size_t i = 0; i < n; ++i) {
+    invalid[i] = !(mesh->vertices[i].allFinite() && mesh->vertices[i].cwiseAbs().maxCoeff() < max_coordinate);
+    if (invalid[i]) used[i] = 0;
+  }
+  DropTrianglesAt(*mesh, invalid, &valid_triangle);
   stats.vertices = std::count(used.begin(), used.end(), 1);
   if (outcomes) {
     outcomes->assign(n, WeakRefitOutcome::kUnused);
@@ -231,22 +229,15 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
   if (!moves.empty()) stats.mean_abs_move_mm = sum / moves.size();
   if (stats.rim_vertices_dropped == 0) return stats;
   std::vector<char> keep(mesh->triangles.size(), 1);
-  for (size_t t = 0; t < keep.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      if (drop[mesh->triangles[t][k]]) keep[t] = 0;
-  if (outcomes) {  // KeepMeshTriangles numbers the vertices in the order the kept triangles first use them
-    std::vector<WeakRefitOutcome> renumbered;
-    std::vector<char> seen(n, 0);
-    for (size_t t = 0; t < keep.size(); ++t)
-      if (keep[t])
-        for (int k = 0; k < 3; ++k)
-          if (!seen[mesh->triangles[t][k]]) {
-            seen[mesh->triangles[t][k]] = 1;
-            renumbered.push_back((*outcomes)[mesh->triangles[t][k]]);
-          }
+  DropTrianglesAt(*mesh, drop, &keep);
+  std::vector<int32_t> new_index;
+  stats.rim_triangles_dropped = KeepMeshTriangles(mesh, keep, &new_index);
+  if (outcomes) {
+    std::vector<WeakRefitOutcome> renumbered(mesh->vertices.size());
+    for (size_t i = 0; i < n; ++i)
+      if (new_index[i] >= 0) renumbered[new_index[i]] = (*outcomes)[i];
     outcomes->swap(renumbered);
   }
-  stats.rim_triangles_dropped = KeepMeshTriangles(mesh, keep);
   return stats;
 }
 

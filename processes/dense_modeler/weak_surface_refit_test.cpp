@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <random>
@@ -324,38 +325,28 @@ TEST(WeakSurfaceRefit, MoveLimitKeepsFarVertices) {
 TEST(WeakSurfaceRefit, OptionsValidated) {
   std::string why;
   EXPECT_TRUE(ValidateWeakRefitOptions(WeakRefitOptions(), &why)) << why;
-  WeakRefitOptions o;
-  o.relative_votes = 1.0;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  EXPECT_NE(why.find("relative_votes"), std::string::npos);
-  o = WeakRefitOptions();
-  o.min_neighbours = 5;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.max_gap_deg = 0;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.min_move_mm = o.max_move_mm;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.rim_drop_mm = -1;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.rim_drop_mm = o.max_move_mm;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.radius_mm = 0.5;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.min_normal_cos = 1;
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  o = WeakRefitOptions();
-  o.max_move_mm = std::numeric_limits<double>::infinity();
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
-  EXPECT_NE(why.substr(why.size() - 2), "; ") << why;  // no trailing separator
-  o = WeakRefitOptions();
-  o.max_residual_mm = std::nan("");
-  EXPECT_FALSE(ValidateWeakRefitOptions(o, &why));
+  // One bad field each, on top of the defaults; first: the field the message must name ("" = not checked).
+  const std::vector<std::pair<std::string, std::function<void(WeakRefitOptions*)>>> bad = {
+      {"relative_votes", [](WeakRefitOptions* o) { o->relative_votes = 1.0; }},
+      {"", [](WeakRefitOptions* o) { o->min_neighbours = 5; }},
+      {"", [](WeakRefitOptions* o) { o->max_gap_deg = 0; }},
+      {"", [](WeakRefitOptions* o) { o->min_move_mm = o->max_move_mm; }},
+      {"", [](WeakRefitOptions* o) { o->rim_drop_mm = -1; }},
+      {"", [](WeakRefitOptions* o) { o->rim_drop_mm = o->max_move_mm; }},
+      {"", [](WeakRefitOptions* o) { o->radius_mm = 0.5; }},
+      {"", [](WeakRefitOptions* o) { o->min_normal_cos = 1; }},
+      {"", [](WeakRefitOptions* o) { o->max_move_mm = std::numeric_limits<double>::infinity(); }},
+      {"", [](WeakRefitOptions* o) { o->max_residual_mm = std::nan(""); }},
+  };
+  for (size_t k = 0; k < bad.size(); ++k) {
+    WeakRefitOptions o;
+    bad[k].second(&o);
+    EXPECT_FALSE(ValidateWeakRefitOptions(o, &why)) << "case " << k;
+    if (!bad[k].first.empty()) {
+      EXPECT_NE(why.find(bad[k].first), std::string::npos) << why;
+    }
+    EXPECT_NE(why.substr(why.size() - 2), "; ") << why;  // no trailing separator
+  }
 }
 
 }  // namespace
