@@ -18,7 +18,8 @@
 //       carry the samples' spacing (1 random sample per mm^2: p90 0.86 mm for a perfect model), are then printed as
 //       sample_accuracy_*.
 //       --write-aligned FILE writes the model points as scored (after --align; "x y z" per line, truth frame) and
-//       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are.
+//       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are;
+//       --write-errors FILE writes "x y z distance" per model point (truth frame, the accuracy_* distances).
 // Output is one "key value" pair per line (easy to grep in tests and scripts).
 #include <cmath>
 #include <cstdio>
@@ -50,7 +51,7 @@ int main(int argc, char** argv) {
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
                  "[--align EST TRUTH] [--truth-mesh MESH] [--visible-from POSES] [--min-views N] [--no-occlusion] "
-                 "[--intrinsics fx,fy,cx,cy,w,h]\n");
+                 "[--intrinsics fx,fy,cx,cy,w,h] [--write-aligned F] [--write-visible F] [--write-errors F]\n");
     return 2;
   }
   const std::string command = argv[1];
@@ -80,7 +81,7 @@ int main(int argc, char** argv) {
   }
   if (command == "surface") {
     double threshold = 2.0, min_z = -1e300;
-    std::string align_est, align_truth, visible_from, write_aligned, write_visible, truth_mesh;
+    std::string align_est, align_truth, visible_from, write_aligned, write_visible, write_errors, truth_mesh;
     ViewIntrinsics intrinsics;
     int min_views = 2;
     bool occlusion = true;
@@ -104,6 +105,8 @@ int main(int argc, char** argv) {
         write_aligned = argv[++i];
       } else if (a == "--truth-mesh" && i + 1 < argc) {
         truth_mesh = argv[++i];
+      } else if (a == "--write-errors" && i + 1 < argc) {
+        write_errors = argv[++i];
       } else if (a == "--write-visible" && i + 1 < argc) {
         write_visible = argv[++i];
       } else if (a == "--align" && i + 2 < argc) {
@@ -136,7 +139,8 @@ int main(int argc, char** argv) {
     }
     if (!write_aligned.empty() && !WriteXyz(write_aligned, model, &error)) return Fail(error);
     if (!write_visible.empty() && !WriteXyz(write_visible, visible, &error)) return Fail(error);
-    const SurfaceEvaluation samples = EvaluateSurface(model, truth, visible, threshold);
+    std::vector<double> distances;
+    const SurfaceEvaluation samples = EvaluateSurface(model, truth, visible, threshold, &distances);
     const SurfaceEvaluation v = EvaluateSurface(model, visible, threshold);
     SurfaceEvaluation s = samples;
     if (!truth_mesh.empty()) {
@@ -145,7 +149,13 @@ int main(int argc, char** argv) {
       if (!ReadPlyMesh(truth_mesh, &mesh_vertices, &mesh_triangles, &error)) return Fail(error);
       const MeshDistance distance(mesh_vertices, mesh_triangles);
       if (distance.empty()) return Fail(truth_mesh + ": no usable triangle");
-      s = EvaluateSurfaceToMesh(model, distance, visible, threshold);
+      s = EvaluateSurfaceToMesh(model, distance, visible, threshold, &distances);
+    }
+    if (!write_errors.empty()) {
+      std::ofstream out(write_errors);
+      for (size_t i = 0; i < model.size() && i < distances.size(); ++i)
+        out << model[i].x() << ' ' << model[i].y() << ' ' << model[i].z() << ' ' << distances[i] << '\n';
+      if (!out) return Fail("cannot write " + write_errors);
     }
     std::printf(
         "model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"

@@ -500,14 +500,16 @@ double Completeness(const std::vector<Eigen::Vector3d>& model, const std::vector
 template <typename DistanceFn>
 SurfaceEvaluation Evaluate(const std::vector<Eigen::Vector3d>& model,
                            const std::vector<Eigen::Vector3d>& completeness_truth, double completeness_threshold,
-                           bool truth_empty, DistanceFn&& distance_to_truth) {
+                           bool truth_empty, std::vector<double>* distances, DistanceFn&& distance_to_truth) {
   SurfaceEvaluation r;
+  if (distances) distances->clear();
   r.num_model = static_cast<int>(model.size());
   r.num_truth = static_cast<int>(completeness_truth.size());
   if (model.empty() || truth_empty || completeness_truth.empty()) return r;
   std::vector<double> d;
   d.reserve(model.size());
   for (const auto& p : model) d.push_back(distance_to_truth(p));
+  if (distances) *distances = d;
   SetAccuracy(std::move(d), &r);
   r.completeness = Completeness(model, completeness_truth, completeness_threshold);
   return r;
@@ -517,17 +519,17 @@ SurfaceEvaluation Evaluate(const std::vector<Eigen::Vector3d>& model,
 
 SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& model, const MeshDistance& truth_mesh,
                                         const std::vector<Eigen::Vector3d>& completeness_truth,
-                                        double completeness_threshold) {
-  return Evaluate(model, completeness_truth, completeness_threshold, truth_mesh.empty(),
+                                        double completeness_threshold, std::vector<double>* distances) {
+  return Evaluate(model, completeness_truth, completeness_threshold, truth_mesh.empty(), distances,
                   [&](const Eigen::Vector3d& p) { return truth_mesh.Distance(p); });
 }
 
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth,
-                                  double completeness_threshold) {
+                                  double completeness_threshold, std::vector<double>* distances) {
   const PointGrid truth_grid(accuracy_truth, std::max(completeness_threshold, 1e-9));
-  return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(),
+  return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(), distances,
                   [&](const Eigen::Vector3d& p) { return truth_grid.NearestExact(p); });
 }
 

@@ -106,17 +106,19 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, con
                                   double completeness_threshold);
 // The same with separate truth sets: accuracy against accuracy_truth (the whole true surface: a model point on a
 // part no camera saw is still on the surface), completeness over completeness_truth (the part that could be seen).
+// distances (optional) receives every model point's distance, in model order.
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth,
-                                  double completeness_threshold);
+                                  double completeness_threshold, std::vector<double>* distances = nullptr);
 
 // Accuracy as the exact distance from every model point to the true surface (truth_mesh: the surface the simulator
 // rendered), completeness as in EvaluateSurface (truth points within completeness_threshold of a model point). The
 // point-to-sample accuracy of EvaluateSurface carries the samples' spacing: with 1 random sample per mm^2 a model
-// lying exactly on the surface scores p50 0.47, p90 0.86 and, over 10^5 points, max ~1.9 (mm).
+// lying exactly on the surface scores p50 0.47, p90 0.86 and, over 10^5 points, max ~1.9 (mm). distances (optional)
+// receives every model point's distance, in model order (e.g. to see where the errors are).
 SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& model, const MeshDistance& truth_mesh,
                                         const std::vector<Eigen::Vector3d>& completeness_truth,
-                                        double completeness_threshold);
+                                        double completeness_threshold, std::vector<double>* distances = nullptr);
 
 }  // namespace objscan
