@@ -49,6 +49,11 @@ scene() {
   check "$name mesh completeness" "$(value completeness "$d/mesh.txt")" ">=" 0.95 target
 }
 
+# Measured 3 Dec, afternoon, with the blob's generator fixed (make_blob_mesh.py: r no longer depends on phi at the
+# poles; before, each pole was a pinwheel of five spikes and dips with ~7 mm of relief within 5 mm, the cap's "bumps"
+# below, and the blob stood on the south pole's spikes, the floor contact below): mesh (blob) 0.100, 0.340, 1.74,
+# 0.991, 1.09 (the worst vertices are on a flank 26 mm above the floor); its mesh max bound is the issue's 3 mm too.
+# The figures below are of the old blob.
 # Measured 3 Dec (weakly voted mesh vertices refitted to their strong neighbours' surface, flared weak rims removed,
 # weak_surface_refit.h; mesh p50, p90, max, completeness; voxel centres p90): box 0.109, 0.377, 2.96, 0.959, 1.02;
 # cylinder 0.085, 0.308, 2.52, 0.986, 1.04; mesh (blob) 0.108, 0.382, 3.85, 0.952, 1.11 (over 3 mm: ~30 vertices
@@ -91,7 +96,7 @@ scene() {
 # check: box 4.92, 1.68; cylinder 2.21, 1.52; blob 2.48, 1.44.)
 scene box 0.5 3.0 1.3 0.945 0.91
 scene cylinder 0.5 3.0 1.3 0.97 0.94
-scene mesh 0.5 4.5 1.3 0.94 0.93
+scene mesh 0.5 3.0 1.3 0.97 0.96
 
 [ "$FAILED" = 0 ] || fail "accuracy below the bounds above"
 echo "PASS: dense model accuracy on the box, cylinder and mesh scenes"

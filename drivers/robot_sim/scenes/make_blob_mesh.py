@@ -1,8 +1,12 @@
 #!/usr/bin/env python3
 """Writes blob.ply: a closed, bumpy, star-shaped blob (mm) for robot_sim's mesh.scene.
 
-r(theta, phi) = 100 * (1 + 0.12 sin(3 phi) sin(theta)^2 + 0.08 cos(2 theta) + 0.05 sin(5 phi + 2 theta)),
+r(theta, phi) = 100 * (1 + 0.12 sin(3 phi) sin(theta)^2 + 0.08 cos(2 theta) + 0.05 sin(5 phi + 2 theta) sin(theta)^2),
 flattened to 0.75 in z; latitude-longitude grid with pole vertices; ASCII PLY, counter-clockwise outward faces.
+Both phi terms fade with sin(theta)^2 towards the poles, so r is one value there and the surface is smooth (C1).
+Until 3 Dec the 5-phi term had no such factor: r at theta -> 0 depended on phi, and the grid's first ring around
+each pole was a pinwheel of five spikes and dips with ~7 mm of relief within 5 mm of the pole (a defect of the
+formula, not a shape any sensor resolves).
 """
 import math
 
@@ -11,7 +15,7 @@ verts, faces = [], []
 verts.append((0.0, 0.0, 0.0))  # north pole placeholder, set below
 def radius(theta, phi):
     return 100.0 * (1 + 0.12 * math.sin(3 * phi) * math.sin(theta) ** 2 + 0.08 * math.cos(2 * theta)
-                    + 0.05 * math.sin(5 * phi + 2 * theta))
+                    + 0.05 * math.sin(5 * phi + 2 * theta) * math.sin(theta) ** 2)
 verts[0] = (0.0, 0.0, 0.75 * radius(0.0, 0.0))
 for i in range(1, RINGS):
     theta = math.pi * i / RINGS
