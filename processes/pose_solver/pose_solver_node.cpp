@@ -213,7 +213,7 @@ void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
   TrackFrame frame;
   std::string error;
   if (!TracksFromMessage(msg, &frame, &error)) {
-    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    status_.Reject(error, "seq " + std::to_string(msg.seq), "tracks", msg.seq);  // received, not dropped
     return;
   }
   if (frame.width <= 0 || frame.height <= 0) {
@@ -223,13 +223,14 @@ void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
   if (have_camera_ && (frame.width != camera_.width || frame.height != camera_.height)) {
     status_.Reject(
         "tracks: image size differs from camera_info",
-        "seq " + std::to_string(msg.seq) + " " + std::to_string(frame.width) + "x" + std::to_string(frame.height));
+        "seq " + std::to_string(msg.seq) + " " + std::to_string(frame.width) + "x" + std::to_string(frame.height),
+        "tracks", msg.seq);
     return;
   }
   for (const auto& t : frame.features) {
     if (t.u < -0.5f || t.v < -0.5f || (frame.width > 0 && t.u > frame.width - 0.5f) ||
         (frame.height > 0 && t.v > frame.height - 0.5f)) {
-      status_.Reject("tracks: coordinate outside the image", "seq " + std::to_string(msg.seq));
+      status_.Reject("tracks: coordinate outside the image", "seq " + std::to_string(msg.seq), "tracks", msg.seq);
       return;
     }
   }

@@ -221,6 +221,29 @@ TEST(PoseSolverNode, RejectsBadInputWithoutCorruptingState) {
   EXPECT_EQ(node.status().rejected("tracks: after end of stream"), 1);
 }
 
+TEST(PoseSolverNode, RejectedTracksAreNotCountedAsDropped) {
+  SyntheticOrbitOptions so;
+  so.num_frames = 12;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  auto bus = MakeLcmBus("memq://");
+  PoseSolverNodeOptions o;
+  o.exit_when_finished = false;
+  PoseSolverNode node(*bus, o);
+  bus->PublishMessage("CAMERA_INFO", CameraToMessage(s.camera, 0));
+  for (int f = 0; f < 12; ++f) {
+    bus->PublishMessage("ROBOT_ODOMETRY", OdometryToMessage(s.odometry[f]));
+    feature_tracks_t m = TracksToMessage(s.frames[f]);
+    if (f == 4) m.u[0] = NAN;         // received, rejected: not a drop
+    if (f == 6) m.v[1] = 900;         // outside the image: not a drop either
+    if (f == 7) m.image_width = 320;  // wrong size: nor this
+    if (f == 9) continue;             // never sent: one drop
+    bus->PublishMessage("FEATURE_TRACKS", m);
+    Drain(*bus);
+  }
+  EXPECT_EQ(node.status().rejected_total(), 3);
+  EXPECT_EQ(node.status().dropped_inputs(), 1);
+}
+
 TEST(PoseSolverNode, InvalidOptionsThrow) {
   auto bus = MakeLcmBus("memq://");
   PoseSolverNodeOptions o;

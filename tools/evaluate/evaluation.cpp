@@ -526,8 +526,8 @@ SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& mode
 
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
-                                  const std::vector<Eigen::Vector3d>& completeness_truth,
-                                  double completeness_threshold, std::vector<double>* distances) {
+                                  const std::vector<Eigen::Vector3d>& completeness_truth, double completeness_threshold,
+                                  std::vector<double>* distances) {
   const PointGrid truth_grid(accuracy_truth, std::max(completeness_threshold, 1e-9));
   return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(), distances,
                   [&](const Eigen::Vector3d& p) { return truth_grid.NearestExact(p); });

@@ -109,8 +109,8 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model, con
 // distances (optional) receives every model point's distance, in model order.
 SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
-                                  const std::vector<Eigen::Vector3d>& completeness_truth,
-                                  double completeness_threshold, std::vector<double>* distances = nullptr);
+                                  const std::vector<Eigen::Vector3d>& completeness_truth, double completeness_threshold,
+                                  std::vector<double>* distances = nullptr);
 
 // Accuracy as the exact distance from every model point to the true surface (truth_mesh: the surface the simulator
 // rendered), completeness as in EvaluateSurface (truth points within completeness_threshold of a model point). The

@@ -349,8 +349,9 @@ TEST(MeshDistanceTest, SurfaceAccuracyToTheMeshHasNoSamplingFloor) {
   const SurfaceEvaluation to_samples = EvaluateSurface(model, samples, 2.0);
   ASSERT_EQ(distances.size(), model.size());  // per point, in model order: the outliers are every 100th
   for (size_t i = 0; i < model.size(); i += 997) EXPECT_DOUBLE_EQ(distances[i], mesh.Distance(model[i]));
-  EXPECT_EQ(std::count_if(distances.begin(), distances.end(), [](double d) { return d > 2.9; }),
-            std::count_if(model.begin(), model.end(), [&](const Eigen::Vector3d& p) { return (p - c).norm() > 102.9; }));
+  EXPECT_EQ(
+      std::count_if(distances.begin(), distances.end(), [](double d) { return d > 2.9; }),
+      std::count_if(model.begin(), model.end(), [&](const Eigen::Vector3d& p) { return (p - c).norm() > 102.9; }));
   // |offset| uniform on [0, 0.5]: p50 0.25, p90 0.45; max 3 (the outliers).
   EXPECT_NEAR(to_mesh.accuracy_p50, 0.25, 0.02);
   EXPECT_NEAR(to_mesh.accuracy_p90, 0.45, 0.02);
