@@ -454,6 +454,7 @@ struct SearchScratch {
   std::vector<float> fu, fv;                 // AVX2 kernel: per window sample and lane, the bilinear fractions
   std::vector<int32_t> index;                // and the float index of the top-left pixel in B
   std::vector<double> value_a;               // and window A's values in double
+  std::vector<double> lane_scores;           // per lane: the AVX2 kernel's scores before they go to their steps
 };
 
 // B's sums of every lane (lanes: a multiple of kSearchLanes; every lane's window inside B).
@@ -562,30 +563,32 @@ __attribute__((target("avx2"))) void FinishScoresAvx2(const WindowA& wa, int n, 
 }
 #endif
 
-// scores[s + n] for s = -n..n (see above); kernel: a SearchKernel.
+// scores[s + n_steps] for each s of steps[0, count) (each in [-n_steps, n_steps], distinct; see above; other scores
+// are left as they are); kernel: a SearchKernel.
 void SearchScores(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, const Eigen::Vector2d& q0,
-                  const Eigen::Vector2d& dir, double step, int n_steps, int kernel, SearchScratch* sc, double* scores) {
-  const int count = 2 * n_steps + 1;
+                  const Eigen::Vector2d& dir, double step, int n_steps, const int* steps, int count, int kernel,
+                  SearchScratch* sc, double* scores) {
   kernel = ResolveKernel(kernel, gray_b);
   if (kernel == kSearchReference) {
-    for (int s = -n_steps; s <= n_steps; ++s)
-      scores[s + n_steps] = WindowNcc(wa, w, gray_b, q0 + (s * step) * dir, nullptr, nullptr, kSearchReference);
+    for (int i = 0; i < count; ++i)
+      scores[steps[i] + n_steps] =
+          WindowNcc(wa, w, gray_b, q0 + (steps[i] * step) * dir, nullptr, nullptr, kSearchReference);
     return;
   }
-  std::fill(scores, scores + count, -2.0);
-  if (!wa.inside) return;
+  for (int i = 0; i < count; ++i) scores[steps[i] + n_steps] = -2.0;
+  if (!wa.inside || count <= 0) return;
   const int lanes = (count + kSearchLanes - 1) / kSearchLanes * kSearchLanes;
   sc->qx.resize(lanes), sc->qy.resize(lanes), sc->sb.resize(lanes), sc->sbb.resize(lanes), sc->sab.resize(lanes);
   sc->inside.resize(count);
+  sc->lane_scores.resize(lanes);
   double* qx = sc->qx.data();
   double* qy = sc->qy.data();
   char* inside = sc->inside.data();
   int any = -1;
   // The reference's q0 + (s * step) * dir and Inside(gray_b, q, w.reach + 1), spelled out.
   const double margin = w.reach + 1, x_end = gray_b.cols - 1 - margin, y_end = gray_b.rows - 1 - margin;
-  for (int s = -n_steps; s <= n_steps; ++s) {
-    const double t = s * step, x = q0.x() + t * dir.x(), y = q0.y() + t * dir.y();
-    const int k = s + n_steps;
+  for (int k = 0; k < count; ++k) {
+    const double t = steps[k] * step, x = q0.x() + t * dir.x(), y = q0.y() + t * dir.y();
     const bool in = x >= margin && y >= margin && x < x_end && y < y_end;
     qx[k] = x, qy[k] = y, inside[k] = in;
     if (in && any < 0) any = k;
@@ -595,15 +598,19 @@ void SearchScores(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b,
   for (int k = 0; k < lanes; ++k)
     if (k >= count || !inside[k]) qx[k] = qx[any], qy[k] = qy[any];
   const int n = (2 * w.h + 1) * (2 * w.h + 1);
+  double* lane_scores = sc->lane_scores.data();
 #if defined(__x86_64__) && defined(__GNUC__)
   if (kernel == kSearchAvx2) {
     SearchSumsAvx2(wa, w, gray_b, lanes, sc);
-    return FinishScoresAvx2(wa, n, count, *sc, scores);
+    FinishScoresAvx2(wa, n, count, *sc, lane_scores);
+    for (int k = 0; k < count; ++k) scores[steps[k] + n_steps] = lane_scores[k];
+    return;
   }
 #endif
   SearchSumsPortable(wa, w, gray_b, lanes, sc);
   for (int k = 0; k < count; ++k)
-    if (sc->inside[k]) scores[k] = NccFromSums(wa, n, sc->sb[k], sc->sbb[k], sc->sab[k], nullptr, nullptr);
+    if (sc->inside[k])
+      scores[steps[k] + n_steps] = NccFromSums(wa, n, sc->sb[k], sc->sbb[k], sc->sab[k], nullptr, nullptr);
 }
 
 // Exact key of a float pixel position (+0.0f folds -0 into +0, as float comparison does).
@@ -621,6 +628,7 @@ struct PairScratch {
   cv::Mat gray8, gray_a, gray_b;
   cv::Mat1b visited;
   std::vector<double> scores;
+  std::vector<int> steps;  // the search steps scored together
   SearchScratch search;
 };
 
@@ -655,6 +663,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
   if (o.refine_kernel < 0 || o.refine_kernel > 3) e << "refine-kernel must be in [0, 3]; ";
+  if (o.refine_first_steps < 0) e << "refine-first-steps must be >= 0 (0 = every step at once); ";
+  if (!(o.refine_first_min_ncc >= -1 && o.refine_first_min_ncc <= 1)) e << "refine-first-min-ncc must be in [-1, 1]; ";
   if (!(o.max_triangle_edge_px > 0)) e << "max-triangle-edge must be > 0; ";
   if (!(o.max_vertex_depth_ratio >= 1)) e << "max-vertex-depth-ratio must be >= 1; ";
   if (!(o.max_triangle_slant_deg > 0 && o.max_triangle_slant_deg <= 90)) e << "max-triangle-slant must be in (0, 90]; ";
@@ -828,6 +838,8 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
   const PinholeCamera& cam_b = b.camera;
   const PairTriangulator triangulator(cam_a, a.world_from_camera, cam_b, b.world_from_camera, o);
   const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
+  const int first_steps =
+      o.refine_first_steps > 0 ? std::min(n_steps, o.refine_first_steps) : n_steps;  // 0: every step at once
   WindowA window_a;
   std::vector<double>& scores = scratch.scores;
   scores.assign(2 * n_steps + 1, -2.0);
@@ -960,11 +972,29 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
           const double ln = std::hypot(l.x(), l.y());
           const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
           const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
+          // The steps within first_steps of the prediction first; the rest only when their best is at their edge
+          // (the peak may lie farther out). Steps not scored stay at -2 (never the best, never a neighbour).
+          ++stats.refine_searches;
+          std::fill(scores.begin(), scores.end(), -2.0);
+          std::vector<int>& steps = scratch.steps;
+          steps.clear();
+          for (int s = -first_steps; s <= first_steps; ++s) steps.push_back(s);
+          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, steps.data(),
+                       static_cast<int>(steps.size()), o.refine_kernel, &scratch.search, scores.data());
           int best = -1;
-          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, o.refine_kernel, &scratch.search,
-                       scores.data());
-          for (int k = 0; k <= 2 * n_steps; ++k)
+          for (int k = n_steps - first_steps; k <= n_steps + first_steps; ++k)
             if (best < 0 || scores[k] > scores[best]) best = k;
+          if (first_steps < n_steps && (best == n_steps - first_steps || best == n_steps + first_steps ||
+                                        scores[best] < o.refine_first_min_ncc)) {
+            ++stats.refine_full_searches;
+            steps.clear();
+            for (int s = first_steps + 1; s <= n_steps; ++s) steps.push_back(-s), steps.push_back(s);
+            SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, steps.data(),
+                         static_cast<int>(steps.size()), o.refine_kernel, &scratch.search, scores.data());
+            best = -1;
+            for (int k = 0; k <= 2 * n_steps; ++k)
+              if (best < 0 || scores[k] > scores[best]) best = k;
+          }
           if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
             ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here
             continue;

@@ -446,6 +446,59 @@ void ExpectSamePoints(const std::vector<DensePoint>& x, const DensePairStats& sx
   EXPECT_EQ(sx.rejected_refine_border, sy.rejected_refine_border) << what;
   EXPECT_EQ(sx.rejected_triangulation, sy.rejected_triangulation) << what;
   EXPECT_EQ(sx.mean_refine_shift_px, sy.mean_refine_shift_px) << what;
+  EXPECT_EQ(sx.refine_full_searches, sy.refine_full_searches) << what;
+}
+
+TEST(AffineDense, RefinementSearchesNearThePredictionFirst) {
+  // A textured plane, vertices off along the epipolar line by a known amount. The default search scores the 7 steps
+  // within 1.5 px of the prediction first and the other 6 of its +-3 px only when their best is at their edge or
+  // under NCC 0.95.
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
+  pb.translation() = Eigen::Vector3d(150, 0, 0);
+  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  AffineDenseOptions o;
+  o.pixel_step = 2;
+  AffineDenseOptions all = o;
+  all.refine_first_steps = 0;  // every step at once
+  for (const double shift : {0.0, 2.5}) {
+    auto matches = scene.Matches(pa, pb, 40);
+    for (auto& m : matches) m.b.x() += shift;
+    DensePairStats first, every;
+    const auto pts = ComputeDensePair(a, b, matches, o, &first);
+    const auto ref = ComputeDensePair(a, b, matches, all, &every);
+    std::printf("vertices %.1f px off: %zu points, %lld of %lld searches scored every step; all at once: %zu\n", shift,
+                pts.size(), static_cast<long long>(first.refine_full_searches),
+                static_cast<long long>(first.refine_searches), ref.size());
+    EXPECT_GT(first.refine_searches, 20000);
+    EXPECT_EQ(every.refine_full_searches, 0);
+    if (shift == 0.0) {
+      EXPECT_LT(first.refine_full_searches, 0.05 * first.refine_searches);  // peaks at the prediction: 7 steps
+      ASSERT_EQ(pts.size(), ref.size());
+      size_t differ = 0;  // the same matches: the peak near the prediction is the best of the whole search
+      for (size_t i = 0; i < pts.size(); ++i) differ += !(pts[i].pixel_b == ref[i].pixel_b);
+      EXPECT_EQ(differ, 0u);
+    } else {
+      // Peaks 2.5 px out: nearly every search goes on to every step and finds them (a few stop at a nearer peak
+      // of NCC >= 0.95 inside 1.5 px, and differ from the search of every step).
+      EXPECT_GT(first.refine_full_searches, 0.99 * first.refine_searches);
+      EXPECT_NEAR(static_cast<double>(pts.size()), static_cast<double>(ref.size()), 0.001 * ref.size());
+      EXPECT_GT(pts.size(), 0.9 * first.refine_searches);
+    }
+  }
+  // A search of fewer steps than first_steps scores them all at once.
+  o.refine_search_px = 1.0;
+  DensePairStats short_search;
+  ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &short_search);
+  EXPECT_GT(short_search.refine_searches, 20000);
+  EXPECT_EQ(short_search.refine_full_searches, 0);
+  AffineDenseOptions bad;
+  bad.refine_first_steps = -1;
+  EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
+  bad = AffineDenseOptions();
+  bad.refine_first_min_ncc = 1.5;
+  EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
 }
 
 TEST(AffineDense, RefinementKernelsBitIdentical) {
@@ -479,11 +532,13 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
   struct Case {
     int h;
     double search, step;
-    int image;       // 0 = BGR, 1 = gray, 2 = float gray levels with fractions
-    int pixel_step;  // (a sparser sample of pixels keeps the test short)
+    int image;        // 0 = BGR, 1 = gray, 2 = float gray levels with fractions
+    int pixel_step;   // (a sparser sample of pixels keeps the test short)
+    int first_steps;  // AffineDenseOptions::refine_first_steps (3: the default; 0: every step at once)
   };
-  const Case cases[] = {{2, 3.0, 0.5, 0, 1}, {2, 3.0, 0.5, 1, 3}, {2, 3.0, 0.5, 2, 3}, {1, 2.2, 0.3, 0, 3},
-                        {4, 9.0, 0.5, 0, 3}, {3, 0.5, 0.5, 0, 3}, {2, 6.0, 0.25, 2, 3}};
+  const Case cases[] = {{2, 3.0, 0.5, 0, 1, 3},  {2, 3.0, 0.5, 1, 3, 3}, {2, 3.0, 0.5, 2, 3, 3},
+                        {1, 2.2, 0.3, 0, 3, 3},  {4, 9.0, 0.5, 0, 3, 3}, {3, 0.5, 0.5, 0, 3, 3},
+                        {2, 6.0, 0.25, 2, 3, 3}, {2, 3.0, 0.5, 0, 3, 0}, {2, 6.0, 0.25, 0, 3, 11}};
   int checked = 0;
   int64_t border = 0;
   for (const Case& c : cases) {
@@ -502,6 +557,7 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
     o.refine_step_px = c.step;
     o.min_ncc = 0.5;
     o.pixel_step = c.pixel_step;
+    o.refine_first_steps = c.first_steps;
     DensePairStats ref_stats;
     o.refine_kernel = 1;
     const auto ref = ComputeDensePair(va, vb, matches, o, &ref_stats);
@@ -531,7 +587,7 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 21);
+  EXPECT_EQ(checked, 27);
   EXPECT_GT(border, 1000);
   AffineDenseOptions bad;
   bad.refine_kernel = 4;

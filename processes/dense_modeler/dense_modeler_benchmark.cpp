@@ -49,10 +49,13 @@ void BM_DensePairSphere(benchmark::State& state) {
 BENCHMARK(BM_DensePairSphere)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The same pair into one output buffer kept from call to call, as the node does (no allocation, no page faults).
+// Arg: 0 = the method's pair, 1 = with the default refinement, 2 = with the refinement scoring every step at once
+// (refine_first_steps = 0: the default before 3 Dec). full_searches: refined pixels that scored every step.
 void BM_DensePairSphereReusedOutput(benchmark::State& state) {
   const PairData& d = SpherePair();
   AffineDenseOptions o;
   o.refine_along_epipolar = state.range(0) != 0;
+  if (state.range(0) == 2) o.refine_first_steps = 0;
   DensePairStats st;
   std::vector<DensePoint> points;
   for (auto _ : state) {
@@ -61,8 +64,9 @@ void BM_DensePairSphereReusedOutput(benchmark::State& state) {
   }
   state.counters["pixels"] = static_cast<double>(st.pixels);
   state.counters["points"] = static_cast<double>(st.accepted);
+  state.counters["full_searches"] = static_cast<double>(st.refine_full_searches);
 }
-BENCHMARK(BM_DensePairSphereReusedOutput)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DensePairSphereReusedOutput)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // The pair's own matches (pair_matches.h) with the tracker's matches left of the image centre removed: corner
 // detection and LK both ways for the bare half.

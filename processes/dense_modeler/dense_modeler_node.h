@@ -39,12 +39,13 @@
 // pair whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped
 // (the pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
 // pairs_skipped_inconsistent, pairs_waiting (for the region), pairs_without_region (run unrestricted although a
-// region was expected), dense_points, pair_matches_added (matches pair_matches.h added, all pairs), voxels, votes,
-// pair_ms, vote_ms, carving_views, central_track_ids (track ids whose central views are counted), roi_source (0 none, 1
-// target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase final_ms,
-// final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_crevice_band_dropped, final_carved,
-// final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_weak_vertices, final_weak_moved,
-// final_rim_vertices_removed (weak_surface_refit.h), final_carving_s, final_visibility_s,
+// region was expected), dense_points, refine_searches and refine_full_searches (the pairs' epipolar searches and
+// those that scored every step, affine_dense.h), pair_matches_added (matches pair_matches.h added, all pairs), voxels,
+// votes, pair_ms, vote_ms, carving_views, central_track_ids (track ids whose central views are counted), roi_source (0
+// none, 1 target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
+// final_ms, final_seeds, final_voxels, final_triangles, final_floor_band_dropped, final_crevice_band_dropped,
+// final_carved, final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_weak_vertices,
+// final_weak_moved, final_rim_vertices_removed (weak_surface_refit.h), final_carving_s, final_visibility_s,
 // final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
 // (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s. Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.
@@ -234,12 +235,14 @@ class DenseModelerNode : public Node {
   int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
-  RecentValues pair_ms_{100000};  // ms, the pairs' wall times (pair matches + dense pair; status pair_ms), the last
-                                  // 100 000 kept for the final log's percentiles
+  RecentValues pair_ms_{100000};   // ms, the pairs' wall times (pair matches + dense pair; status pair_ms), the last
+                                   // 100 000 kept for the final log's percentiles
+  RecentValues dense_ms_{100000};  // ms, ComputeDensePair's share of them (the dense pair alone)
   std::deque<std::pair<int64_t, int64_t>> waiting_pairs_;  // (seq_a, seq_b) waiting for the region of interest
   int64_t pairs_without_region_ = 0;                       // pairs run unrestricted although a region was expected
   int64_t pair_matches_added_ = 0;                         // matches AddPairMatches gave the pairs so far
   int64_t dense_points_ = 0;
+  int64_t refine_searches_ = 0, refine_full_searches_ = 0;  // epipolar searches of the pairs so far, every step scored
   int64_t last_seq_ = -1, last_utime_ = 0;
   int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
   int64_t complete_frames_ = 0;
