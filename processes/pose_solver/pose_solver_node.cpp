@@ -193,11 +193,11 @@ void PoseSolverNode::OnOdometry(const odometry_t& msg) {
   OdometryReading r;
   std::string error;
   if (!OdometryFromMessage(msg, &r, &error)) {
-    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    status_.Reject(error, "seq " + std::to_string(msg.seq), "odometry", msg.seq);  // received, not dropped
     return;
   }
   if (!odometry_.Add(r)) {
-    status_.Reject("odometry: out of order", "utime " + std::to_string(msg.utime));
+    status_.Reject("odometry: out of order", "utime " + std::to_string(msg.utime), "odometry", msg.seq);
     return;
   }
   status_.ObserveSeq("odometry", msg.seq);

@@ -221,7 +221,7 @@ TEST(PoseSolverNode, RejectsBadInputWithoutCorruptingState) {
   EXPECT_EQ(node.status().rejected("tracks: after end of stream"), 1);
 }
 
-TEST(PoseSolverNode, RejectedTracksAreNotCountedAsDropped) {
+TEST(PoseSolverNode, RejectedInputsAreNotCountedAsDropped) {
   SyntheticOrbitOptions so;
   so.num_frames = 12;
   const SyntheticOrbit s = MakeSyntheticOrbit(so);
@@ -231,7 +231,10 @@ TEST(PoseSolverNode, RejectedTracksAreNotCountedAsDropped) {
   PoseSolverNode node(*bus, o);
   bus->PublishMessage("CAMERA_INFO", CameraToMessage(s.camera, 0));
   for (int f = 0; f < 12; ++f) {
-    bus->PublishMessage("ROBOT_ODOMETRY", OdometryToMessage(s.odometry[f]));
+    odometry_t odo = OdometryToMessage(s.odometry[f]);
+    if (f == 3) odo.x_mm = NAN;                              // received, rejected: not a drop
+    if (f == 5) odo.utime = s.odometry[1].utime;             // out of order (its seq is new): not a drop either
+    if (f != 8) bus->PublishMessage("ROBOT_ODOMETRY", odo);  // never sent: one drop
     feature_tracks_t m = TracksToMessage(s.frames[f]);
     if (f == 4) m.u[0] = NAN;         // received, rejected: not a drop
     if (f == 6) m.v[1] = 900;         // outside the image: not a drop either
@@ -240,8 +243,10 @@ TEST(PoseSolverNode, RejectedTracksAreNotCountedAsDropped) {
     bus->PublishMessage("FEATURE_TRACKS", m);
     Drain(*bus);
   }
-  EXPECT_EQ(node.status().rejected_total(), 3);
-  EXPECT_EQ(node.status().dropped_inputs(), 1);
+  EXPECT_EQ(node.status().rejected_total(), 5);
+  EXPECT_EQ(node.status().rejected("odometry: non-finite value"), 1);
+  EXPECT_EQ(node.status().rejected("odometry: out of order"), 1);
+  EXPECT_EQ(node.status().dropped_inputs(), 2);  // odometry 8 and tracks 9
 }
 
 TEST(PoseSolverNode, InvalidOptionsThrow) {
