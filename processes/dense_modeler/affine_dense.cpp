@@ -443,11 +443,12 @@ double WindowNcc(const WindowA& wa, const WindowWarp& w, const cv::Mat& gray_b, 
   return NccFromSums(wa, n, sb, sbb, sab, stddev_a, stddev_b);
 }
 
-// The 1-D refinement search's NCC scores, all steps of one pixel at once (SearchScores below): WindowNcc at
-// q_s = q0 + (s·step)·dir for s = -n..n into scores[s + n], bit-identical to one WindowNcc(wa, w, gray_b, q_s) per
-// step (the reference). The steps are the SIMD lanes: every lane does the sample's operations of WindowNcc (the same
-// double positions, truncation, float bilinear expression) and accumulates its sums in the same order, so only the
-// work is shared (the window offsets, the loop, the setup), never an operation reordered.
+// The 1-D refinement search's NCC scores, a list of steps of one pixel at once (SearchScores below): WindowNcc at
+// q_s = q0 + (s·step)·dir for each listed s in [-n, n] into scores[s + n], bit-identical to one
+// WindowNcc(wa, w, gray_b, q_s) per step (the reference). The steps are the SIMD lanes: every lane does the sample's
+// operations of WindowNcc (the same double positions, truncation, float bilinear expression) and accumulates its sums
+// in the same order, so only the work is shared (the window offsets, the loop, the setup), never an operation
+// reordered.
 struct SearchScratch {
   std::vector<double> qx, qy, sb, sbb, sab;  // per lane (padded): position of the window centre in B, B's sums
   std::vector<char> inside;                  // per step: the window lies inside B
@@ -662,6 +663,8 @@ bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   if (!(o.junction_floor_min_separation_px >= 0)) e << "junction-floor-min-separation must be >= 0 px; ";
   if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
+  if (o.refine_along_epipolar && !(o.refine_search_px >= o.refine_step_px))
+    e << "refine search must be >= refine step (else the search has no step but the prediction); ";
   if (o.refine_kernel < 0 || o.refine_kernel > 3) e << "refine-kernel must be in [0, 3]; ";
   if (o.refine_first_steps < 0) e << "refine-first-steps must be >= 0 (0 = every step at once); ";
   if (!(o.refine_first_min_ncc >= -1 && o.refine_first_min_ncc <= 1)) e << "refine-first-min-ncc must be in [-1, 1]; ";
@@ -973,8 +976,10 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
           const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
           const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
           // The steps within first_steps of the prediction first; the rest only when their best is at their edge
-          // (the peak may lie farther out). Steps not scored stay at -2 (never the best, never a neighbour).
+          // (the peak may lie farther out) or under refine_first_min_ncc (a weak peak: a better one may lie farther
+          // out). Steps not scored stay at -2 (never the best, never a neighbour).
           ++stats.refine_searches;
+          if (first_steps == n_steps) ++stats.refine_full_searches;  // every step at once
           std::fill(scores.begin(), scores.end(), -2.0);
           std::vector<int>& steps = scratch.steps;
           steps.clear();

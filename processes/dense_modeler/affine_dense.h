@@ -70,13 +70,9 @@ struct AffineDenseOptions {
                                           // +-1.5 px lost much of the lower sphere and the box (docs/benchmarks.md)
   double refine_step_px = 0.5;            // px, refinement search step (> 0); the best step is refined by a
                                           // parabola through its neighbours
-  int refine_first_steps = 3;             // steps each side of the prediction scored first; the other steps only
-                                          // when the best of those is at their edge or under refine_first_min_ncc
-                                          // (0 or >= the search's steps: every step at once, as before 3 Dec); an
-                                          // interior peak of NCC >= 0.95 near the prediction ends the search, which
-                                          // changed no model figure by more than 0.002 mm (p90) and cut the pair's
-                                          // time by ~30 % (docs/benchmarks.md, 3 Dec); at 0.9 the sphere's max rose
-                                          // 2.80 -> 3.43 mm (a nearer, lesser peak won)
+  int refine_first_steps = 3;             // steps each side of the prediction scored first, the rest only when
+                                          // their best is at their edge or under refine_first_min_ncc (0 or >= the
+                                          // search's steps: every step at once; docs/benchmarks.md, 3 Dec)
   double refine_first_min_ncc = 0.95;     // NCC the first steps' best needs to end the search there, [-1, 1]
   bool reject_refine_at_border = true;    // drop P when the refinement's best NCC is at either end of the search:
                                           // the true match lies farther than refine_search_px from the affine
@@ -139,8 +135,8 @@ struct DensePairStats {
   int64_t rejected_ncc = 0;
   int64_t rejected_refine_border = 0;    // refinement's best score at the end of its search
   int64_t refine_searches = 0;           // pixels whose Q was searched along the epipolar line
-  int64_t refine_full_searches = 0;      // of those, every step scored (the first steps' best at their edge or
-                                         // under refine_first_min_ncc)
+  int64_t refine_full_searches = 0;      // of those, every step scored (all at once, or the first steps' best
+                                         // at their edge or under refine_first_min_ncc)
   int64_t rejected_triangulation = 0;    // small angle, behind a camera or reprojection error
   int64_t rejected_box = 0;              // outside the world box or the region
   int64_t rejected_floor_ambiguous = 0;  // floor-junction pixel that the floor plane explains as well

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
@@ -446,7 +447,20 @@ void ExpectSamePoints(const std::vector<DensePoint>& x, const DensePairStats& sx
   EXPECT_EQ(sx.rejected_refine_border, sy.rejected_refine_border) << what;
   EXPECT_EQ(sx.rejected_triangulation, sy.rejected_triangulation) << what;
   EXPECT_EQ(sx.mean_refine_shift_px, sy.mean_refine_shift_px) << what;
+  EXPECT_EQ(sx.refine_searches, sy.refine_searches) << what;
   EXPECT_EQ(sx.refine_full_searches, sy.refine_full_searches) << what;
+}
+
+// The fraction of the points of x whose pixel in A is in y with the same pixel in B (bit-identical).
+double FractionSameMatch(const std::vector<DensePoint>& x, const std::vector<DensePoint>& y) {
+  std::map<std::pair<double, double>, Eigen::Vector2f> b_of;
+  for (const DensePoint& p : y) b_of[{p.pixel_a.x(), p.pixel_a.y()}] = p.pixel_b;
+  size_t same = 0;
+  for (const DensePoint& p : x) {
+    auto it = b_of.find({p.pixel_a.x(), p.pixel_a.y()});
+    same += it != b_of.end() && it->second == p.pixel_b;
+  }
+  return x.empty() ? 0.0 : static_cast<double>(same) / x.size();
 }
 
 TEST(AffineDense, RefinementSearchesNearThePredictionFirst) {
@@ -472,33 +486,60 @@ TEST(AffineDense, RefinementSearchesNearThePredictionFirst) {
                 pts.size(), static_cast<long long>(first.refine_full_searches),
                 static_cast<long long>(first.refine_searches), ref.size());
     EXPECT_GT(first.refine_searches, 20000);
-    EXPECT_EQ(every.refine_full_searches, 0);
+    EXPECT_EQ(every.refine_searches, first.refine_searches);
+    EXPECT_EQ(every.refine_full_searches, every.refine_searches);  // all at once: every step of every search
     if (shift == 0.0) {
       EXPECT_LT(first.refine_full_searches, 0.05 * first.refine_searches);  // peaks at the prediction: 7 steps
       ASSERT_EQ(pts.size(), ref.size());
-      size_t differ = 0;  // the same matches: the peak near the prediction is the best of the whole search
-      for (size_t i = 0; i < pts.size(); ++i) differ += !(pts[i].pixel_b == ref[i].pixel_b);
-      EXPECT_EQ(differ, 0u);
+      EXPECT_EQ(FractionSameMatch(pts, ref), 1.0);  // the peak near the prediction is the best of the whole search
+      // The score condition alone sends a search on: B slightly blurred (peaks of NCC < 1, mostly >= 0.95), with
+      // NCC 1 required nearly every search scores every step, and finds what the search of every step finds.
+      DenseView blurred = b;
+      blurred.image = cv::Mat();  // (not b's pixels)
+      cv::GaussianBlur(b.image, blurred.image, cv::Size(0, 0), 0.8);
+      AffineDenseOptions strict = o;
+      strict.refine_first_min_ncc = 1.0;
+      DensePairStats st_default, st_strict, st_all;
+      ComputeDensePair(a, blurred, matches, o, &st_default);
+      const auto pts_strict = ComputeDensePair(a, blurred, matches, strict, &st_strict);
+      const auto ref_blurred = ComputeDensePair(a, blurred, matches, all, &st_all);
+      std::printf("B blurred: %lld of %lld searches scored every step by default, %lld with NCC 1 required\n",
+                  static_cast<long long>(st_default.refine_full_searches),
+                  static_cast<long long>(st_default.refine_searches),
+                  static_cast<long long>(st_strict.refine_full_searches));
+      EXPECT_LT(st_default.refine_full_searches, 0.5 * st_default.refine_searches);
+      EXPECT_GT(st_strict.refine_full_searches, 0.99 * st_strict.refine_searches);
+      ASSERT_EQ(pts_strict.size(), ref_blurred.size());
+      EXPECT_GT(FractionSameMatch(pts_strict, ref_blurred), 0.999);
     } else {
       // Peaks 2.5 px out: nearly every search goes on to every step and finds them (a few stop at a nearer peak
       // of NCC >= 0.95 inside 1.5 px, and differ from the search of every step).
       EXPECT_GT(first.refine_full_searches, 0.99 * first.refine_searches);
       EXPECT_NEAR(static_cast<double>(pts.size()), static_cast<double>(ref.size()), 0.001 * ref.size());
+      EXPECT_GT(FractionSameMatch(pts, ref), 0.999);
       EXPECT_GT(pts.size(), 0.9 * first.refine_searches);
     }
   }
-  // A search of fewer steps than first_steps scores them all at once.
-  o.refine_search_px = 1.0;
-  DensePairStats short_search;
-  ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &short_search);
+  // A search of no more steps than first_steps scores them all at once: the same as first_steps = 0.
+  o.refine_search_px = all.refine_search_px = 1.0;
+  DensePairStats short_search, short_all;
+  const auto pts_short = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), o, &short_search);
+  const auto ref_short = ComputeDensePair(a, b, scene.Matches(pa, pb, 40), all, &short_all);
   EXPECT_GT(short_search.refine_searches, 20000);
-  EXPECT_EQ(short_search.refine_full_searches, 0);
+  EXPECT_EQ(short_search.refine_full_searches, short_search.refine_searches);
+  ASSERT_EQ(pts_short.size(), ref_short.size());
+  EXPECT_EQ(FractionSameMatch(pts_short, ref_short), 1.0);
   AffineDenseOptions bad;
   bad.refine_first_steps = -1;
   EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
   bad = AffineDenseOptions();
   bad.refine_first_min_ncc = 1.5;
   EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
+  bad = AffineDenseOptions();
+  bad.refine_search_px = 0.25;  // shorter than one step
+  EXPECT_FALSE(ValidateAffineDenseOptions(bad, nullptr));
+  bad.refine_along_epipolar = false;  // no search: no matter
+  EXPECT_TRUE(ValidateAffineDenseOptions(bad, nullptr));
 }
 
 TEST(AffineDense, RefinementKernelsBitIdentical) {
@@ -569,10 +610,11 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
     for (const DensePoint& p : ref)
       near_edge += std::min(p.pixel_b.x(), scene.camera.width - 1 - p.pixel_b.x()) < c.search + 2 * c.h + 1;
     std::printf(
-        "h %d search %.2f step %.2f image %d: %zu points (%d with search windows leaving B), %lld at the "
-        "search border\n",
-        c.h, c.search, c.step, c.image, ref.size(), near_edge,
-        static_cast<long long>(ref_stats.rejected_refine_border));
+        "h %d search %.2f step %.2f image %d first steps %d: %zu points (%d with search windows leaving B), %lld at "
+        "the search border, %lld of %lld searches scored every step\n",
+        c.h, c.search, c.step, c.image, c.first_steps, ref.size(), near_edge,
+        static_cast<long long>(ref_stats.rejected_refine_border),
+        static_cast<long long>(ref_stats.refine_full_searches), static_cast<long long>(ref_stats.refine_searches));
     if (c.search > 5) {
       EXPECT_GT(near_edge, 20);
     }
@@ -583,7 +625,7 @@ TEST(AffineDense, RefinementKernelsBitIdentical) {
       ExpectSamePoints(ref, ref_stats, pts, st,
                        "kernel " + std::to_string(kernel) + " h " + std::to_string(c.h) + " search " +
                            std::to_string(c.search) + " step " + std::to_string(c.step) + " image " +
-                           std::to_string(c.image));
+                           std::to_string(c.image) + " first steps " + std::to_string(c.first_steps));
       ++checked;
     }
   }

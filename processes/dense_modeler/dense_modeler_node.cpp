@@ -166,7 +166,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
   p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
   p.Add("dense-refine-first-steps", &d->refine_first_steps,
-        "steps each side of the prediction searched first, the rest only if their best is at their edge (0 = all)");
+        "steps each side of the prediction searched first, the rest only if their best is at their edge or "
+        "under dense-refine-first-min-ncc (0 = all at once)");
   p.Add("dense-refine-first-min-ncc", &d->refine_first_min_ncc,
         "NCC the first steps' best must reach to end the search (else every step is scored)");
   p.Add("dense-skip-floor-triangles", &d->skip_floor_triangles, "skip triangles whose vertices all lie on the floor");

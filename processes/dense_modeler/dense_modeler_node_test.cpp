@@ -204,6 +204,10 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
                            "final_curled_triangles", "final_voxels_off_mesh", "final_weak_vertices", "final_weak_moved",
                            "final_rim_vertices_removed", "final_carving_s", "final_visibility_s"})
     EXPECT_GE(StatusValue(last, name), 0.0) << name;
+  // The pairs' epipolar searches (refinement on by default), some of which scored every step.
+  EXPECT_GT(StatusValue(last, "refine_searches"), 1000.0);
+  EXPECT_GE(StatusValue(last, "refine_full_searches"), 0.0);
+  EXPECT_LE(StatusValue(last, "refine_full_searches"), StatusValue(last, "refine_searches"));
   // Snapshot on request, loadable, same content.
   PublishControl(+control_t::COMMAND_SNAPSHOT, "viewer", dir_ + "/snap.bin");
   VoxelVoteGrid loaded;

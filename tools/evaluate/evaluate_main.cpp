@@ -152,6 +152,9 @@ int main(int argc, char** argv) {
       s = EvaluateSurfaceToMesh(model, distance, visible, threshold, &distances);
     }
     if (!write_errors.empty()) {
+      if (distances.empty())
+        std::fprintf(stderr, "warning: %s: no distances (no model points, or no truth points to score against)\n",
+                     write_errors.c_str());
       std::ofstream out(write_errors);
       for (size_t i = 0; i < model.size() && i < distances.size(); ++i)
         out << model[i].x() << ' ' << model[i].y() << ' ' << model[i].z() << ' ' << distances[i] << '\n';

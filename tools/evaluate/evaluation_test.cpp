@@ -347,6 +347,12 @@ TEST(MeshDistanceTest, SurfaceAccuracyToTheMeshHasNoSamplingFloor) {
   std::vector<double> distances;
   const SurfaceEvaluation to_mesh = EvaluateSurfaceToMesh(model, mesh, samples, 2.0, &distances);
   const SurfaceEvaluation to_samples = EvaluateSurface(model, samples, 2.0);
+  std::vector<double> sample_distances;
+  EvaluateSurface(model, samples, samples, 2.0, &sample_distances);
+  ASSERT_EQ(sample_distances.size(), model.size());
+  for (size_t i = 0; i < model.size(); ++i)  // to the nearest sample: never nearer than the surface itself
+    ASSERT_GE(sample_distances[i], mesh.Distance(model[i]) - 0.01) << i;
+  EXPECT_EQ(*std::max_element(sample_distances.begin(), sample_distances.end()), to_samples.accuracy_max);
   ASSERT_EQ(distances.size(), model.size());  // per point, in model order: the outliers are every 100th
   for (size_t i = 0; i < model.size(); i += 997) EXPECT_DOUBLE_EQ(distances[i], mesh.Distance(model[i]));
   EXPECT_EQ(

@@ -5,8 +5,8 @@ r(theta, phi) = 100 * (1 + 0.12 sin(3 phi) sin(theta)^2 + 0.08 cos(2 theta) + 0.
 flattened to 0.75 in z; latitude-longitude grid with pole vertices; ASCII PLY, counter-clockwise outward faces.
 Both phi terms fade with sin(theta)^2 towards the poles, so r is one value there and the surface is smooth (C1).
 Until 3 Dec the 5-phi term had no such factor: r at theta -> 0 depended on phi, and the grid's first ring around
-each pole was a pinwheel of five spikes and dips with ~7 mm of relief within 5 mm of the pole (a defect of the
-formula, not a shape any sensor resolves).
+each pole was a pinwheel of five spikes and dips with 7.5 mm of relief 8-9 mm from the pole (a defect of the
+formula: the surface had no single point at the poles), and the blob stood on the south pinwheel's tips.
 """
 import math
 
