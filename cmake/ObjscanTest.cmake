@@ -1,3 +1,24 @@
+# The real image sets the tests read (../shared/data: Middlebury rings, Oxford dinosaur; see each set's SOURCE.txt):
+# OBJSCAN_DATA_DIR, else the first of <source>/../shared/data and /work/shared/data that exists. Tests get it in
+# their environment (OBJSCAN_DATA_DIR); without it the real-data tests skip and say so.
+set(OBJSCAN_DATA_DIR "" CACHE PATH "folder of the real image sets (default: <source>/../shared/data or /work/shared/data)")
+if(NOT OBJSCAN_DATA_DIR)
+  foreach(candidate "${PROJECT_SOURCE_DIR}/../shared/data" "/work/shared/data")
+    if(IS_DIRECTORY "${candidate}")
+      get_filename_component(OBJSCAN_DATA_DIR_FOUND "${candidate}" REALPATH)
+      break()
+    endif()
+  endforeach()
+else()
+  set(OBJSCAN_DATA_DIR_FOUND "${OBJSCAN_DATA_DIR}")
+endif()
+if(OBJSCAN_DATA_DIR_FOUND)
+  message(STATUS "real image sets for the tests: ${OBJSCAN_DATA_DIR_FOUND}")
+else()
+  message(WARNING "no real image sets (../shared/data, /work/shared/data; or set OBJSCAN_DATA_DIR): "
+                  "the Middlebury and Oxford dinosaur tests will skip")
+endif()
+
 # objscan_test(<name> SOURCES <files...> [LIBS <targets...>] [LABELS <labels...>] [TIMEOUT <s>])
 # One line per test: builds <name> against GoogleTest and registers it with CTest (label "unit" by default).
 function(objscan_test name)
@@ -15,7 +36,8 @@ function(objscan_test name)
     set(ARG_TIMEOUT 300)
   endif()
   set_tests_properties(${name} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
-    ENVIRONMENT "OBJSCAN_SOURCE_DIR=${PROJECT_SOURCE_DIR};OBJSCAN_BINARY_DIR=${PROJECT_BINARY_DIR}")
+    ENVIRONMENT
+    "OBJSCAN_SOURCE_DIR=${PROJECT_SOURCE_DIR};OBJSCAN_BINARY_DIR=${PROJECT_BINARY_DIR};OBJSCAN_DATA_DIR=${OBJSCAN_DATA_DIR_FOUND}")
 endfunction()
 
 # objscan_benchmark(<name> SOURCES <files...> [LIBS <targets...>]): a Google Benchmark executable (not a test).

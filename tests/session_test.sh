@@ -26,7 +26,7 @@ in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames $FRAMES --out "$WOR
 check_summary "$WORK/sim" $FRAMES
 [ -s "$WORK/sim/ground_truth/poses_gt.txt" ] || fail "no ground truth written"
 
-DATA="$SRC/../shared/data/middlebury_templeSparseRing"
+DATA="${OBJSCAN_DATA_DIR:-$SRC/../shared/data}/middlebury_templeSparseRing"
 if [ -d "$DATA" ]; then
   in_ns "$NS" "$SRC/objscan" run --dataset "$DATA" --out "$WORK/temple" --lcm-url "$URL" \
     || { tail -n 30 "$WORK"/temple/logs/*.log; fail "objscan run --dataset failed"; }

@@ -7,16 +7,13 @@
 
 #include "common/bus.h"
 #include "common/log.h"
+#include "common/test_data.h"
 #include "drivers/camera/camera_node.h"
 
 namespace objscan {
 namespace {
 
-std::string TempleDir() {
-  const char* source_dir = std::getenv("OBJSCAN_SOURCE_DIR");
-  return (source_dir ? std::string(source_dir) + "/../shared/data" : std::string("/work/shared/data")) +
-         "/middlebury_templeSparseRing";
-}
+std::string TempleDir() { return SharedDataPath("middlebury_templeSparseRing"); }
 
 void BM_ReadFrame(benchmark::State& state) {
   FrameSourceOptions options;

@@ -13,6 +13,7 @@
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/options.h"
+#include "common/test_data.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
@@ -24,11 +25,7 @@ namespace objscan {
 namespace {
 namespace fs = std::filesystem;
 
-std::string TempleDir() {
-  const char* source_dir = std::getenv("OBJSCAN_SOURCE_DIR");
-  return (source_dir ? std::string(source_dir) + "/../shared/data" : std::string("/work/shared/data")) +
-         "/middlebury_templeSparseRing";
-}
+std::string TempleDir() { return SharedDataPath("middlebury_templeSparseRing"); }
 
 class TempDir {
  public:

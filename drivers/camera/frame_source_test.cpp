@@ -12,15 +12,13 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "common/test_data.h"
+
 namespace objscan {
 namespace {
 namespace fs = std::filesystem;
 
-std::string DataDir() {
-  const char* source_dir = std::getenv("OBJSCAN_SOURCE_DIR");
-  const std::string base = source_dir ? std::string(source_dir) + "/../shared/data" : "/work/shared/data";
-  return base;
-}
+std::string DataDir() { return SharedDataDir(); }
 std::string TempleDir() { return DataDir() + "/middlebury_templeSparseRing"; }
 
 // A temporary folder removed at the end of the test.

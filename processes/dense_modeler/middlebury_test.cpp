@@ -14,16 +14,14 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
+#include "common/test_data.h"
 #include "drivers/camera/frame_source.h"
 #include "processes/dense_modeler/dense_model.h"
 
 namespace objscan {
 namespace {
 
-std::string DataDir(const std::string& set) {
-  const char* src = std::getenv("OBJSCAN_SOURCE_DIR");
-  return std::string(src ? src : "/work/main") + "/../shared/data/" + set;
-}
+std::string DataDir(const std::string& set) { return SharedDataPath(set); }
 
 struct RingSet {
   std::string folder, par_file, label;

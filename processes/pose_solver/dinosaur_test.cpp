@@ -1,9 +1,9 @@
-// Real tracks: the Oxford VGG dinosaur turntable (36 frames, 10 deg steps, /work/shared/data/oxford_dinosaur,
-// see SOURCE.txt; viff.xy holds (row, column) pairs, -1 = missing). No metric calibration exists, so a plausible K
-// is ASSUMED: f = 2700 px (between the non-metric RQ factors 3217 / 2292 of the published P matrices), principal point
-// at the image centre, no skew. On a run of consecutive frames: factorization + perspective BA of the tracks common to
-// all of them (ReconstructSpan), then triangulation of every other track seen in >= 2 of the frames and a BA of all.
-// Reported: reprojection RMS (target <= 0.5 px). Skipped when the data are not present.
+// Real tracks: the Oxford VGG dinosaur turntable (36 frames, 10 deg steps, ../shared/data/oxford_dinosaur
+// (common/test_data.h), see SOURCE.txt; viff.xy holds (row, column) pairs, -1 = missing). No metric calibration exists,
+// so a plausible K is ASSUMED: f = 2700 px (between the non-metric RQ factors 3217 / 2292 of the published P matrices),
+// principal point at the image centre, no skew. On a run of consecutive frames: factorization + perspective BA of the
+// tracks common to all of them (ReconstructSpan), then triangulation of every other track seen in >= 2 of the frames
+// and a BA of all. Reported: reprojection RMS (target <= 0.5 px). Skipped when the data are not present.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -11,15 +11,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/test_data.h"
 #include "processes/pose_solver/pose_estimator.h"
 
 namespace objscan {
 namespace {
 
-std::string DataPath() {
-  const char* src = std::getenv("OBJSCAN_SOURCE_DIR");
-  return std::string(src ? src : "/work/main") + "/../shared/data/oxford_dinosaur/viff.xy";
-}
+std::string DataPath() { return SharedDataPath("oxford_dinosaur/viff.xy"); }
 
 TEST(Dinosaur, FactorizationAndBundleAdjustmentOnRealTracks) {
   std::ifstream in(DataPath());

@@ -1,8 +1,8 @@
 // Real wide-baseline images: Middlebury templeSparseRing and dinoSparseRing (16 calibrated views on a ring, ~22.5 deg
-// apart, /work/shared/data/middlebury_*, see SOURCE.txt there). KLT cannot bridge such steps; the descriptor tracker
-// (processes/tracker/descriptor_seeding.h, SIFT) makes the tracks, the PoseEstimator runs on them with the given K
-// and no odometry (scale free), and the result is compared with the given calibration after a Sim(3) alignment of
-// the camera centres. The calibration is used ONLY for the evaluation (and its K as the known intrinsics).
+// apart, ../shared/data/middlebury_* (common/test_data.h), see SOURCE.txt there). KLT cannot bridge such steps; the
+// descriptor tracker (processes/tracker/descriptor_seeding.h, SIFT) makes the tracks, the PoseEstimator runs on them
+// with the given K and no odometry (scale free), and the result is compared with the given calibration after a Sim(3)
+// alignment of the camera centres. The calibration is used ONLY for the evaluation (and its K as the known intrinsics).
 // Ring order: dino = file order; temple = the azimuth order listed in its SOURCE.txt (gantry angles; the file order
 // jumps around the ring). The ring is started right after its weakest link (fewest F-RANSAC inliers between
 // neighbours, from the images alone). Loop closure (last view next to the first) is not used.
@@ -20,6 +20,7 @@
 #include <set>
 
 #include "common/geometry.h"
+#include "common/test_data.h"
 #include "drivers/camera/frame_source.h"
 #include "processes/pose_solver/pose_estimator.h"
 #include "processes/tracker/descriptor_seeding.h"
@@ -27,10 +28,7 @@
 namespace objscan {
 namespace {
 
-std::string DataDir(const std::string& name) {
-  const char* src = std::getenv("OBJSCAN_SOURCE_DIR");
-  return std::string(src ? src : "/work/main") + "/../shared/data/" + name;
-}
+std::string DataDir(const std::string& name) { return SharedDataPath(name); }
 
 struct RingFigures {
   int views = 0;

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/test_data.h"
 #include "processes/tracker/synthetic_sequence.h"
 
 namespace objscan {
@@ -510,8 +511,7 @@ TEST(KltTracker, BadImagesThrowAndSizeChangeResets) {
 // Real images: the Oxford VGG dinosaur turntable (10 degree steps, 720x576) with its 3x4 camera matrices. A track
 // continued from frame i-1 to frame i must lie on the epipolar line of its previous position.
 TEST(KltTracker, RealTurntableTracksSatisfyEpipolarGeometry) {
-  const char* source = std::getenv("OBJSCAN_SOURCE_DIR");
-  const std::string dir = std::string(source ? source : "/work/main") + "/../shared/data/oxford_dinosaur/";
+  const std::string dir = SharedDataPath("oxford_dinosaur/");
   std::ifstream in(dir + "dino_Ps_xy.txt");
   if (!in) GTEST_SKIP() << "no data at " << dir;
   std::vector<Eigen::Matrix<double, 3, 4>> cameras;
