@@ -64,6 +64,16 @@ DenseView View(const PinholeCamera& cam, const Eigen::Isometry3d& pose, const cv
   return v;
 }
 
+// The floor-like plane z = 1000 seen from A at the origin and from B 150 mm to its side (same orientation, a
+// horizontal baseline: epipolar lines are rows), both views rendered.
+struct SidewaysPlanePair {
+  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
+  Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pb = Eigen::Isometry3d(Eigen::Translation3d(150, 0, 0));
+  DenseView a = View(scene.camera, pa, scene.Render(pa));
+  DenseView b = View(scene.camera, pb, scene.Render(pb));
+};
+
 struct Errors {
   double max_px = 0, max_plane_mm = 0, mean_plane_mm = 0;
   size_t n = 0;
@@ -223,11 +233,10 @@ TEST(AffineDense, TiltedPlanePlaneMappingExactAffineClose) {
 }
 
 TEST(AffineDense, EpipolarCheckRejectsWrongMatches) {
-  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.translation() = Eigen::Vector3d(150, 0, 0);  // horizontal baseline: epipolar lines are rows
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const SidewaysPlanePair pair;
+  const PlaneScene& scene = pair.scene;
+  const Eigen::Isometry3d &pa = pair.pa, &pb = pair.pb;
+  const DenseView &a = pair.a, &b = pair.b;
   auto matches = scene.Matches(pa, pb, 40);
   for (auto& m : matches) m.b.y() += 4.0;  // 4 px off the epipolar line
   AffineDenseOptions o;
@@ -262,11 +271,10 @@ TEST(AffineDense, RadianceCheckRejectsWrongTexture) {
 }
 
 TEST(AffineDense, EpipolarRefinementFixesAlongLineErrors) {
-  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.translation() = Eigen::Vector3d(150, 0, 0);
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const SidewaysPlanePair pair;
+  const PlaneScene& scene = pair.scene;
+  const Eigen::Isometry3d &pa = pair.pa, &pb = pair.pb;
+  const DenseView &a = pair.a, &b = pair.b;
   auto matches = scene.Matches(pa, pb, 40);
   for (size_t i = 0; i < matches.size(); ++i) matches[i].b.x() += (i % 2 ? 0.8 : -0.8);  // along the epipolar line
   AffineDenseOptions o;
@@ -288,11 +296,10 @@ TEST(AffineDense, MatchesBeyondTheRefinementSearchAreRejected) {
   // Every vertex 4 px off along the epipolar line (as for a triangle whose plane is far from the surface, e.g. across
   // a crease): the true match of every pixel lies beyond the 1.5 px search, so the refinement's best score sits at
   // the end of its range. With the check those pixels are dropped; without it they become wrong points.
-  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.translation() = Eigen::Vector3d(150, 0, 0);
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const SidewaysPlanePair pair;
+  const PlaneScene& scene = pair.scene;
+  const Eigen::Isometry3d &pa = pair.pa, &pb = pair.pb;
+  const DenseView &a = pair.a, &b = pair.b;
   auto matches = scene.Matches(pa, pb, 40);
   for (auto& m : matches) m.b.x() += 4.0;
   AffineDenseOptions o;
@@ -467,11 +474,10 @@ TEST(AffineDense, RefinementSearchesNearThePredictionFirst) {
   // A textured plane, vertices off along the epipolar line by a known amount. The default search scores the 7 steps
   // within 1.5 px of the prediction first and the other 6 of its +-3 px only when their best is at their edge or
   // under NCC 0.95.
-  PlaneScene scene{Eigen::Vector3d::UnitZ(), 1000.0};
-  const Eigen::Isometry3d pa = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d pb = Eigen::Isometry3d::Identity();
-  pb.translation() = Eigen::Vector3d(150, 0, 0);
-  const DenseView a = View(scene.camera, pa, scene.Render(pa)), b = View(scene.camera, pb, scene.Render(pb));
+  const SidewaysPlanePair pair;
+  const PlaneScene& scene = pair.scene;
+  const Eigen::Isometry3d &pa = pair.pa, &pb = pair.pb;
+  const DenseView &a = pair.a, &b = pair.b;
   AffineDenseOptions o;
   o.pixel_step = 2;
   AffineDenseOptions all = o;
