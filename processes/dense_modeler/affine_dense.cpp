@@ -629,7 +629,7 @@ struct PairScratch {
   cv::Mat gray8, gray_a, gray_b;
   cv::Mat1b visited;
   std::vector<double> scores;
-  std::vector<int> steps;  // the search steps scored together
+  std::vector<int> near_steps, far_steps;  // the search's steps near the prediction and beyond
   SearchScratch search;
 };
 
@@ -843,9 +843,22 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
   const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
   const int first_steps =
       o.refine_first_steps > 0 ? std::min(n_steps, o.refine_first_steps) : n_steps;  // 0: every step at once
+  // The search's steps (the same for every pixel): those within first_steps of the prediction, then the others.
+  std::vector<int>& near_steps = scratch.near_steps;
+  std::vector<int>& far_steps = scratch.far_steps;
+  near_steps.clear(), far_steps.clear();
+  for (int s = -first_steps; s <= first_steps; ++s) near_steps.push_back(s);
+  for (int s = first_steps + 1; s <= n_steps; ++s) far_steps.push_back(-s), far_steps.push_back(s);
   WindowA window_a;
   std::vector<double>& scores = scratch.scores;
   scores.assign(2 * n_steps + 1, -2.0);
+  // The first best score of scores[lo, hi].
+  const auto best_in = [&scores](int lo, int hi) {
+    int best = lo;
+    for (int k = lo + 1; k <= hi; ++k)
+      if (scores[k] > scores[best]) best = k;
+    return best;
+  };
   const cv::Rect roi = DensePairRoi(a.camera, a.world_from_camera, o);
   if (roi.area() <= 0) return finish();
   const int h = o.ncc_half_window;
@@ -979,26 +992,17 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
           // (the peak may lie farther out) or under refine_first_min_ncc (a weak peak: a better one may lie farther
           // out). Steps not scored stay at -2 (never the best, never a neighbour).
           ++stats.refine_searches;
-          if (first_steps == n_steps) ++stats.refine_full_searches;  // every step at once
+          if (far_steps.empty()) ++stats.refine_full_searches;  // every step at once
           std::fill(scores.begin(), scores.end(), -2.0);
-          std::vector<int>& steps = scratch.steps;
-          steps.clear();
-          for (int s = -first_steps; s <= first_steps; ++s) steps.push_back(s);
-          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, steps.data(),
-                       static_cast<int>(steps.size()), o.refine_kernel, &scratch.search, scores.data());
-          int best = -1;
-          for (int k = n_steps - first_steps; k <= n_steps + first_steps; ++k)
-            if (best < 0 || scores[k] > scores[best]) best = k;
-          if (first_steps < n_steps && (best == n_steps - first_steps || best == n_steps + first_steps ||
-                                        scores[best] < o.refine_first_min_ncc)) {
+          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, near_steps.data(),
+                       static_cast<int>(near_steps.size()), o.refine_kernel, &scratch.search, scores.data());
+          int best = best_in(n_steps - first_steps, n_steps + first_steps);
+          if (!far_steps.empty() && (best == n_steps - first_steps || best == n_steps + first_steps ||
+                                     scores[best] < o.refine_first_min_ncc)) {
             ++stats.refine_full_searches;
-            steps.clear();
-            for (int s = first_steps + 1; s <= n_steps; ++s) steps.push_back(-s), steps.push_back(s);
-            SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, steps.data(),
-                         static_cast<int>(steps.size()), o.refine_kernel, &scratch.search, scores.data());
-            best = -1;
-            for (int k = 0; k <= 2 * n_steps; ++k)
-              if (best < 0 || scores[k] > scores[best]) best = k;
+            SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, far_steps.data(),
+                         static_cast<int>(far_steps.size()), o.refine_kernel, &scratch.search, scores.data());
+            best = best_in(0, 2 * n_steps);
           }
           if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
             ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here

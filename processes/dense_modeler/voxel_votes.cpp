@@ -69,13 +69,11 @@ VoxelVoteGrid::VoxelVoteGrid(const VoxelVoteOptions& options) : options_(options
 }
 
 Eigen::Vector3i VoxelVoteGrid::VoxelOf(const Eigen::Vector3d& p) const {
-  const Eigen::Vector3d s = p / options_.voxel_size_mm;
-  return Eigen::Vector3i(static_cast<int>(std::floor(s.x())), static_cast<int>(std::floor(s.y())),
-                         static_cast<int>(std::floor(s.z())));
+  return VoxelIndexOf(p, options_.voxel_size_mm);
 }
 
 Eigen::Vector3d VoxelVoteGrid::CenterOf(const Eigen::Vector3i& ijk) const {
-  return (ijk.cast<double>() + Eigen::Vector3d::Constant(0.5)) * options_.voxel_size_mm;
+  return VoxelCenterOf(ijk, options_.voxel_size_mm);
 }
 
 uint64_t VoxelVoteGrid::BlockKey(int bx, int by, int bz) {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -36,6 +37,18 @@ inline uint64_t VoxelKey(const Eigen::Vector3i& ijk) {
   return ((static_cast<uint64_t>(ijk.x()) + kOffset) & kMask) |
          (((static_cast<uint64_t>(ijk.y()) + kOffset) & kMask) << 21) |
          (((static_cast<uint64_t>(ijk.z()) + kOffset) & kMask) << 42);
+}
+
+// Index of the voxel of size voxel_size_mm that contains point (mm, world): floor(point / voxel_size_mm).
+inline Eigen::Vector3i VoxelIndexOf(const Eigen::Vector3d& point, double voxel_size_mm) {
+  const Eigen::Vector3d s = point / voxel_size_mm;
+  return Eigen::Vector3i(static_cast<int>(std::floor(s.x())), static_cast<int>(std::floor(s.y())),
+                         static_cast<int>(std::floor(s.z())));
+}
+
+// Centre of voxel ijk (mm, world): (ijk + 0.5) x voxel_size_mm.
+inline Eigen::Vector3d VoxelCenterOf(const Eigen::Vector3i& ijk, double voxel_size_mm) {
+  return (ijk.cast<double>() + Eigen::Vector3d::Constant(0.5)) * voxel_size_mm;
 }
 
 // One voxel with its votes and mean colour.

@@ -39,7 +39,7 @@ std::vector<double> VertexSupport(const std::vector<Eigen::Vector3d>& points, co
                                   const std::vector<CarvedVoxel>& voxels, double voxel_size) {
   std::vector<Eigen::Vector3d> centres;
   centres.reserve(voxels.size());
-  for (const CarvedVoxel& v : voxels) centres.push_back((v.ijk.cast<double>().array() + 0.5).matrix() * voxel_size);
+  for (const CarvedVoxel& v : voxels) centres.push_back(VoxelCenterOf(v.ijk, voxel_size));
   const PointGrid grid(centres, voxel_size);
   std::vector<double> support(points.size(), 0.0);
   for (size_t i = 0; i < points.size(); ++i) {
@@ -113,7 +113,7 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
   std::unordered_set<uint64_t> taken;
   for (size_t i = 0; i < n; ++i)
     if (used[i] && normal_f[i].squaredNorm() > 0 && support[i] >= weak_below &&
-        taken.insert(VoxelKey((points[i] / voxel_size).array().floor().cast<int>().matrix())).second) {
+        taken.insert(VoxelKey(VoxelIndexOf(points[i], voxel_size))).second) {
       strong_points.push_back(points[i]);
       strong_index.push_back(static_cast<int>(i));
     }
@@ -122,7 +122,7 @@ WeakRefitStats RefitWeakMeshVertices(TriangleMesh* mesh, const std::vector<Carve
   const double max_gap = o.max_gap_deg * kDegToRad;
 
   std::vector<char> border, drop(n, 0);
-  MarkBorderVertices(*mesh, std::vector<char>(mesh->triangles.size(), 1), &border);
+  MarkBorderVertices(*mesh, valid_triangle, &border);
   std::vector<std::pair<int, Eigen::Vector3d>> moves;  // vertex, its move (mm)
   std::vector<int> near;
   std::vector<double> angles, weight, heights;

@@ -36,9 +36,15 @@ int Fail(const std::string& message) {
   return 1;
 }
 
-bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& points, std::string* error) {
+// "x y z" per point, or "x y z value" with values (one per point).
+bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& points, std::string* error,
+              const std::vector<double>* values = nullptr) {
   std::ofstream out(path);
-  for (const Eigen::Vector3d& p : points) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (size_t i = 0; i < points.size(); ++i) {
+    out << points[i].x() << ' ' << points[i].y() << ' ' << points[i].z();
+    if (values) out << ' ' << (*values)[i];
+    out << '\n';
+  }
   if (!out) *error = "cannot write " + path;
   return static_cast<bool>(out);
 }
@@ -155,10 +161,8 @@ int main(int argc, char** argv) {
       if (distances.empty())
         std::fprintf(stderr, "warning: %s: no distances (no model points, or no truth points to score against)\n",
                      write_errors.c_str());
-      std::ofstream out(write_errors);
-      for (size_t i = 0; i < model.size() && i < distances.size(); ++i)
-        out << model[i].x() << ' ' << model[i].y() << ' ' << model[i].z() << ' ' << distances[i] << '\n';
-      if (!out) return Fail("cannot write " + write_errors);
+      const std::vector<Eigen::Vector3d> none;  // no distances: an empty file
+      if (!WriteXyz(write_errors, distances.empty() ? none : model, &error, &distances)) return Fail(error);
     }
     std::printf(
         "model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
