@@ -10,6 +10,8 @@
 #include <set>
 #include <string>
 
+#include "processes/dense_modeler/voxel_votes.h"
+
 namespace objscan {
 namespace {
 
@@ -35,36 +37,30 @@ TriangleMesh SphereMesh() {
 
 double RadialError(const Eigen::Vector3f& v) { return (v.cast<double>() - kCentre).norm() - kRadius; }
 
-std::array<int, 3> CellOf(const Eigen::Vector3f& p) {
-  return {{static_cast<int>(std::floor(p.x() / kVoxel)), static_cast<int>(std::floor(p.y() / kVoxel)),
-           static_cast<int>(std::floor(p.z() / kVoxel))}};
-}
+Eigen::Vector3i CellOf(const Eigen::Vector3f& p) { return VoxelIndexOf(p.cast<double>(), kVoxel); }
 
 // The vertices whose voxel holds a vertex of `patch`: they are the weak ones for the voxels of WeakVoxels (a
 // vertex's nearest voxel centre is its own cell's).
 std::vector<char> WeakCells(const TriangleMesh& mesh, const std::vector<char>& patch) {
-  std::set<std::array<int, 3>> weak;
+  std::set<uint64_t> weak;
   for (size_t i = 0; i < mesh.vertices.size(); ++i)
-    if (patch[i]) weak.insert(CellOf(mesh.vertices[i]));
+    if (patch[i]) weak.insert(VoxelKey(CellOf(mesh.vertices[i])));
   std::vector<char> flags(mesh.vertices.size(), 0);
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) flags[i] = weak.count(CellOf(mesh.vertices[i])) > 0;
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) flags[i] = weak.count(VoxelKey(CellOf(mesh.vertices[i]))) > 0;
   return flags;
 }
 
 // One voxel per cell holding a mesh vertex: 3 votes where a vertex of `patch` is, 200 elsewhere.
 std::vector<CarvedVoxel> WeakVoxels(const TriangleMesh& mesh, const std::vector<char>& patch) {
-  std::map<std::array<int, 3>, int32_t> cells;
+  std::map<uint64_t, CarvedVoxel> cells;  // by key: a fixed order
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    auto it = cells.emplace(CellOf(mesh.vertices[i]), 200).first;
-    if (patch[i]) it->second = 3;
+    const Eigen::Vector3i ijk = CellOf(mesh.vertices[i]);
+    auto [it, added] = cells.emplace(VoxelKey(ijk), CarvedVoxel());
+    if (added) it->second.ijk = ijk, it->second.votes = 200;
+    if (patch[i]) it->second.votes = 3;
   }
   std::vector<CarvedVoxel> voxels;
-  for (const auto& [c, v] : cells) {
-    CarvedVoxel x;
-    x.ijk = Eigen::Vector3i(c[0], c[1], c[2]);
-    x.votes = v;
-    voxels.push_back(x);
-  }
+  for (const auto& [key, v] : cells) voxels.push_back(v);
   return voxels;
 }
 
