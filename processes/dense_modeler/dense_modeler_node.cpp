@@ -55,6 +55,8 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("max-central-track-ids", &o->max_central_track_ids,
         "track ids whose central views are counted at most (beyond, ids neither landmarks nor in view are forgotten)");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
+  p.Add("require-target", &o->require_target,
+        "model nothing before a confirmed TARGET (closed loop: the robot searches for its target first)");
   p.Add("target-margin", &o->target_margin_mm, "mm, margin around the target box");
   p.Add("roi-box", &o->roi_box, "mm, world region xmin,ymin,zmin,xmax,ymax,zmax when no TARGET box (\"\" = none)");
   p.Add("auto-roi", &o->auto_roi, "derive the region of interest from the landmarks near the image centre");
@@ -259,6 +261,8 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
   if (o.refinement_downsample < 1 || o.refinement_downsample > 8) e << "refinement-downsample must be in [1, 8]; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
+  if (o.require_target && (!o.use_target_box || o.target_channel.empty()))
+    e << "require-target needs use-target-box and a target channel; ";
   {
     RegionOfInterest box;
     std::string box_why;
@@ -296,6 +300,7 @@ DenseModelerNode::DenseModelerNode(Bus& bus, const DenseModelerNodeOptions& opti
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for posed images");
   status_.SetValue("pairs_waiting", 0);         // pairs waiting for the region of interest
   status_.SetValue("pairs_without_region", 0);  // pairs run unrestricted although a region was expected
+  if (options_.require_target) status_.SetValue("pairs_before_target", 0);
   auto malformed = [this](const std::string& what) { return status_.MalformedHandler(what); };
   bus_.SubscribeMessage<image_t>(
       options_.image_channel, [this](const image_t& m, const RawMessage&) { OnImage(m); }, malformed("image"),
@@ -481,7 +486,7 @@ void DenseModelerNode::UpdateRegion(bool force) {
   region_dirty_ = false;
   RegionOfInterest region;
   int source = 0;
-  if (have_box_ || config_region_.valid) {
+  if (have_box_ || (config_region_.valid && !options_.require_target)) {
     source = have_box_ ? 1 : 2;
     region = have_box_ ? RegionOfInterest{} : config_region_;
     if (have_box_) {
@@ -491,7 +496,7 @@ void DenseModelerNode::UpdateRegion(bool force) {
     }
     if (options_.roi.detect_floor)
       AddFloorNear(landmark_points_, 0.5 * (region.box_min + region.box_max), options_.roi, &region);
-  } else if (options_.auto_roi &&
+  } else if (options_.auto_roi && !options_.require_target &&
              AutoRegionOfInterest(landmark_ids_, landmark_points_, central_counts_, options_.roi, &region)) {
     source = 3;
   }
@@ -515,8 +520,15 @@ void DenseModelerNode::TryProcess(int64_t seq) {
   slot.processed = true;
   last_seq_ = std::max(last_seq_, seq);
   last_utime_ = std::max(last_utime_, slot.utime);
-  // Copy for the final carving (bounded, deterministic thinning).
-  if (complete_frames_ % carving_keep_stride_ == 0) {
+  // Copy for the final carving (bounded, deterministic thinning). Searching for its target, the robot looks
+  // elsewhere: with require_target only frames that see the target box's centre are kept.
+  bool carving_candidate = true;
+  if (options_.require_target) {
+    Eigen::Vector2d pixel;
+    const Eigen::Vector3d center_in_camera = slot.pose->world_from_camera.inverse() * (0.5 * (box_min_ + box_max_));
+    carving_candidate = have_box_ && camera_->Project(center_in_camera, &pixel) && camera_->InImage(pixel);
+  }
+  if (carving_candidate && complete_frames_ % carving_keep_stride_ == 0) {
     if (static_cast<int>(carving_views_.size()) >= options_.max_carving_views) {
       std::vector<StoredView> kept;
       for (size_t i = 0; i < carving_views_.size(); i += 2) kept.push_back(std::move(carving_views_[i]));
@@ -534,7 +546,7 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       carving_views_.push_back(std::move(stored));
     }
   }
-  ++complete_frames_;
+  if (carving_candidate) ++complete_frames_;
   if (options_.auto_roi) {
     std::vector<std::pair<int64_t, Eigen::Vector2d>> tracks;
     tracks.reserve(slot.tracks->features.size());
@@ -587,7 +599,7 @@ void DenseModelerNode::QueuePair(int64_t seq_a, int64_t seq_b) {
 }
 
 bool DenseModelerNode::RegionExpected() const {
-  return !region_.valid && ((options_.auto_roi && !options_.landmarks_channel.empty()) ||
+  return !region_.valid && ((options_.auto_roi && !options_.require_target && !options_.landmarks_channel.empty()) ||
                             (options_.use_target_box && !options_.target_channel.empty()));
 }
 
@@ -597,6 +609,11 @@ void DenseModelerNode::RunWaitingPairs(bool force, int64_t evicting_seq) {
     const auto [seq_a, seq_b] = waiting_pairs_.front();
     if (RegionExpected() && !force && seq_a > evicting_seq) break;
     waiting_pairs_.pop_front();
+    if (options_.require_target && !region_.valid) {
+      ++pairs_before_target_;
+      status_.SetValue("pairs_before_target", static_cast<double>(pairs_before_target_));
+      continue;
+    }
     if (RegionExpected()) {
       ++pairs_without_region_;
       status_.SetValue("pairs_without_region", static_cast<double>(pairs_without_region_));

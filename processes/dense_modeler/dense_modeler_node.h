@@ -39,7 +39,7 @@
 // pair whose frames see their landmarks with a median reprojection error over max_pair_landmark_error_px is skipped
 // (the pose solver's early live poses can belong to a map it rescaled since). Status values: pairs,
 // pairs_skipped_inconsistent, pairs_waiting (for the region), pairs_without_region (run unrestricted although a
-// region was expected), dense_points, refine_searches and refine_full_searches (the pairs' epipolar searches and
+// region was expected), pairs_before_target (require_target: dropped while no TARGET was confirmed), dense_points, refine_searches and refine_full_searches (the pairs' epipolar searches and
 // those that scored every step, affine_dense.h), pair_matches_added (matches pair_matches.h added, all pairs), voxels,
 // votes, pair_ms, vote_ms, carving_views, central_track_ids (track ids whose central views are counted), roi_source (0
 // none, 1 target, 2 configuration, 3 automatic), roi_floor (1 when the floor cuts the region); after the final phase
@@ -110,6 +110,11 @@ struct DenseModelerNodeOptions {
   int refinement_downsample = 1;                         // integer downsampling of the gray copies kept with them for
                                                          // the mesh's photometric refinement, [1, 8]
   bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
+  bool require_target = false;                           // closed loop (robot searching for its target): nothing is
+                                                         // modeled before a confirmed TARGET box; earlier pairs are
+                                                         // dropped (never run unrestricted), frames are kept for
+                                                         // carving only when the box's centre is in their view, and
+                                                         // auto_roi / roi_box are not used
   double target_margin_mm = 30.0;                        // mm, added on every side of the target box (>= 0)
   std::string roi_box;                                   // mm, world "xmin,ymin,zmin,xmax,ymax,zmax" ("" = none)
   bool auto_roi = true;                                  // derive the region from landmarks when no box is known
@@ -240,6 +245,7 @@ class DenseModelerNode : public Node {
   RecentValues dense_ms_{100000};  // ms, ComputeDensePair's share of them (the dense pair alone)
   std::deque<std::pair<int64_t, int64_t>> waiting_pairs_;  // (seq_a, seq_b) waiting for the region of interest
   int64_t pairs_without_region_ = 0;                       // pairs run unrestricted although a region was expected
+  int64_t pairs_before_target_ = 0;                        // require_target: pairs dropped before a TARGET box
   int64_t pair_matches_added_ = 0;                         // matches AddPairMatches gave the pairs so far
   int64_t dense_points_ = 0;
   int64_t refine_searches_ = 0, refine_full_searches_ = 0;  // epipolar searches of the pairs so far, every step scored

@@ -367,6 +367,42 @@ TEST_F(NodeFixture, PairsWaitForTheRegionOfInterest) {
   EXPECT_EQ(StatusValue(out_.statuses.back(), "pairs_waiting"), 0);
 }
 
+// The robot searching its target: without a confirmed TARGET nothing is modeled (the pairs are dropped, never run
+// unrestricted), and views that do not see the box are not kept for carving.
+TEST_F(NodeFixture, RequireTargetModelsNothingBeforeTheTarget) {
+  options_.output_dir.clear();
+  options_.require_target = true;
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  const auto features = scene_.SurfacePoints(2000);
+  for (int i = 0; i < 12; ++i) PublishFrame(i, 16, features);
+  EXPECT_EQ(node.pairs_done(), 0);
+  EXPECT_EQ(node.grid().total_votes(), 0);
+  PublishTarget();
+  Drain();
+  for (int i = 12; i < 18; ++i) PublishFrame(i, 16, features);
+  EXPECT_GE(node.pairs_done(), 5);
+  EXPECT_GT(node.grid().total_votes(), 0);
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  ASSERT_FALSE(out_.statuses.empty());
+  // 12 frames, pair gap 1: 11 pairs before the target, at most the last one (its frame still buffered) runs after.
+  EXPECT_GE(StatusValue(out_.statuses.back(), "pairs_before_target"), 6);
+  EXPECT_EQ(StatusValue(out_.statuses.back(), "pairs_without_region"), 0);
+  // The 6 frames after the target see the sphere: only they are kept for carving.
+  EXPECT_LE(StatusValue(out_.statuses.back(), "carving_views"), 6);
+  EXPECT_GE(StatusValue(out_.statuses.back(), "carving_views"), 5);
+}
+
+TEST(DenseModelerNodeOptions, RequireTargetNeedsTheTargetChannel) {
+  DenseModelerNodeOptions o;
+  o.require_target = true;
+  std::string why;
+  EXPECT_TRUE(ValidateDenseModelerNodeOptions(o, &why)) << why;
+  o.target_channel.clear();
+  EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
+  EXPECT_NE(why.find("require-target"), std::string::npos);
+}
+
 TEST_F(NodeFixture, SameInputGivesIdenticalOutput) {
   options_.output_dir.clear();
   std::vector<std::vector<uint8_t>> encoded[2];

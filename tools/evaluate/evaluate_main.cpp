@@ -20,11 +20,17 @@
 //       --write-aligned FILE writes the model points as scored (after --align; "x y z" per line, truth frame) and
 //       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are;
 //       --write-errors FILE writes "x y z distance" per model point (truth frame, the accuracy_* distances).
+//   objscan_evaluate target TARGET.json TRUTH.json [--align EST.txt TRUTH.txt]
+//       the object finder's box (target.json: center_mm, size_mm, state) against the true one (robot_sim's
+//       ground_truth/sim_outcome.json: center_mm, size_mm of the target), the estimate first mapped by the Sim(3)
+//       that aligns the estimated trajectory to the true one; prints center_error_mm (3-D), center_error_xy_mm and
+//       the extents' errors (larger and smaller floor extent, height).
 // Output is one "key value" pair per line (easy to grep in tests and scripts).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -57,7 +63,8 @@ int main(int argc, char** argv) {
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
                  "[--align EST TRUTH] [--truth-mesh MESH] [--visible-from POSES] [--min-views N] [--no-occlusion] "
-                 "[--intrinsics fx,fy,cx,cy,w,h] [--write-aligned F] [--write-visible F] [--write-errors F]\n");
+                 "[--intrinsics fx,fy,cx,cy,w,h] [--write-aligned F] [--write-visible F] [--write-errors F]\n"
+                 "       objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH]\n");
     return 2;
   }
   const std::string command = argv[1];
@@ -172,6 +179,47 @@ int main(int argc, char** argv) {
     if (!truth_mesh.empty())
       std::printf("sample_accuracy_p50 %.4f\nsample_accuracy_p90 %.4f\nsample_accuracy_max %.4f\n",
                   samples.accuracy_p50, samples.accuracy_p90, samples.accuracy_max);
+    return 0;
+  }
+  if (command == "target") {
+    std::string align_est, align_truth;
+    for (int i = 4; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--align" && i + 2 < argc) {
+        align_est = argv[++i];
+        align_truth = argv[++i];
+      } else {
+        return Fail("unknown option " + a);
+      }
+    }
+    std::string texts[2];
+    for (int k = 0; k < 2; ++k) {
+      std::ifstream in(argv[2 + k]);
+      if (!in) return Fail(std::string("cannot read ") + argv[2 + k]);
+      std::stringstream buffer;
+      buffer << in.rdbuf();
+      texts[k] = buffer.str();
+    }
+    std::vector<double> c, sz, tc, tsz;
+    if (!JsonNumbers(texts[0], "center_mm", 3, &c) || !JsonNumbers(texts[0], "size_mm", 3, &sz))
+      return Fail(std::string(argv[2]) + ": no center_mm / size_mm (3 numbers each)");
+    if (!JsonNumbers(texts[1], "center_mm", 3, &tc) || !JsonNumbers(texts[1], "size_mm", 3, &tsz))
+      return Fail(std::string(argv[3]) + ": no center_mm / size_mm (3 numbers each)");
+    Sim3 truth_from_estimate;
+    if (!align_est.empty()) {
+      std::vector<StampedPose> est, tru;
+      if (!ReadTumTrajectory(align_est, &est, &error) || !ReadTumTrajectory(align_truth, &tru, &error))
+        return Fail(error);
+      TrajectoryEvaluation e;
+      if (!EvaluateTumTrajectories(est, tru, true, 0.005, &e, &error)) return Fail(error);
+      truth_from_estimate = e.error.alignment;
+    }
+    const TargetEvaluation t = EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, {tc[0], tc[1], tc[2]},
+                                              {tsz[0], tsz[1], tsz[2]}, truth_from_estimate);
+    std::printf("center_error_mm %.3f\ncenter_error_xy_mm %.3f\ncenter_x %.3f\ncenter_y %.3f\ncenter_z %.3f\n"
+                "size_error_major_mm %.3f\nsize_error_minor_mm %.3f\nsize_error_height_mm %.3f\n",
+                t.center_error_mm, t.center_error_xy_mm, t.center_aligned_mm.x(), t.center_aligned_mm.y(),
+                t.center_aligned_mm.z(), t.size_error_mm.x(), t.size_error_mm.y(), t.size_error_mm.z());
     return 0;
   }
   return Fail("unknown command " + command);

@@ -1,7 +1,9 @@
 #include "tools/evaluate/evaluation.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -531,6 +533,46 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
   const PointGrid truth_grid(accuracy_truth, std::max(completeness_threshold, 1e-9));
   return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(), distances,
                   [&](const Eigen::Vector3d& p) { return truth_grid.NearestExact(p); });
+}
+
+bool JsonNumbers(const std::string& json_text, const std::string& key, int n, std::vector<double>* values) {
+  values->clear();
+  const size_t at = json_text.find("\"" + key + "\"");
+  if (at == std::string::npos) return false;
+  size_t pos = json_text.find(':', at + key.size() + 2);
+  if (pos == std::string::npos) return false;
+  ++pos;
+  while (pos < json_text.size() && std::isspace(static_cast<unsigned char>(json_text[pos]))) ++pos;
+  const bool array = pos < json_text.size() && json_text[pos] == '[';
+  if (array) ++pos;
+  for (int i = 0; i < n; ++i) {
+    const char* begin = json_text.c_str() + pos;
+    char* end = nullptr;
+    const double v = std::strtod(begin, &end);
+    if (end == begin || !std::isfinite(v)) return false;
+    values->push_back(v);
+    pos += static_cast<size_t>(end - begin);
+    while (pos < json_text.size() && std::isspace(static_cast<unsigned char>(json_text[pos]))) ++pos;
+    if (i + 1 < n) {
+      if (!array || pos >= json_text.size() || json_text[pos] != ',') return false;
+      ++pos;
+    }
+  }
+  return !array || (pos < json_text.size() && json_text[pos] == ']');
+}
+
+TargetEvaluation EvaluateTarget(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
+                                const Eigen::Vector3d& true_center_mm, const Eigen::Vector3d& true_size_mm,
+                                const Sim3& truth_from_estimate) {
+  TargetEvaluation e;
+  e.center_aligned_mm = truth_from_estimate * center_mm;
+  e.center_error_mm = (e.center_aligned_mm - true_center_mm).norm();
+  e.center_error_xy_mm = (e.center_aligned_mm - true_center_mm).head<2>().norm();
+  const double s = truth_from_estimate.scale;
+  e.size_error_mm = Eigen::Vector3d(s * size_mm.head<2>().maxCoeff() - true_size_mm.head<2>().maxCoeff(),
+                                    s * size_mm.head<2>().minCoeff() - true_size_mm.head<2>().minCoeff(),
+                                    s * size_mm.z() - true_size_mm.z());
+  return e;
 }
 
 }  // namespace objscan

@@ -121,4 +121,23 @@ SurfaceEvaluation EvaluateSurfaceToMesh(const std::vector<Eigen::Vector3d>& mode
                                         const std::vector<Eigen::Vector3d>& completeness_truth,
                                         double completeness_threshold, std::vector<double>* distances = nullptr);
 
+// The first array of n numbers under "key" in a JSON text (objscan's own files: target.json, sim_outcome.json):
+// `"key": [a, b, c]` or `"key": a` (n = 1). False when the key is missing or its value is not n finite numbers.
+bool JsonNumbers(const std::string& json_text, const std::string& key, int n, std::vector<double>* values);
+
+struct TargetEvaluation {
+  double center_error_mm = 0;       // |estimated centre (aligned) - true centre|
+  double center_error_xy_mm = 0;    // the same on the floor (x, y)
+  Eigen::Vector3d center_aligned_mm = Eigen::Vector3d::Zero();  // estimated centre in the truth frame
+  Eigen::Vector3d size_error_mm = Eigen::Vector3d::Zero();  // estimated - true extents (scaled by the alignment):
+                                                            // the larger floor extent, the smaller, the height
+};
+
+// Compares an object finder's box (centre, extents along its own axes, world mm) with the true one after mapping
+// the estimate by truth_from_estimate (the Sim(3) of the trajectories' alignment; identity when none). The floor
+// extents are compared larger with larger (box yaw conventions differ by 90 degrees), the heights directly.
+TargetEvaluation EvaluateTarget(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
+                                const Eigen::Vector3d& true_center_mm, const Eigen::Vector3d& true_size_mm,
+                                const Sim3& truth_from_estimate);
+
 }  // namespace objscan

@@ -271,8 +271,6 @@ TEST(EvaluationTest, VisibleSurfacePointsAtGrazingAnglesDoNotHideThemselves) {
     }
 }
 
-}  // namespace
-}  // namespace objscan
 
 namespace objscan {
 namespace {
@@ -413,6 +411,41 @@ TEST(MeshDistanceTest, ReadsAsciiAndBinaryPlyMeshes) {
   EXPECT_FALSE(ReadPlyMesh(bad, &v, &t, &error));
   EXPECT_NE(error.find("no face"), std::string::npos) << error;
   for (const auto& p : {ascii, binary, bad}) std::remove(p.c_str());
+}
+
+}  // namespace
+}  // namespace objscan
+
+TEST(JsonNumbers, ReadsArraysAndScalarsOfOurFiles) {
+  const std::string text = R"({"state": "confirmed", "center_mm": [12.5, -3, 1e2], "size_mm":[150,140, 120],
+    "yaw_rad": 0.25, "other": {"center_mm": [1, 2, 3]}})";
+  std::vector<double> v;
+  ASSERT_TRUE(JsonNumbers(text, "center_mm", 3, &v));
+  EXPECT_EQ(v, (std::vector<double>{12.5, -3, 100}));  // the first occurrence
+  ASSERT_TRUE(JsonNumbers(text, "size_mm", 3, &v));
+  EXPECT_EQ(v, (std::vector<double>{150, 140, 120}));
+  ASSERT_TRUE(JsonNumbers(text, "yaw_rad", 1, &v));
+  EXPECT_DOUBLE_EQ(v[0], 0.25);
+  EXPECT_FALSE(JsonNumbers(text, "missing", 1, &v));
+  EXPECT_FALSE(JsonNumbers(text, "center_mm", 4, &v));  // only 3 numbers
+  EXPECT_FALSE(JsonNumbers(text, "state", 1, &v));       // not a number
+  EXPECT_FALSE(JsonNumbers(R"({"center_mm": [1, nan, 2]})", "center_mm", 3, &v));
+}
+
+TEST(EvaluateTarget, AppliesTheAlignmentBeforeComparing) {
+  // The estimate lives in a frame rotated 90 deg about z, shifted and at half scale.
+  Sim3 truth_from_estimate;
+  truth_from_estimate.scale = 2.0;
+  truth_from_estimate.rotation = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  truth_from_estimate.translation = Eigen::Vector3d(1000, 0, 0);
+  const Eigen::Vector3d true_center(1000 - 2 * 20, 2 * 10, 2 * 50 + 3);  // 3 mm too low after alignment
+  const TargetEvaluation e = EvaluateTarget({10, 20, 50}, {70, 75, 60}, true_center, {150, 140, 120},
+                                            truth_from_estimate);
+  EXPECT_NEAR(e.center_error_mm, 3.0, 1e-9);
+  EXPECT_NEAR(e.center_error_xy_mm, 0.0, 1e-9);
+  EXPECT_NEAR(e.size_error_mm.x(), 0.0, 1e-9);   // 2 x 75 vs 150
+  EXPECT_NEAR(e.size_error_mm.y(), 0.0, 1e-9);   // 2 x 70 vs 140
+  EXPECT_NEAR(e.size_error_mm.z(), 0.0, 1e-9);   // 2 x 60 vs 120
 }
 
 }  // namespace
