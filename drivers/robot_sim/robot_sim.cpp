@@ -53,23 +53,44 @@ bool ValidateRobotSimOptions(const RobotSimOptions& o, std::string* why) {
       o.goal_heading_gain <= 0)
     return fail("goal tolerance and gain must be > 0");
   if (o.command_timeout_us < 0) return fail("--command-timeout-ms must be >= 0");
+  if (!Finite(o.footprint_radius_mm) || o.footprint_radius_mm <= 0 || o.footprint_radius_mm > 5000)
+    return fail("--footprint-radius-mm must be in (0, 5000] mm");
   return true;
 }
 
-RobotSimulator::RobotSimulator(const Scene& scene, const RobotSimOptions& options)
-    : options_(options), rng_(MixSeed(options.seed, 0x0d0)) {
+namespace {
+
+const RobotSimOptions& Validated(const RobotSimOptions& options) {
   std::string why;
-  if (!ValidateRobotSimOptions(options_, &why)) throw std::invalid_argument(why);
+  if (!ValidateRobotSimOptions(options, &why)) throw std::invalid_argument(why);
+  return options;
+}
+
+}  // namespace
+
+RobotSimulator::RobotSimulator(const Scene& scene, const RobotSimOptions& options)
+    : options_(Validated(options)), footprint_(scene, options.footprint_radius_mm), rng_(MixSeed(options.seed, 0x0d0)) {
   const Eigen::Vector3d target = scene.target_index >= 0 ? scene.TargetCenter() : Eigen::Vector3d::Zero();
   orbit_center_ = options_.orbit_center_auto ? Eigen::Vector2d(target.x(), target.y()) : options_.orbit_center_mm;
   look_at_ = options_.look_at_auto ? target : options_.look_at_mm;
-  state_ = OrbitState(0);
-  state_.v_mm_s = state_.omega_rad_s = state_.pan_rate_rad_s = state_.tilt_rate_rad_s = 0;
+  if (options_.mode == "command" && scene.has_robot_start) {
+    const RobotStart& start = scene.robot_start;
+    state_ = RobotState();
+    state_.x_mm = start.x_mm;
+    state_.y_mm = start.y_mm;
+    state_.theta_rad = start.theta_rad;
+    state_.pan_rad = start.pan_rad;
+    state_.tilt_rad = start.tilt_rad;
+    start_state_ = state_;
+  } else {
+    start_state_ = OrbitState(0);
+    state_ = start_state_;
+    state_.v_mm_s = state_.omega_rad_s = state_.pan_rate_rad_s = state_.tilt_rate_rad_s = 0;
+  }
   if (options_.odometry_origin == "world") {
-    const RobotState start = OrbitState(0);
-    odo_x_ = start.x_mm;
-    odo_y_ = start.y_mm;
-    odo_theta_ = start.theta_rad;
+    odo_x_ = start_state_.x_mm;
+    odo_y_ = start_state_.y_mm;
+    odo_theta_ = start_state_.theta_rad;
   }
 }
 
@@ -168,6 +189,19 @@ void RobotSimulator::AdvanceCommand(double dt) {
   next.theta_rad = WrapAngle(state_.theta_rad + omega * dt);
   next.v_mm_s = v;
   next.omega_rad_s = omega;
+  // Collisions: a step into an object's footprint is not applied; the base still turns in place.
+  pending_object_ = -1;
+  pending_contact_ = ContactCounter::Frame::kIdle;
+  if (std::abs(v * dt) > 1e-9) {
+    if (footprint_.StepBlocked(state_.x_mm, state_.y_mm, state_.theta_rad, v * dt, omega * dt, &pending_object_)) {
+      next.x_mm = state_.x_mm;
+      next.y_mm = state_.y_mm;
+      next.v_mm_s = 0;
+      pending_contact_ = ContactCounter::Frame::kBlocked;
+    } else {
+      pending_contact_ = ContactCounter::Frame::kFree;
+    }
+  }
   next.pan_rate_rad_s = next.tilt_rate_rad_s = 0;
   if (has_command_ && command_.has_pan_tilt && std::isfinite(command_.pan_rad) && std::isfinite(command_.tilt_rad)) {
     // The head servos its measured angle (true + bias) to the command.
@@ -211,7 +245,20 @@ SimFrame RobotSimulator::Step() {
   frame.seq = next_seq_;
   frame.utime = UtimeOf(next_seq_);
   frame.truth = options_.mode == "orbit" ? OrbitState(next_seq_) : state_;
-  if (has_previous_) UpdateOdometry(previous_truth_, frame.truth);
+  ContactCounter::Frame contact = pending_contact_;
+  frame.collision_object = pending_object_;
+  if (options_.mode == "orbit") {
+    const bool overlaps =
+        footprint_.Overlaps(Eigen::Vector2d(frame.truth.x_mm, frame.truth.y_mm), &frame.collision_object);
+    contact = overlaps ? ContactCounter::Frame::kBlocked : ContactCounter::Frame::kFree;
+  }
+  frame.blocked = contact == ContactCounter::Frame::kBlocked;
+  if (!frame.blocked) frame.collision_object = -1;
+  frame.new_collision = contacts_.Record(contact);
+  if (has_previous_) {
+    path_length_mm_ += std::hypot(frame.truth.x_mm - previous_truth_.x_mm, frame.truth.y_mm - previous_truth_.y_mm);
+    UpdateOdometry(previous_truth_, frame.truth);
+  }
   previous_truth_ = frame.truth;
   has_previous_ = true;
   const RobotState& t = frame.truth;

@@ -6,9 +6,16 @@
 //   orbit    the base drives a circle of radius R around P (tangentially, counter-clockwise for positive degrees),
 //            frame i at angle start + degrees * i / frames; the head pans/tilts so that the optical axis passes
 //            through the look-at point (default the target's centre). Velocities are those of the circle.
-//   command  the robot follows SimCommand's (velocity, goal, head-only, stop); it starts at the orbit's frame-0
-//            pose (head aimed at the look-at point). Goals are in the odometry frame and are driven to with the
-//            robot's own (erroneous) odometry, as a real robot would. Speeds and head rates are limited.
+//   command  the robot follows SimCommand's (velocity, goal, head-only, stop); it starts at the scene's `robot`
+//            line pose when the scene has one (Scene::robot_start, head at its pan/tilt), else at the orbit's
+//            frame-0 pose (head aimed at the look-at point). Goals are in the odometry frame and are driven to with
+//            the robot's own (erroneous) odometry, as a real robot would. Speeds and head rates are limited.
+//
+// Collisions (footprint.h): the base is a circle of footprint_radius_mm. In command mode a base step whose path would
+// make it overlap an object's floor footprint is not applied (the heading still turns, the true velocity is 0 and the
+// odometry measures no translation); such a frame is "blocked" and an entry into contact is one collision
+// (ContactCounter). In orbit mode the motion is never changed, but frames whose footprint overlaps an object are
+// counted the same way (a scripted orbit through an object is reported).
 //
 // Odometry error model (all seeded by `seed`, per frame, in frame order, so the readings never depend on timing):
 //   distance   d_meas = d_true * (1 + scale_error) + N(0, (distance_noise * |d_true|)^2)
@@ -30,6 +37,7 @@
 
 #include "common/robot_model.h"
 #include "common/sensor_data.h"
+#include "drivers/robot_sim/footprint.h"
 #include "drivers/robot_sim/scene.h"
 
 namespace objscan {
@@ -83,6 +91,7 @@ struct RobotSimOptions {
   double goal_tolerance_mm = 10;          // command mode: goal reached within this distance
   double goal_heading_gain = 2.0;         // command mode goal controller: omega = gain * heading error
   int64_t command_timeout_us = 1000000;   // µs of sim time without a command after which the base stops (0 = never)
+  double footprint_radius_mm = 200;       // mm, radius of the base's circular footprint (collisions)
 };
 
 // False with a reason for invalid options.
@@ -94,11 +103,16 @@ struct SimFrame {
   RobotState truth;                     // true state at utime
   Eigen::Isometry3d world_from_camera;  // true camera pose (mm)
   OdometryReading odometry;             // what the robot reports (errors applied)
+  // Contact: command mode = the base step into this frame was refused; orbit mode = this frame's footprint
+  // overlaps an object.
+  bool blocked = false;
+  bool new_collision = false;  // this frame starts a collision (contact episode)
+  int collision_object = -1;   // Scene object index of the contact (when blocked), else -1
 };
 
 class RobotSimulator {
  public:
-  // Throws std::invalid_argument for invalid options.
+  // Throws std::invalid_argument for invalid options. Keeps no reference to the scene.
   RobotSimulator(const Scene& scene, const RobotSimOptions& options);
 
   // True once all frames were produced (never in command mode with frames = 0).
@@ -110,6 +124,15 @@ class RobotSimulator {
   // reached; the motion to the following frame uses this command). Ignored in orbit mode. receive_utime is the sim
   // time (µs) at which it arrived (for the command timeout).
   void SetCommand(const SimCommand& command, int64_t receive_utime);
+
+  // Contact statistics over the frames produced so far.
+  int64_t collisions() const { return contacts_.collisions(); }
+  int64_t blocked_frames() const { return contacts_.blocked_frames(); }
+  // mm, length of the true base path over the frames produced so far (sum of the frame-to-frame chords).
+  double path_length_mm() const { return path_length_mm_; }
+  const FootprintChecker& footprint() const { return footprint_; }
+  // The true state at frame 0 (command mode: the scene's robot start if any; orbit mode: the orbit's first pose).
+  const RobotState& start_state() const { return start_state_; }
 
   Eigen::Vector2d orbit_center() const { return orbit_center_; }
   Eigen::Vector3d look_at() const { return look_at_; }
@@ -126,6 +149,12 @@ class RobotSimulator {
   void UpdateOdometry(const RobotState& previous, const RobotState& current);
 
   RobotSimOptions options_;
+  FootprintChecker footprint_;
+  ContactCounter contacts_;
+  ContactCounter::Frame pending_contact_ = ContactCounter::Frame::kIdle;  // command mode: the step into the next frame
+  int pending_object_ = -1;
+  double path_length_mm_ = 0;
+  RobotState start_state_;
   Eigen::Vector2d orbit_center_;
   Eigen::Vector3d look_at_;
   int64_t next_seq_ = 0;

@@ -41,10 +41,13 @@ void BM_RenderSphere(benchmark::State& state) { RenderScene(state, "sphere.scene
 void BM_RenderSphereTrilinear(benchmark::State& state) { RenderScene(state, "sphere.scene", true); }
 void BM_RenderCluttered(benchmark::State& state) { RenderScene(state, "cluttered.scene", false); }
 void BM_RenderMesh(benchmark::State& state) { RenderScene(state, "mesh.scene", false); }
+// A room (walls, table, pillar, rug, ...) seen from the 800 mm orbit around its target.
+void BM_RenderRoom(benchmark::State& state) { RenderScene(state, "rooms/room_01.scene", false); }
 BENCHMARK(BM_RenderSphere)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RenderSphereTrilinear)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RenderCluttered)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RenderMesh)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderRoom)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace objscan

@@ -104,6 +104,9 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("max-head-rate-deg-s", &o->max_head_rate_deg_s, "deg/s, command mode pan/tilt slew limit");
   p.Add("command-timeout-ms", &o->command_timeout_ms,
         "ms of sim time without a command before the base stops (0 = never)");
+  p.Add("footprint-radius-mm", &o->footprint_radius_mm,
+        "mm, radius of the robot base's circular footprint: command mode stops the base before it overlaps an "
+        "object; contacts are counted in both modes");
   p.Add("lockstep-channel", &o->lockstep_channel,
         "publish frame i+1 only after a message with seq >= i - lockstep-lag on this channel (empty = off)");
   p.Add("lockstep-lag", &o->lockstep_lag, "frames the lockstep consumer may lag behind");
@@ -155,6 +158,7 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.max_omega_rad_s = o.max_omega_deg_s * kDeg;
   s.max_head_rate_rad_s = o.max_head_rate_deg_s * kDeg;
   s.command_timeout_us = static_cast<int64_t>(o.command_timeout_ms) * 1000;
+  s.footprint_radius_mm = o.footprint_radius_mm;
   return s;
 }
 
@@ -224,6 +228,15 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   sim_ = std::make_unique<RobotSimulator>(*scene_, sim_options_);
   LogInfo("scene " + options_.scene + ": " + std::to_string(scene_->objects.size()) + " objects, target '" +
           scene_->target().name + "'");
+  {
+    const RobotState& start = sim_->start_state();
+    int object = -1;
+    const double clearance = sim_->footprint().Clearance(Eigen::Vector2d(start.x_mm, start.y_mm), &object);
+    if (clearance < 0)
+      LogWarning("the robot starts overlapping '" + scene_->objects.at(static_cast<size_t>(object)).name + "' by " +
+                 std::to_string(-clearance) + " mm (footprint radius " + std::to_string(options_.footprint_radius_mm) +
+                 " mm)");
+  }
 
   if (!options_.ground_truth_dir.empty()) {
     const std::string& dir = options_.ground_truth_dir;
@@ -249,6 +262,8 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
               << " orbit_center=" << sim_->orbit_center().x() << "," << sim_->orbit_center().y()
               << " orbit_degrees=" << options_.orbit_degrees << " orbit_start_deg=" << options_.orbit_start_deg
               << " look_at=" << sim_->look_at().x() << "," << sim_->look_at().y() << "," << sim_->look_at().z()
+              << " footprint_radius=" << options_.footprint_radius_mm << " start=" << sim_->start_state().x_mm << ","
+              << sim_->start_state().y_mm << "," << sim_->start_state().theta_rad * 180 / 3.14159265358979323846
               << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx
               << " fy=" << camera_.fy << " cx=" << camera_.cx << " cy=" << camera_.cy
               << " noise_sigma=" << options_.noise_sigma << "\n# robot: mast_height=" << options_.mast_height_mm
@@ -335,6 +350,8 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   }
   status_.SetState(process_status_t::STATE_STARTING, options_.scene);
   status_.SetValue("frames_published", 0);
+  status_.SetValue("collisions", 0);
+  status_.SetValue("blocked_frames", 0);
 }
 
 RobotSimNode::~RobotSimNode() = default;
@@ -411,12 +428,60 @@ void RobotSimNode::PublishFrame() {
     robot_gt_ << frame.utime / 1e6 << " " << frame.seq << " " << s.x_mm << " " << s.y_mm << " " << s.theta_rad << " "
               << s.pan_rad << " " << s.tilt_rad << " " << s.v_mm_s << " " << s.omega_rad_s << "\n";
   }
+  if (frame.new_collision) {
+    const std::string object = frame.collision_object >= 0
+                                   ? scene_->objects.at(static_cast<size_t>(frame.collision_object)).name
+                                   : std::string("?");
+    LogWarning("collision " + std::to_string(sim_->collisions()) + " at frame " + std::to_string(frame.seq) +
+               ": the base touches '" + object + "'" +
+               (options_.mode == "command" ? " (stopped)" : " (orbit: motion unchanged)"));
+  }
   truth_history_.push_back(frame.truth);
   last_utime_ = frame.utime;
   ++frames_published_;
   status_.SetLastDataUtime(frame.utime);
   status_.SetValue("frames_published", static_cast<double>(frames_published_));
   status_.SetValue("render_ms", render_ms_);
+  status_.SetValue("collisions", static_cast<double>(sim_->collisions()));
+  status_.SetValue("blocked_frames", static_cast<double>(sim_->blocked_frames()));
+}
+
+void RobotSimNode::WriteOutcome() {
+  const std::string path = options_.ground_truth_dir + "/sim_outcome.json";
+  const SceneObject& target = scene_->target();
+  const OrientedBox box = ObjectBox(target);
+  auto vec = [](const Eigen::Vector3d& v) {
+    std::ostringstream out;
+    out << std::setprecision(10) << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+    return out.str();
+  };
+  auto quoted = [](const std::string& text) {
+    std::string out = "\"";
+    for (const char c : text) {
+      if (c == '"' || c == '\\') out += '\\';
+      if (static_cast<unsigned char>(c) >= 0x20) out += c;
+    }
+    return out + "\"";
+  };
+  std::ofstream file(path);
+  file << std::setprecision(10) << "{\n"
+       << "  \"mode\": " << quoted(options_.mode) << ",\n"
+       << "  \"frames\": " << frames_published_ << ",\n"
+       << "  \"collisions\": " << sim_->collisions() << ",\n"
+       << "  \"blocked_frames\": " << sim_->blocked_frames() << ",\n"
+       << "  \"path_length_mm\": " << sim_->path_length_mm() << ",\n"
+       << "  \"footprint_radius_mm\": " << options_.footprint_radius_mm << ",\n"
+       << "  \"target\": {\n"
+       << "    \"name\": " << quoted(target.name) << ",\n"
+       << "    \"shape\": " << quoted(ShapeName(target.type)) << ",\n"
+       << "    \"center_mm\": " << vec(box.center_mm) << ",\n"
+       << "    \"size_mm\": " << vec(box.size_mm) << ",\n"
+       << "    \"yaw_rad\": " << box.yaw_rad << ",\n"
+       << "    \"bounds_min_mm\": " << vec(target.bounds.min()) << ",\n"
+       << "    \"bounds_max_mm\": " << vec(target.bounds.max()) << "\n"
+       << "  }\n"
+       << "}\n";
+  if (!file) LogError("cannot write " + path);
 }
 
 void RobotSimNode::FinishStream() {
@@ -432,8 +497,13 @@ void RobotSimNode::FinishStream() {
   end_of_stream_sent_ = true;
   if (poses_gt_.is_open()) poses_gt_.flush();
   if (robot_gt_.is_open()) robot_gt_.flush();
+  if (!options_.ground_truth_dir.empty()) WriteOutcome();
   status_.SetState(process_status_t::STATE_FINISHED, std::to_string(frames_published_) + " frames published");
-  LogInfo("end of stream after " + std::to_string(frames_published_) + " frames");
+  std::ostringstream outcome;
+  outcome << "end of stream after " << frames_published_ << " frames; " << sim_->collisions() << " collisions, "
+          << sim_->blocked_frames() << " blocked frames, true base path " << std::llround(sim_->path_length_mm())
+          << " mm";
+  LogInfo(outcome.str());
 }
 
 void RobotSimNode::Tick(int64_t wall_utime) {

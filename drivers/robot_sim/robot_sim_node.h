@@ -6,7 +6,8 @@
 //   GROUND_TRUTH_POSE  pose_t world_from_camera (mm), STATUS_GROUND_TRUTH, SCALE_TRUE, seq = i (evaluation only)
 //   CAMERA_IMAGE       image_t (rgb8 by default; bgr8, gray8 or jpeg), seq = i, utime = llround(i * 1e6 / rate)
 // and after the last frame control_t COMMAND_END_OF_STREAM (sender "robot_sim", last_seq) on OBJSCAN_CONTROL.
-// PROCESS_STATUS at 1 Hz (values frames_published, render_ms, lockstep_timeouts, commands).
+// PROCESS_STATUS at 1 Hz (values frames_published, render_ms, lockstep_timeouts, commands, collisions,
+// blocked_frames).
 //
 // Driving: the node is a driver, so it publishes from Tick(wall_utime) rather than from message handlers; main runs
 // it with RunNode(bus, node) and a 1 ms tick (Handle() waits at most 1 ms, so commands and lockstep messages are
@@ -22,7 +23,12 @@
 // "robot_sim" or "*" on OBJSCAN_CONTROL ends the stream early (END_OF_STREAM follows).
 // Determinism: messages depend only on the scene, options and seed (and in command mode on the commands received
 // before each frame), never on timing, except PROCESS_STATUS.
-// --ground-truth-dir DIR writes target_surface.ply, target_mesh.ply, scene.txt at start-up and poses_gt.txt, robot_gt.txt per frame.
+// Collisions (robot_sim.h, footprint.h): the base is a circle of --footprint-radius-mm; in command mode it stops
+// instead of driving into an object or a wall; each new collision is logged (frame, object) and counted.
+// --ground-truth-dir DIR writes target_surface.ply, target_mesh.ply, scene.txt at start-up, poses_gt.txt,
+// robot_gt.txt per frame and sim_outcome.json at the end of the stream (frames, collisions, blocked_frames,
+// path_length_mm of the true base, the target's truth: name, shape, center_mm, size_mm, yaw_rad of its bounding box
+// in its own yawed frame, scene.h ObjectBox).
 #pragma once
 
 #include <cstdint>
@@ -90,6 +96,7 @@ struct RobotSimNodeOptions {
   double max_omega_deg_s = 90;       // deg/s
   double max_head_rate_deg_s = 120;  // deg/s
   int command_timeout_ms = 1000;     // ms of sim time without a command before the base stops (0 = never)
+  double footprint_radius_mm = 200;  // mm, radius of the base's circular footprint (collisions)
   // timing
   std::string lockstep_channel;    // wait for seq >= i - lockstep_lag here before frame i+1 ("" = off)
   int lockstep_lag = 0;            // frames the consumer may lag behind
@@ -146,6 +153,7 @@ class RobotSimNode : public Node {
   bool LockstepReady(int64_t wall_utime);
   void PublishFrame();
   void FinishStream();
+  void WriteOutcome();
   template <class Msg>
   void Publish(const std::string& channel, const Msg& msg);
 

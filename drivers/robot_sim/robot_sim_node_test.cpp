@@ -318,6 +318,87 @@ TEST(RobotSimNodeTest, CommandModeFollowsRobotCommandAndStopsOnShutdown) {
   EXPECT_EQ(rec.controls[0].last_seq, static_cast<int64_t>(rec.images.size()) - 1);
 }
 
+// The value `name` of a process_status_t (NAN when absent).
+double StatusValue(const process_status_t& status, const std::string& name) {
+  for (int k = 0; k < status.num_values; ++k)
+    if (status.value_name[k] == name) return status.value[k];
+  return NAN;
+}
+
+TEST(RobotSimNodeTest, CommandModeStopsAtAnObstacleCountsItAndWritesTheOutcome) {
+  const std::string dir = ::testing::TempDir() + "/robot_sim_collision";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream scene(dir + "/crate.scene");
+    scene << "sphere name=ball center=0,2000,100 radius=100 target=true\n"
+             "box name=crate center=1000,0,250 size=400,400,500\n"
+             "robot start=0,0,0\n";
+  }
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  RobotSimNodeOptions options = FastOptions(0);
+  options.mode = "command";
+  options.scene = dir + "/crate.scene";
+  std::string why;
+  options.footprint_radius_mm = -5;
+  EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why));
+  EXPECT_NE(why.find("--footprint-radius-mm"), std::string::npos) << why;
+  options.footprint_radius_mm = 200;
+  options.ground_truth_dir = dir + "/gt";
+  RobotSimNode node(*bus, options);
+  robot_command_t command{};
+  command.mode = robot_command_t::MODE_VELOCITY;
+  command.v_mm_s = 300;
+  command.has_pan_tilt = false;
+  for (int i = 0; i < 90; ++i) {  // 3 s at 300 mm/s towards a face 600 mm ahead (footprint 200 mm)
+    command.seq = i;
+    bus->PublishMessage("ROBOT_COMMAND", command);
+    Drain(*bus);
+    node.Tick(WallTimeMicros());
+    Drain(*bus);
+  }
+  ASSERT_EQ(rec.images.size(), 90u);
+  const auto& truth = node.truth_history();
+  EXPECT_EQ(truth.front().x_mm, 0);  // the scene's start pose
+  EXPECT_GE(truth.back().x_mm, 590 - 1e-9);
+  EXPECT_LE(truth.back().x_mm, 600 + 1e-9);
+  EXPECT_EQ(node.status().value("collisions"), 1);
+  EXPECT_GE(node.status().value("blocked_frames"), 25);
+  // the odometry reports the stop: no translation over the blocked frames
+  EXPECT_EQ(rec.odometry[89].x_mm, rec.odometry[80].x_mm);
+  control_t shutdown{};
+  shutdown.sender = "test";
+  shutdown.target = "*";
+  shutdown.command = control_t::COMMAND_SHUTDOWN;
+  shutdown.last_seq = -1;
+  bus->PublishMessage("OBJSCAN_CONTROL", shutdown);
+  Drain(*bus);
+  RunToEnd(*bus, node, 5);
+  ASSERT_TRUE(node.Finished());
+  node.OnShutdown();
+  Drain(*bus);
+  ASSERT_FALSE(rec.statuses.empty());
+  EXPECT_EQ(StatusValue(rec.statuses.back(), "collisions"), 1);
+  EXPECT_EQ(StatusValue(rec.statuses.back(), "blocked_frames"), node.status().value("blocked_frames"));
+  // sim_outcome.json
+  std::ifstream file(dir + "/gt/sim_outcome.json");
+  ASSERT_TRUE(file.good());
+  const std::string json((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  for (const std::string expected :
+       {"\"frames\": 90,", "\"collisions\": 1,", "\"name\": \"ball\"", "\"shape\": \"sphere\"",
+        "\"center_mm\": [0, 2000, 100]", "\"size_mm\": [200, 200, 200]", "\"yaw_rad\": 0,"})
+    EXPECT_NE(json.find(expected), std::string::npos) << expected << " in\n" << json;
+  const size_t at = json.find("\"path_length_mm\": ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_NEAR(std::stod(json.substr(at + 18)), truth.back().x_mm, 1e-6);
+  // scene.txt keeps the robot line and loads again
+  const Scene reloaded = LoadScene(dir + "/gt/scene.txt");
+  ASSERT_TRUE(reloaded.has_robot_start);
+  EXPECT_EQ(reloaded.robot_start.x_mm, 0);
+  EXPECT_NEAR(reloaded.robot_start.tilt_rad, 25 * M_PI / 180, 1e-12);
+}
+
 TEST(RobotSimNodeTest, InvalidOptionsAreRejected) {
   auto bus = MakeLcmBus("memq://");
   RobotSimNodeOptions options;

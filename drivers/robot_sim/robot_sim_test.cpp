@@ -176,6 +176,49 @@ TEST(RobotSimTest, CommandModeFollowsVelocityGoalAndHeadCommands) {
   EXPECT_EQ(g.truth.v_mm_s, 0);
 }
 
+TEST(RobotSimTest, CommandModeStartsAtTheScenesRobotLine) {
+  const std::string objects = "sphere center=0,0,100 radius=100 target=true\n";
+  const Scene scene = ParseScene(objects + "robot start=1500,-700,120 pan=-20 tilt=35\n", ".");
+  RobotSimOptions options;
+  options.mode = "command";
+  options.frames = 0;
+  RobotSimulator sim(scene, options);
+  const SimFrame f = sim.Step();
+  EXPECT_EQ(f.truth.x_mm, 1500);
+  EXPECT_EQ(f.truth.y_mm, -700);
+  EXPECT_NEAR(f.truth.theta_rad, 120 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(f.truth.pan_rad, -20 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(f.truth.tilt_rad, 35 * M_PI / 180, 1e-12);
+  EXPECT_EQ(f.truth.v_mm_s, 0);
+  EXPECT_TRUE(f.world_from_camera.isApprox(
+      WorldFromCamera(options.geometry, 1500, -700, 120 * M_PI / 180, -20 * M_PI / 180, 35 * M_PI / 180)));
+  EXPECT_EQ(f.odometry.x_mm, 0);  // odometry frame = the start pose
+  EXPECT_EQ(f.odometry.theta_rad, 0);
+  // the head holds the scene's angles until commanded
+  SimFrame g = f;
+  for (int i = 0; i < 10; ++i) g = sim.Step();
+  EXPECT_EQ(g.truth.pan_rad, f.truth.pan_rad);
+  EXPECT_EQ(g.truth.x_mm, 1500);
+  // odometry origin "world": the readings start at the true start pose
+  options.odometry_origin = "world";
+  RobotSimulator world(scene, options);
+  const SimFrame w = world.Step();
+  EXPECT_EQ(w.odometry.x_mm, 1500);
+  EXPECT_NEAR(w.odometry.theta_rad, 120 * M_PI / 180, 1e-12);
+  // the orbit ignores the line; without the line, command mode starts at the orbit's first pose as before
+  RobotSimOptions orbit;
+  RobotSimulator orbiting(scene, orbit);
+  const SimFrame o = orbiting.Step();
+  EXPECT_NEAR(o.truth.x_mm, 0, 1e-9);
+  EXPECT_NEAR(o.truth.y_mm, -800, 1e-9);
+  RobotSimulator plain(ParseScene(objects, "."), options);
+  const SimFrame p = plain.Step();
+  EXPECT_NEAR(p.truth.x_mm, o.truth.x_mm, 1e-9);
+  EXPECT_NEAR(p.truth.y_mm, o.truth.y_mm, 1e-9);
+  EXPECT_NEAR(p.truth.theta_rad, o.truth.theta_rad, 1e-12);
+  EXPECT_NEAR(p.truth.tilt_rad, o.truth.tilt_rad, 1e-12);
+}
+
 TEST(RobotSimTest, RejectsInvalidOptions) {
   const Scene scene = SphereScene();
   RobotSimOptions options;

@@ -822,6 +822,34 @@ uint64_t ParseSeed(const std::string& key, const std::string& v) {
   }
 }
 
+// The `robot start=x,y,yaw_deg [pan=deg] [tilt=deg]` line; marks the keys it reads in *used.
+RobotStart ParseRobotStart(const std::map<std::string, std::string>& kv, std::set<std::string>* used) {
+  RobotStart start;
+  const auto it = kv.find("start");
+  if (it == kv.end()) throw std::runtime_error("robot: start=x,y,yaw_deg is required");
+  used->insert("start");
+  const Eigen::Vector3d pose = ParseVector3("start", it->second);
+  if (std::abs(pose.x()) > RobotStart::kMaxCoordinateMm || std::abs(pose.y()) > RobotStart::kMaxCoordinateMm)
+    throw std::runtime_error("robot: start x, y must be within +-" + Fmt(RobotStart::kMaxCoordinateMm) + " mm");
+  if (std::abs(pose.z()) > 360) throw std::runtime_error("robot: start yaw must be in [-360, 360] deg");
+  start.x_mm = pose.x();
+  start.y_mm = pose.y();
+  start.theta_rad = std::atan2(std::sin(pose.z() * kPi / 180.0), std::cos(pose.z() * kPi / 180.0));
+  if (kv.count("pan")) {
+    used->insert("pan");
+    const double pan = ParseDouble("pan", kv.at("pan"));
+    if (std::abs(pan) > 180) throw std::runtime_error("robot: pan must be in [-180, 180] deg");
+    start.pan_rad = pan * kPi / 180.0;
+  }
+  if (kv.count("tilt")) {
+    used->insert("tilt");
+    const double tilt = ParseDouble("tilt", kv.at("tilt"));
+    if (std::abs(tilt) > 90) throw std::runtime_error("robot: tilt must be in [-90, 90] deg");
+    start.tilt_rad = tilt * kPi / 180.0;
+  }
+  return start;
+}
+
 std::string JoinPath(const std::string& dir, const std::string& file) {
   if (file.empty() || file[0] == '/' || dir.empty()) return file;
   return dir + "/" + file;
@@ -859,8 +887,46 @@ std::string Scene::Describe() const {
   out << "scene seed=" << seed << " background=" << Fmt3(background_bgr) << "\n";
   out << "light direction=" << Fmt3(light.direction) << " ambient=" << Fmt(light.ambient)
       << " diffuse=" << Fmt(light.diffuse) << "\n";
+  if (has_robot_start)
+    out << "robot start=" << Fmt(robot_start.x_mm) << "," << Fmt(robot_start.y_mm) << ","
+        << Fmt(robot_start.theta_rad * 180.0 / kPi) << " pan=" << Fmt(robot_start.pan_rad * 180.0 / kPi)
+        << " tilt=" << Fmt(robot_start.tilt_rad * 180.0 / kPi) << "\n";
   for (const auto& o : objects) out << o.Describe() << "\n";
   return out.str();
+}
+
+const char* ShapeName(ShapeType type) { return TypeName(type); }
+
+OrientedBox ObjectBox(const SceneObject& o) {
+  OrientedBox box;
+  box.yaw_rad = o.type == ShapeType::kSphere ? 0.0 : o.yaw_rad;
+  switch (o.type) {
+    case ShapeType::kSphere:
+      box.center_mm = o.center_mm;
+      box.size_mm = Eigen::Vector3d::Constant(2 * o.radius_mm);
+      return box;
+    case ShapeType::kBox:
+      box.center_mm = o.center_mm;
+      box.size_mm = o.size_mm;
+      return box;
+    case ShapeType::kCylinder:
+      box.center_mm = o.center_mm;
+      box.size_mm = Eigen::Vector3d(2 * o.radius_mm, 2 * o.radius_mm, o.height_mm);
+      return box;
+    case ShapeType::kFloor:
+      box.size_mm = Eigen::Vector3d(o.size_mm.x(), o.size_mm.x(), 0);
+      return box;
+    case ShapeType::kMesh:
+      break;
+  }
+  // Mesh: extents of the placed vertices in the yawed frame.
+  const Eigen::Matrix3d object_from_world = Yaw(o.yaw_rad).transpose();
+  Eigen::AlignedBox3d local;
+  for (const Eigen::Vector3f& p : o.mesh.positions) local.extend(object_from_world * p.cast<double>());
+  if (local.isEmpty()) return box;
+  box.center_mm = Yaw(o.yaw_rad) * local.center();
+  box.size_mm = local.sizes();
+  return box;
 }
 
 Scene ParseScene(const std::string& text, const std::string& base_dir, const std::string& path) {
@@ -869,6 +935,7 @@ Scene ParseScene(const std::string& text, const std::string& base_dir, const std
   std::istringstream in(text);
   std::string raw_line;
   int line_number = 0;
+  int robot_line = 0;  // line of the robot item (0 = none yet)
   while (std::getline(in, raw_line)) {
     ++line_number;
     const std::string where = (path.empty() ? std::string("scene") : path) + ":" + std::to_string(line_number) + ": ";
@@ -903,6 +970,13 @@ Scene ParseScene(const std::string& text, const std::string& base_dir, const std
         if (has("diffuse")) scene.light.diffuse = ParseDouble("diffuse", get("diffuse"));
         if (scene.light.direction.norm() < 1e-9) throw std::runtime_error("direction must not be zero");
         if (scene.light.ambient < 0 || scene.light.diffuse < 0) throw std::runtime_error("ambient/diffuse < 0");
+      } else if (type == "robot") {
+        if (robot_line > 0)
+          throw std::runtime_error("robot: only one robot line is allowed (the first is line " +
+                                   std::to_string(robot_line) + ")");
+        robot_line = line_number;
+        scene.robot_start = ParseRobotStart(kv, &used);
+        scene.has_robot_start = true;
       } else {
         SceneObject o;
         if (type == "floor")
@@ -916,7 +990,8 @@ Scene ParseScene(const std::string& text, const std::string& base_dir, const std
         else if (type == "mesh")
           o.type = ShapeType::kMesh;
         else
-          throw std::runtime_error("unknown item '" + type + "' (scene, light, floor, sphere, box, cylinder, mesh)");
+          throw std::runtime_error("unknown item '" + type +
+                                   "' (scene, light, robot, floor, sphere, box, cylinder, mesh)");
         o.id = static_cast<int>(scene.objects.size());
         o.name = has("name") ? get("name") : type + std::to_string(o.id);
         o.texture.seed = scene.seed * 1000 + static_cast<uint64_t>(o.id) + 1;

@@ -11,6 +11,8 @@
 //   box      center=x,y,z size=sx,sy,sz yaw=deg ...
 //   cylinder center=x,y,z radius=R height=H yaw=deg ...    axis along world z, center = middle of the axis
 //   mesh     file=PATH center=x,y,z scale=k yaw=deg on_floor=true ...   PLY (ascii / binary_little_endian) or OBJ
+//   robot    start=x,y,yaw_deg [pan=deg] [tilt=deg]          the robot's start pose in command mode (at most one line;
+//                                                           tilt > 0 = looking down; defaults pan 0, tilt 25)
 // Common object keys: name=, target=true|false, seed=N (texture), texture=leaves|noise|checker|solid,
 //   texel_mm=T (mm per texel), texture_size=N (power of two), saturation=0..1, contrast=0..1, color=b,g,r (solid),
 //   segments=N (tessellation, 0 = automatic from the chord tolerance).
@@ -112,23 +114,47 @@ struct SceneLight {
   double diffuse = 0.6;                      // Lambert term scale
 };
 
+// The robot's start pose from a scene's `robot` line (world frame; used by the command mode, ignored by the orbit).
+struct RobotStart {
+  double x_mm = 0, y_mm = 0;  // base centre on the floor, |x|, |y| <= kMaxCoordinateMm
+  double theta_rad = 0;       // heading (yaw about world z; the line gives degrees in [-360, 360])
+  double pan_rad = 0;         // head pan (> 0 = left), the line gives degrees in [-180, 180]
+  double tilt_rad = 25.0 * 3.14159265358979323846 / 180.0;  // head tilt (> 0 = down), degrees in [-90, 90]
+  static constexpr double kMaxCoordinateMm = 100000;
+};
+
+// An object's bounding box in its own yawed frame: box = its size, cylinder = 2r x 2r x h, sphere = 2r, mesh = the
+// extents of its placed vertices along its yawed x and y axes and world z.
+struct OrientedBox {
+  Eigen::Vector3d center_mm = Eigen::Vector3d::Zero();  // world
+  Eigen::Vector3d size_mm = Eigen::Vector3d::Zero();    // along the object's x, y (yawed) and world z
+  double yaw_rad = 0;                                   // the object's yaw (0 for a sphere)
+};
+OrientedBox ObjectBox(const SceneObject& object);
+// "floor", "sphere", "box", "cylinder" or "mesh".
+const char* ShapeName(ShapeType type);
+
 struct Scene {
   std::string path;                               // file it was loaded from ("" for text)
   uint64_t seed = 1;                              // scene seed (scene seed=; reported in scene.txt)
   Eigen::Vector3d background_bgr{190, 195, 200};  // 0..255, colour where no surface is hit
   SceneLight light;
   std::vector<SceneObject> objects;
-  int target_index = -1;  // index of the target object
+  int target_index = -1;         // index of the target object
+  bool has_robot_start = false;  // the file has a `robot` line
+  RobotStart robot_start;        // valid when has_robot_start
 
   const SceneObject& target() const { return objects.at(static_cast<size_t>(target_index)); }
   // Centre of the target's bounding box (world mm).
   Eigen::Vector3d TargetCenter() const { return target().bounds.center(); }
-  // The resolved scene description (scene, light and one line per object), with a header comment.
+  // The resolved scene description (scene, light, the robot line if any, one line per object), with a header
+  // comment.
   std::string Describe() const;
 };
 
 // Parses a scene description. base_dir resolves relative mesh paths. Throws std::runtime_error naming the line on
-// syntax errors, unknown types/keys, invalid values, unreadable mesh files, several targets or no object.
+// syntax errors, unknown types/keys, invalid values (non-finite, out of range), unreadable mesh files, several
+// targets, several robot lines or no object.
 Scene ParseScene(const std::string& text, const std::string& base_dir, const std::string& path = "");
 // Reads and parses a scene file. Throws std::runtime_error (unreadable file or as ParseScene).
 Scene LoadScene(const std::string& path);
