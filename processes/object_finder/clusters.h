@@ -1,0 +1,43 @@
+// Clusters of map points above the floor and the boxes that bound them. LCM-free, deterministic, mm / rad.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "processes/object_finder/floor_plane.h"
+
+namespace objscan {
+
+// Single-linkage Euclidean clustering: two points closer than distance_mm (3-D) are in the same cluster. A hash grid
+// of cell distance_mm keeps it near O(points). Returns the clusters with at least min_points members, each a sorted
+// list of indices into points, ordered by their first index (independent of hash order).
+std::vector<std::vector<int>> EuclideanClusters(const std::vector<Eigen::Vector3d>& points, double distance_mm,
+                                                int min_points);
+
+// Minimum-area rectangle around 2-D points (rotating calipers over the convex hull). yaw_rad is the angle of the
+// rectangle's first axis, normalised to [-pi/4, pi/4) with extents swapped to match; extents along (first, second)
+// axis. Fewer than 3 distinct hull points: the axis-aligned bounding box.
+struct Rectangle2d {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  Eigen::Vector2d extents = Eigen::Vector2d::Zero();
+  double yaw_rad = 0;
+};
+Rectangle2d MinAreaRectangle(const std::vector<Eigen::Vector2d>& points);
+
+// The box of one cluster, measured in the floor's frame (FloorPlane::FloorFromWorld) and given in world.
+struct ClusterBox {
+  Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();  // world: rectangle centre at mid height above the floor
+  Eigen::Vector3d size_mm = Eigen::Vector3d::Zero();    // extents along the box axes (yaw) and height above floor
+  double yaw_rad = 0;                                   // about the floor normal (~ world z), [-pi/4, pi/4)
+  double lowest_mm = 0;                                 // mm, lowest member's height above the floor
+  int points = 0;                                       // members
+  // members per 100 cm^2 of the box's visible side area (x + y) * height + x * y: two adjacent sides and the
+  // top, what one view of a box shows at most.
+  double texture_density = 0;
+};
+
+// floor_points: the members' positions in the floor frame (z = height above the floor).
+ClusterBox FitClusterBox(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& members,
+                         const FloorPlane& floor);
+
+}  // namespace objscan

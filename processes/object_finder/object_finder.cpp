@@ -1,0 +1,452 @@
+#include "processes/object_finder/object_finder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+namespace objscan {
+
+namespace {
+
+constexpr int kMinClusterPoints = 3;        // smaller groups are noise, never tracked
+constexpr double kFreshFraction = 0.1;      // members seen again (at least 3) that make a cluster "observed"
+constexpr double kNeighbourFraction = 0.1;  // other points (at least 3) within the clearance that reject a target
+constexpr int kForgetAfterUpdates = 20;     // a track no cluster continued for this many updates is forgotten
+
+TargetBox ToTargetBox(const ClusterBox& b) { return TargetBox{b.centre_mm, b.size_mm, b.yaw_rad}; }
+
+double HorizontalDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::hypot(a.x() - b.x(), a.y() - b.y());
+}
+
+}  // namespace
+
+const char* TargetStateName(TargetState state) {
+  switch (state) {
+    case TargetState::kSearching:
+      return "searching";
+    case TargetState::kCandidate:
+      return "candidate";
+    case TargetState::kConfirmed:
+      return "confirmed";
+    case TargetState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
+
+bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why) {
+  std::ostringstream e;
+  auto positive = [&e](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) e << name << " must be > 0; ";
+  };
+  positive(o.floor_inlier_mm, "floor-inlier-distance");
+  if (!(o.floor_max_tilt_deg > 0 && o.floor_max_tilt_deg < 90)) e << "floor-max-tilt must be in (0, 90); ";
+  if (o.min_floor_points < 3) e << "min-floor-points must be >= 3; ";
+  if (o.min_observations < 0) e << "min-observations must be >= 0; ";
+  positive(o.max_reprojection_error_px, "max-reprojection-error");
+  if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min-height must be >= 0; ";
+  if (!(o.max_height_mm > o.min_height_mm) || !std::isfinite(o.max_height_mm)) e << "max-height must be > min-height; ";
+  positive(o.cluster_distance_mm, "cluster-distance");
+  positive(o.target_min_size_mm, "target-min-size");
+  if (!(o.target_max_size_mm >= o.target_min_size_mm) || !std::isfinite(o.target_max_size_mm))
+    e << "target-max-size must be >= target-min-size; ";
+  if (!(o.size_tolerance >= 0 && o.size_tolerance < 1)) e << "size-tolerance must be in [0, 1); ";
+  if (!(o.floor_contact_mm >= 0) || !std::isfinite(o.floor_contact_mm)) e << "floor-contact must be >= 0; ";
+  if (!(o.min_texture_density >= 0) || !std::isfinite(o.min_texture_density)) e << "min-texture-density must be >= 0; ";
+  if (o.min_target_points < kMinClusterPoints) e << "min-target-points must be >= 3; ";
+  if (!(o.clearance_mm >= 0) || !std::isfinite(o.clearance_mm)) e << "clearance must be >= 0; ";
+  positive(o.track_match_distance_mm, "track-match-distance");
+  if (o.min_views < 1) e << "min-views must be >= 1; ";
+  if (!(o.min_view_baseline_mm >= 0) || !std::isfinite(o.min_view_baseline_mm)) e << "min-view-baseline must be >= 0; ";
+  if (!(o.min_view_bearing_deg >= 0 && o.min_view_bearing_deg <= 180)) e << "min-view-bearing must be in [0, 180]; ";
+  positive(o.max_centre_motion_mm, "max-centre-motion");
+  if (o.lost_after_updates < 1) e << "lost-after-updates must be >= 1; ";
+  positive(o.max_view_distance_mm, "max-view-distance");
+  if (o.drop_after_rejections < 1) e << "drop-after-rejections must be >= 1; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+bool FinderCamera::IsValid() const {
+  return width > 0 && height > 0 && fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
+         std::isfinite(cy);
+}
+
+ImageRegion ProjectBox(const TargetBox& box, const Eigen::Isometry3d& world_from_camera, const FinderCamera& camera) {
+  if (!camera.IsValid()) return {};
+  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
+  const Eigen::Matrix3d yaw = Eigen::AngleAxisd(box.yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const double inf = std::numeric_limits<double>::infinity();
+  double u_min = inf, u_max = -inf, v_min = inf, v_max = -inf;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d offset(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5, corner & 4 ? 0.5 : -0.5);
+    const Eigen::Vector3d p = camera_from_world * (box.centre_mm + yaw * offset.cwiseProduct(box.size_mm));
+    if (!(p.z() > 1e-3)) continue;  // behind the camera
+    const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
+    u_min = std::min(u_min, u);
+    u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  }
+  if (!(u_min <= u_max) || !(v_min <= v_max)) return {};
+  // Pixel i covers [i - 0.5, i + 0.5); clamp in double first (corners near the camera plane project far away).
+  auto first = [](double x, int size) { return static_cast<int>(std::floor(std::clamp(x, -1.0, size + 1.0) + 0.5)); };
+  const int u0 = std::clamp(first(u_min, camera.width), 0, camera.width);
+  const int u1 = std::clamp(first(u_max, camera.width) + 1, 0, camera.width);
+  const int v0 = std::clamp(first(v_min, camera.height), 0, camera.height);
+  const int v1 = std::clamp(first(v_max, camera.height) + 1, 0, camera.height);
+  if (u1 <= u0 || v1 <= v0) return {};
+  return ImageRegion{u0, v0, u1 - u0, v1 - v0};
+}
+
+ObjectFinder::ObjectFinder(const ObjectFinderOptions& options) : options_(options) {
+  std::string why;
+  if (!ValidateObjectFinderOptions(options_, &why)) throw std::invalid_argument("object finder: " + why);
+}
+
+bool ObjectFinder::Update(const FinderInput& input, std::string* error) {
+  auto fail = [error](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  if (!input.camera.IsValid()) return fail("invalid camera intrinsics");
+  const Eigen::Matrix3d r = input.world_from_camera.linear();
+  if (!input.world_from_camera.matrix().allFinite() ||
+      !((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-6) || !(r.determinant() > 0))
+    return fail("camera pose is not a finite rigid transform");
+  std::vector<int> valid;
+  const std::vector<char> fresh = CollectLandmarks(input, &valid);
+  UpdateFloor(input, valid);
+  std::vector<Cluster> clusters;
+  if (floor_valid_) clusters = FindClusters(input, valid, fresh);
+  MatchTracks(clusters);
+  UpdateTracks(input, clusters);
+  UpdateTarget(input);
+  FillResult(input, clusters);
+  ++updates_;
+  return true;
+}
+
+std::vector<char> ObjectFinder::CollectLandmarks(const FinderInput& input, std::vector<int>* valid) {
+  const std::vector<MapLandmark>& landmarks = input.landmarks;
+  std::vector<char> fresh(landmarks.size(), 0);
+  std::unordered_map<int64_t, int> current;
+  current.reserve(landmarks.size());
+  valid->reserve(landmarks.size());
+  int rejected = 0;
+  for (size_t i = 0; i < landmarks.size(); ++i) {
+    const MapLandmark& l = landmarks[i];
+    if (!l.position_mm.allFinite() || !(l.reprojection_error_px >= 0) || !std::isfinite(l.reprojection_error_px) ||
+        l.num_observations < 0) {
+      ++rejected;
+      continue;
+    }
+    valid->push_back(static_cast<int>(i));
+    const auto it = previous_observations_.find(l.id);
+    fresh[i] = it == previous_observations_.end() || l.num_observations > it->second;
+    current[l.id] = l.num_observations;
+  }
+  previous_observations_.swap(current);
+  result_.rejected_landmarks = rejected;
+  return fresh;
+}
+
+void ObjectFinder::UpdateFloor(const FinderInput& input, const std::vector<int>& valid) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(valid.size());
+  for (int i : valid) points.push_back(input.landmarks[i].position_mm);
+  FloorFitOptions fit_options;
+  fit_options.inlier_mm = options_.floor_inlier_mm;
+  fit_options.max_tilt_deg = options_.floor_max_tilt_deg;
+  fit_options.min_points = options_.min_floor_points;
+  const FloorFit fit = FitFloor(points, fit_options, floor_valid_ ? &floor_ : nullptr);
+  if (fit.found) {
+    floor_ = fit.plane;
+    floor_valid_ = true;
+    floor_points_ = fit.inliers;
+  } else if (floor_valid_) {  // too few floor points in this map: keep the last good floor
+    floor_points_ = 0;
+    for (const auto& p : points) floor_points_ += std::abs(floor_.Height(p)) <= options_.floor_inlier_mm;
+  }
+}
+
+std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput& input, const std::vector<int>& valid,
+                                                              const std::vector<char>& fresh) {
+  const Eigen::Isometry3d floor_from_world = floor_.FloorFromWorld();
+  std::vector<Eigen::Vector3d> floor_points;
+  std::vector<int> source;  // index into input.landmarks
+  for (int i : valid) {
+    const MapLandmark& l = input.landmarks[i];
+    if (l.num_observations < options_.min_observations || l.reprojection_error_px > options_.max_reprojection_error_px)
+      continue;
+    const Eigen::Vector3d f = floor_from_world * l.position_mm;
+    if (f.z() <= options_.min_height_mm || f.z() > options_.max_height_mm) continue;
+    floor_points.push_back(f);
+    source.push_back(i);
+  }
+  result_.points_used = static_cast<int>(floor_points.size());
+  const std::vector<std::vector<int>> groups =
+      EuclideanClusters(floor_points, options_.cluster_distance_mm, kMinClusterPoints);
+  std::vector<int> label(floor_points.size(), -1);
+  for (size_t k = 0; k < groups.size(); ++k)
+    for (int m : groups[k]) label[m] = static_cast<int>(k);
+  std::vector<Cluster> clusters(groups.size());
+  for (size_t k = 0; k < groups.size(); ++k) {
+    Cluster& c = clusters[k];
+    c.box = FitClusterBox(floor_points, groups[k], floor_);
+    c.rejection = CheckRule(c.box);
+    if (c.rejection.empty() && CountNeighbours(floor_points, label, static_cast<int>(k), c.box) >
+                                   std::max<double>(3, kNeighbourFraction * groups[k].size()))
+      c.rejection = "not isolated";
+    int fresh_members = 0;
+    for (int m : groups[k]) fresh_members += fresh[source[m]];
+    c.observed = fresh_members >= std::max<double>(3, kFreshFraction * groups[k].size());
+    c.in_view = InView(c.box.centre_mm, input, std::numeric_limits<double>::infinity());
+  }
+  return clusters;
+}
+
+std::string ObjectFinder::CheckRule(const ClusterBox& box) const {
+  const double low = options_.target_min_size_mm * (1 - options_.size_tolerance);
+  const double high = options_.target_max_size_mm * (1 + options_.size_tolerance);
+  const double horizontal = std::max(box.size_mm.x(), box.size_mm.y());
+  if (box.size_mm.z() > high) return "too high";
+  if (horizontal > high) return "too large";
+  if (box.size_mm.z() < low) return "too low";
+  if (horizontal < low) return "too small";
+  if (box.lowest_mm > options_.floor_contact_mm) return "not on the floor";
+  if (box.points < options_.min_target_points) return "too few points";
+  if (box.texture_density < options_.min_texture_density) return "untextured";
+  return "";
+}
+
+int ObjectFinder::CountNeighbours(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& label,
+                                  int cluster, const ClusterBox& box) const {
+  const Eigen::Vector3d centre = floor_.FloorFromWorld() * box.centre_mm;
+  const Eigen::Vector2d a(std::cos(box.yaw_rad), std::sin(box.yaw_rad)), b(-a.y(), a.x());
+  const double half_a = 0.5 * box.size_mm.x() + options_.clearance_mm;
+  const double half_b = 0.5 * box.size_mm.y() + options_.clearance_mm;
+  const double top = box.size_mm.z() + options_.clearance_mm;
+  int count = 0;
+  for (size_t i = 0; i < floor_points.size(); ++i) {
+    if (label[i] == cluster) continue;
+    const Eigen::Vector2d d = floor_points[i].head<2>() - centre.head<2>();
+    count += std::abs(d.dot(a)) <= half_a && std::abs(d.dot(b)) <= half_b && floor_points[i].z() <= top;
+  }
+  return count;
+}
+
+bool ObjectFinder::InView(const Eigen::Vector3d& centre, const FinderInput& input, double max_distance) const {
+  const Eigen::Vector3d p = input.world_from_camera.inverse() * centre;
+  if (!(p.z() > 1.0) || p.norm() > max_distance) return false;
+  const double u = input.camera.fx * p.x() / p.z() + input.camera.cx;
+  const double v = input.camera.fy * p.y() / p.z() + input.camera.cy;
+  return u >= -0.5 && v >= -0.5 && u <= input.camera.width - 0.5 && v <= input.camera.height - 0.5;
+}
+
+void ObjectFinder::MatchTracks(const std::vector<Cluster>& clusters) {
+  for (Track& t : tracks_) {
+    t.matched = false;
+    t.cluster = -1;
+  }
+  std::vector<std::tuple<double, int, int>> pairs;  // distance, track index, cluster index
+  for (size_t ti = 0; ti < tracks_.size(); ++ti)
+    for (size_t ci = 0; ci < clusters.size(); ++ci) {
+      const double d = HorizontalDistance(tracks_[ti].box.centre_mm, clusters[ci].box.centre_mm);
+      if (d <= options_.track_match_distance_mm) pairs.emplace_back(d, static_cast<int>(ti), static_cast<int>(ci));
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<char> cluster_taken(clusters.size(), 0);
+  for (const auto& [d, ti, ci] : pairs) {
+    if (tracks_[ti].matched || cluster_taken[ci]) continue;
+    tracks_[ti].matched = true;
+    tracks_[ti].cluster = ci;
+    cluster_taken[ci] = 1;
+  }
+  for (size_t ci = 0; ci < clusters.size(); ++ci) {
+    if (cluster_taken[ci]) continue;
+    Track t;
+    t.id = next_track_id_++;
+    t.box = clusters[ci].box;
+    t.matched = true;
+    t.cluster = static_cast<int>(ci);
+    tracks_.push_back(t);
+  }
+}
+
+void ObjectFinder::UpdateTracks(const FinderInput& input, const std::vector<Cluster>& clusters) {
+  const Eigen::Vector3d camera = input.world_from_camera.translation();
+  const double min_bearing_cos = std::cos(options_.min_view_bearing_deg * M_PI / 180.0);
+  for (Track& t : tracks_) {
+    t.seen = t.matched && clusters[t.cluster].observed;
+    if (!t.matched) {
+      t.passes = false;
+      ++t.unmatched_updates;
+    } else {
+      const Cluster& c = clusters[t.cluster];
+      t.box = c.box;
+      t.passes = c.rejection.empty();
+      t.unmatched_updates = 0;
+      if (t.passes) t.passing_box = c.box;
+      if (t.seen && c.in_view && t.passes) {
+        t.rejected_run = 0;
+        const View view{camera, (camera - c.box.centre_mm).normalized()};
+        const bool distinct = std::all_of(t.views.begin(), t.views.end(), [&](const View& w) {
+          return (view.camera_mm - w.camera_mm).norm() >= options_.min_view_baseline_mm ||
+                 view.direction.dot(w.direction) <= min_bearing_cos;
+        });
+        if (distinct) {
+          t.views.push_back(view);
+          t.recent_centres.push_back(c.box.centre_mm);
+          if (static_cast<int>(t.recent_centres.size()) > options_.min_views)
+            t.recent_centres.erase(t.recent_centres.begin());
+        }
+      } else if (t.seen && c.in_view) {
+        ++t.rejected_run;
+      }
+    }
+    if (t.seen)
+      t.missed_run = 0;
+    else if (InView(t.box.centre_mm, input, options_.max_view_distance_mm))
+      ++t.missed_run;
+  }
+  tracks_.erase(std::remove_if(
+                    tracks_.begin(), tracks_.end(),
+                    [this](const Track& t) { return t.id != target_id_ && t.unmatched_updates > kForgetAfterUpdates; }),
+                tracks_.end());
+}
+
+bool ObjectFinder::IsCandidate(const Track& t) const {
+  return t.matched && t.passes && !t.views.empty() && t.missed_run < options_.lost_after_updates;
+}
+
+bool ObjectFinder::IsConfirmable(const Track& t) const {
+  if (!IsCandidate(t) || static_cast<int>(t.views.size()) < options_.min_views ||
+      static_cast<int>(t.recent_centres.size()) < options_.min_views)
+    return false;
+  for (const auto& c : t.recent_centres)
+    if ((c - t.box.centre_mm).norm() > options_.max_centre_motion_mm) return false;
+  return true;
+}
+
+double ObjectFinder::Distance(const FinderInput& input, const Track& t) const {
+  if (!input.has_robot_position || !input.robot_xy_mm.allFinite()) return -1;
+  return std::hypot(t.box.centre_mm.x() - input.robot_xy_mm.x(), t.box.centre_mm.y() - input.robot_xy_mm.y());
+}
+
+template <class Pred>
+int ObjectFinder::Best(const FinderInput& input, Pred accept) const {
+  int best = -1;
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    const Track& t = tracks_[i];
+    if (!accept(t)) continue;
+    if (best < 0) {
+      best = static_cast<int>(i);
+      continue;
+    }
+    const Track& b = tracks_[best];
+    const double dt = Distance(input, t), db = Distance(input, b);
+    const bool better =
+        dt >= 0 ? dt < db
+                : (t.views.size() != b.views.size() ? t.views.size() > b.views.size() : t.box.points > b.box.points);
+    if (better) best = static_cast<int>(i);  // ties keep the older track
+  }
+  return best;
+}
+
+ObjectFinder::Track* ObjectFinder::FindTrack(int id) {
+  for (Track& t : tracks_)
+    if (t.id == id) return &t;
+  return nullptr;
+}
+
+void ObjectFinder::UpdateTarget(const FinderInput& input) {
+  if (Track* t = target_id_ >= 0 ? FindTrack(target_id_) : nullptr) {
+    if (t->rejected_run >= options_.drop_after_rejections) {  // the views say it is not a target after all
+      t->views.clear();
+      t->recent_centres.clear();
+      target_id_ = -1;
+      target_lost_ = false;
+      confirmed_seq_ = -1;
+      confirmed_utime_ = 0;
+    } else if (t->seen && t->passes) {
+      target_lost_ = false;
+    } else if (t->missed_run >= options_.lost_after_updates) {
+      target_lost_ = true;
+    }
+    if (target_id_ >= 0) return;
+  }
+  const int best = Best(input, [this](const Track& t) { return IsConfirmable(t); });
+  if (best < 0) return;
+  target_id_ = tracks_[best].id;
+  target_lost_ = false;
+  confirmed_seq_ = input.seq;
+  confirmed_utime_ = input.utime;
+}
+
+void ObjectFinder::FillResult(const FinderInput& input, const std::vector<Cluster>& clusters) {
+  FinderResult& r = result_;
+  r.utime = input.utime;
+  r.seq = input.seq;
+  r.floor_valid = floor_valid_;
+  r.floor = floor_;
+  r.floor_points = floor_points_;
+  r.clusters.assign(clusters.size(), ClusterReport{});
+  for (size_t ci = 0; ci < clusters.size(); ++ci) {
+    r.clusters[ci].box = clusters[ci].box;
+    r.clusters[ci].passes = clusters[ci].rejection.empty();
+    r.clusters[ci].rejection = clusters[ci].rejection;
+    r.clusters[ci].in_view = clusters[ci].in_view;
+    r.clusters[ci].observed = clusters[ci].observed;
+  }
+  for (const Track& t : tracks_)
+    if (t.matched) r.clusters[t.cluster].track_id = t.id;
+
+  const int n = options_.min_views;
+  const Track* target = nullptr;
+  r.state = TargetState::kSearching;
+  r.confidence = 0;
+  if (target_id_ >= 0 && (target = FindTrack(target_id_))) {
+    r.state = target_lost_ ? TargetState::kLost : TargetState::kConfirmed;
+    r.box = ToTargetBox(target->passing_box);
+    const double views = std::max<double>(n, static_cast<double>(target->views.size()));
+    r.confidence = (1.0 - 0.5 * n / views) * (target_lost_ ? 0.5 : 1.0);
+  } else {
+    const int best = Best(input, [this](const Track& t) { return IsCandidate(t); });
+    if (best >= 0) {
+      target = &tracks_[best];
+      r.state = TargetState::kCandidate;
+      r.box = ToTargetBox(target->box);
+      r.confidence = 0.4 * std::min<double>(n, static_cast<double>(target->views.size())) / n;
+    }
+  }
+  r.track_id = target ? target->id : -1;
+  r.views = target ? static_cast<int>(target->views.size()) : 0;
+  r.points = target ? target->box.points : 0;
+  if (!target) r.box = TargetBox{};
+  r.roi = target ? ProjectBox(r.box, input.world_from_camera, input.camera) : ImageRegion{};
+  r.confirmed_seq = confirmed_seq_;
+  r.confirmed_utime = confirmed_utime_;
+
+  r.other_candidates.clear();
+  r.candidates = 0;
+  for (const Track& t : tracks_) {
+    if (!IsCandidate(t)) continue;
+    ++r.candidates;
+    if (target && t.id == target->id) continue;
+    r.other_candidates.push_back(
+        CandidateReport{t.id, ToTargetBox(t.box), t.box.points, static_cast<int>(t.views.size()), Distance(input, t)});
+  }
+  std::stable_sort(r.other_candidates.begin(), r.other_candidates.end(),
+                   [](const CandidateReport& a, const CandidateReport& b) {
+                     return a.distance_mm >= 0 ? a.distance_mm < b.distance_mm : a.views > b.views;
+                   });
+}
+
+}  // namespace objscan

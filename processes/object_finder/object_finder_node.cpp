@@ -1,0 +1,452 @@
+#include "processes/object_finder/object_finder_node.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/log.h"
+#include "common/options.h"
+#include "common/robot_model.h"
+#include "common/time.h"
+#include "objscan/process_status_t.hpp"
+#include "processes/object_finder/message_size_check.h"
+
+namespace objscan {
+
+namespace {
+
+constexpr size_t kPoseHistory = 64;  // camera poses kept to find a keyframe's pose by seq
+
+const ObjectFinderNodeOptions& ValidatedOrThrow(const ObjectFinderNodeOptions& o) {
+  std::string why;
+  if (!ValidateObjectFinderNodeOptions(o, &why)) throw std::invalid_argument("object finder node: " + why);
+  return o;
+}
+
+std::string Format(const char* format, double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof(buffer), format, a, b, c, d, e, f);
+  return buffer;
+}
+
+// "at (x, y) mm, 150x120x140 mm"
+std::string Describe(const TargetBox& box) {
+  return Format("at (%.0f, %.0f) mm, %.0fx%.0fx%.0f mm", box.centre_mm.x(), box.centre_mm.y(), box.size_mm.x(),
+                box.size_mm.y(), box.size_mm.z());
+}
+
+std::string Views(int views) { return std::to_string(views) + (views == 1 ? " view" : " views"); }
+
+std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
+  return "[" + Format(format, v.x()) + ", " + Format(format, v.y()) + ", " + Format(format, v.z()) + "]";
+}
+
+// Subscribes to an LCM type whose declared array sizes are checked against the byte count before decoding.
+template <class Msg, class Handler>
+void SubscribeChecked(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& what,
+                      bool (*check)(const void*, int, std::string*), Handler handler, int queue_capacity) {
+  bus.Subscribe(
+      channel,
+      [&status, what, check, handler](const RawMessage& raw) {
+        std::string why;
+        bool ok = check(raw.data, raw.size, &why);
+        Msg msg;
+        if (ok) {
+          try {
+            ok = msg.decode(raw.data, 0, raw.size) == raw.size;
+          } catch (const std::exception&) {
+            ok = false;
+          }
+          if (!ok) why = "does not decode (" + std::to_string(raw.size) + " bytes)";
+        }
+        if (!ok) {
+          status.Reject(what + ": malformed", why + " on " + raw.channel);
+          return;
+        }
+        handler(msg);
+      },
+      queue_capacity);
+}
+
+}  // namespace
+
+void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
+  p.Add("name", &o->name, "process name (status name, sender of control messages)");
+  p.Add("landmarks-channel", &o->landmarks_channel, "input sparse map channel (landmarks_t)");
+  p.Add("pose-channel", &o->pose_channel, "input camera pose channel (pose_t)");
+  p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
+  p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel (\"\" = none)");
+  p.Add("target-channel", &o->target_channel, "output target_t channel");
+  p.Add("control-channel", &o->control_channel, "control_t channel (end of stream in, finished out)");
+  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.Add("target-period", &o->target_period_s, "s, the latest TARGET is repeated this often");
+  p.Add("status-period", &o->status_period_s, "s, status publication period");
+  p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
+  p.Add("output-dir", &o->output_dir, "write target.json here at end of stream (\"\" = none)");
+  ObjectFinderOptions* f = &o->finder;
+  p.Add("floor-inlier-distance", &f->floor_inlier_mm, "mm, max |height| of a floor landmark");
+  p.Add("floor-max-tilt", &f->floor_max_tilt_deg, "deg, max angle of the floor normal from world z");
+  p.Add("min-floor-points", &f->min_floor_points, "floor landmarks needed to accept a floor");
+  p.Add("min-observations", &f->min_observations, "views a landmark needs to be clustered");
+  p.Add("max-reprojection-error", &f->max_reprojection_error_px, "px, landmarks with a larger RMS are not used");
+  p.Add("min-height", &f->min_height_mm, "mm, landmarks at or below this height above the floor are floor");
+  p.Add("max-height", &f->max_height_mm, "mm, landmarks above this height are ignored");
+  p.Add("cluster-distance", &f->cluster_distance_mm, "mm, linkage distance of the clustering");
+  p.Add("target-min-size", &f->target_min_size_mm, "mm, smallest target (largest horizontal extent and height)");
+  p.Add("target-max-size", &f->target_max_size_mm, "mm, largest target (largest horizontal extent and height)");
+  p.Add("size-tolerance", &f->size_tolerance, "fraction the measured size may leave the size range by, [0, 1)");
+  p.Add("floor-contact", &f->floor_contact_mm, "mm, max height of a target's lowest landmark above the floor");
+  p.Add("clearance", &f->clearance_mm, "mm, free space around a target (other landmarks there reject it)");
+  p.Add("min-texture-density", &f->min_texture_density, "landmarks per 100 cm^2 of visible side area a target needs");
+  p.Add("min-target-points", &f->min_target_points, "landmarks a target needs");
+  p.Add("track-match-distance", &f->track_match_distance_mm, "mm, horizontal centre distance continuing a track");
+  p.Add("min-views", &f->min_views, "distinct views that confirm a target");
+  p.Add("min-view-baseline", &f->min_view_baseline_mm, "mm, camera distance that makes a view distinct");
+  p.Add("min-view-bearing", &f->min_view_bearing_deg, "deg, viewing direction change that makes a view distinct");
+  p.Add("max-centre-motion", &f->max_centre_motion_mm, "mm, max centre motion over the confirming views");
+  p.Add("lost-after-updates", &f->lost_after_updates, "in-view keyframes without seeing the target before LOST");
+  p.Add("max-view-distance", &f->max_view_distance_mm, "mm, a target farther away is not expected to be seen");
+  p.Add("drop-after-rejections", &f->drop_after_rejections,
+        "in-view keyframes in a row rejecting a confirmed target that drop it");
+}
+
+bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& o, std::string* why) {
+  std::ostringstream e;
+  if (o.name.empty()) e << "name must not be empty; ";
+  if (o.landmarks_channel.empty()) e << "landmarks-channel must not be empty; ";
+  if (o.pose_channel.empty()) e << "pose-channel must not be empty; ";
+  if (o.info_channel.empty()) e << "info-channel must not be empty; ";
+  if (o.target_channel.empty()) e << "target-channel must not be empty; ";
+  if (o.control_channel.empty()) e << "control-channel must not be empty; ";
+  if (o.status_channel.empty()) e << "status-channel must not be empty; ";
+  if (!(o.target_period_s > 0.0) || !std::isfinite(o.target_period_s)) e << "target-period must be > 0; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  std::string finder_why;
+  if (!ValidateObjectFinderOptions(o.finder, &finder_why)) e << finder_why << "; ";
+  const std::string msg = e.str();
+  if (msg.empty()) return true;
+  if (why) *why = msg.substr(0, msg.size() - 2);
+  return false;
+}
+
+std::string TargetJson(const FinderResult& r, int updates) {
+  std::ostringstream j;
+  j << "{\n";
+  j << "  \"state\": \"" << TargetStateName(r.state) << "\",\n";
+  j << "  \"frame\": \"world\",\n";
+  j << "  \"centre_mm\": " << JsonVector(r.box.centre_mm, "%.2f") << ",\n";
+  j << "  \"size_mm\": " << JsonVector(r.box.size_mm, "%.2f") << ",\n";
+  j << "  \"yaw_rad\": " << Format("%.6f", r.box.yaw_rad) << ",\n";
+  j << "  \"confidence\": " << Format("%.4f", r.confidence) << ",\n";
+  j << "  \"confirmed_seq\": " << r.confirmed_seq << ",\n";
+  j << "  \"confirmed_utime\": " << r.confirmed_utime << ",\n";
+  j << "  \"views\": " << r.views << ",\n";
+  j << "  \"points\": " << r.points << ",\n";
+  j << "  \"seq\": " << r.seq << ",\n";
+  j << "  \"utime\": " << r.utime << ",\n";
+  j << "  \"updates\": " << updates << ",\n";
+  j << "  \"other_candidates\": [";
+  for (size_t i = 0; i < r.other_candidates.size(); ++i) {
+    const CandidateReport& c = r.other_candidates[i];
+    j << (i ? ",\n" : "\n") << "    {\"centre_mm\": " << JsonVector(c.box.centre_mm, "%.2f")
+      << ", \"size_mm\": " << JsonVector(c.box.size_mm, "%.2f") << ", \"points\": " << c.points << "}";
+  }
+  j << (r.other_candidates.empty() ? "],\n" : "\n  ],\n");
+  j << "  \"floor\": {\"found\": " << (r.floor_valid ? "true" : "false")
+    << ", \"normal\": " << JsonVector(r.floor.normal, "%.6f")
+    << ", \"offset_mm\": " << Format("%.2f", r.floor.offset_mm) << "}\n";
+  j << "}\n";
+  return j.str();
+}
+
+ObjectFinderNode::ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& options)
+    : bus_(bus),
+      options_(ValidatedOrThrow(options)),
+      finder_(options_.finder),
+      status_(&bus, options_.name, options_.status_channel, options_.status_period_s) {
+  status_.SetState(+process_status_t::STATE_STARTING, "waiting for landmarks on " + options_.landmarks_channel);
+  SubscribeChecked<landmarks_t>(
+      bus_, status_, options_.landmarks_channel, "landmarks", CheckLandmarksMessageSize,
+      [this](const landmarks_t& m) { OnLandmarks(m); }, 5);
+  SubscribeChecked<camera_info_t>(
+      bus_, status_, options_.info_channel, "camera_info", CheckCameraInfoMessageSize,
+      [this](const camera_info_t& m) { OnCameraInfo(m); }, 0);
+  bus_.SubscribeMessage<pose_t>(
+      options_.pose_channel, [this](const pose_t& m, const RawMessage&) { OnPose(m); },
+      status_.MalformedHandler("pose"), 200);
+  if (!options_.odometry_channel.empty())
+    bus_.SubscribeMessage<odometry_t>(
+        options_.odometry_channel, [this](const odometry_t& m, const RawMessage&) { OnOdometry(m); },
+        status_.MalformedHandler("odometry"), 200);
+  bus_.SubscribeMessage<control_t>(
+      options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
+      status_.MalformedHandler("control"));
+}
+
+void ObjectFinderNode::OnPose(const pose_t& msg) {
+  CameraPoseEstimate pose;
+  std::string error;
+  if (!PoseFromMessage(msg, &pose, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (msg.parent_frame != "world") {
+    status_.Reject("pose: not in world frame", "parent frame \"" + msg.parent_frame + "\"");
+    return;
+  }
+  status_.CountIn();
+  if (pose.status == PoseStatus::kLost) {  // the last good pose repeated: not where the camera is
+    ++lost_poses_;
+    return;
+  }
+  poses_[pose.seq] = pose.world_from_camera;
+  while (poses_.size() > kPoseHistory) poses_.erase(poses_.begin());
+}
+
+void ObjectFinderNode::OnCameraInfo(const camera_info_t& msg) {
+  PinholeCamera camera;
+  std::string error;
+  if (!CameraFromMessage(msg, &camera, &error)) {
+    status_.Reject(error, "camera " + msg.camera_name);
+    return;
+  }
+  status_.CountIn();
+  camera_.width = camera.width;
+  camera_.height = camera.height;
+  camera_.fx = camera.fx;
+  camera_.fy = camera.fy;
+  camera_.cx = camera.cx;
+  camera_.cy = camera.cy;
+  have_camera_ = true;
+}
+
+void ObjectFinderNode::OnOdometry(const odometry_t& msg) {
+  OdometryReading reading;
+  std::string error;
+  if (!OdometryFromMessage(msg, &reading, &error)) {
+    status_.Reject(error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  status_.CountIn();
+  odometry_x_mm_ = reading.x_mm;
+  odometry_y_mm_ = reading.y_mm;
+  odometry_pan_rad_ = reading.pan_rad;
+  have_odometry_ = true;
+}
+
+bool ObjectFinderNode::RobotPosition(Eigen::Vector2d* xy_mm) const {
+  if (poses_.empty()) {
+    if (!have_odometry_) return false;
+    *xy_mm = Eigen::Vector2d(odometry_x_mm_, odometry_y_mm_);  // odometry frame = world at the start
+    return true;
+  }
+  // camera centre -> pan/tilt axes -> base (common/robot_model.h, default geometry)
+  const RobotGeometry robot;
+  const Eigen::Isometry3d& world_from_camera = poses_.rbegin()->second;
+  const Eigen::Matrix3d world_from_tilt = world_from_camera.linear() * TiltFromCameraRotation().transpose();
+  const Eigen::Vector3d axes = world_from_camera.translation() - world_from_tilt * robot.camera_offset_mm;
+  const double heading = std::atan2(world_from_tilt(1, 0), world_from_tilt(0, 0)) - odometry_pan_rad_;
+  const Eigen::Vector2d mast(robot.mast_offset_x_mm, robot.mast_offset_y_mm);
+  *xy_mm = axes.head<2>() - Eigen::Rotation2Dd(heading) * mast;
+  return true;
+}
+
+void ObjectFinderNode::OnLandmarks(const landmarks_t& msg) {
+  const int64_t start_us = MonotonicMicros();
+  const std::string seq = "seq " + std::to_string(msg.seq);
+  const size_t n = static_cast<size_t>(msg.num_landmarks);  // >= 0: checked before decoding
+  if (msg.id.size() != n || msg.position_mm.size() != n || msg.num_observations.size() != n ||
+      msg.reprojection_error_px.size() != n) {
+    status_.Reject("landmarks: array length mismatch", seq);
+    return;
+  }
+  std::string reason, detail = seq;
+  auto pose = poses_.upper_bound(msg.seq);  // the keyframe's own pose, else the newest before it
+  if (msg.frame != "world") {
+    reason = "landmarks: not in world frame";
+    detail = "frame \"" + msg.frame + "\"";
+  } else if (msg.seq < last_landmarks_seq_) {
+    reason = "landmarks: out of order";
+    detail = seq + " after " + std::to_string(last_landmarks_seq_);
+  } else if (!have_camera_) {
+    reason = "landmarks: no camera_info";
+  } else if (pose == poses_.begin()) {
+    reason = "landmarks: no camera pose";
+  }
+  if (!reason.empty()) {
+    status_.Reject(reason, detail);
+    return;
+  }
+  --pose;
+  FinderInput input;
+  input.utime = msg.utime;
+  input.seq = msg.seq;
+  input.world_from_camera = pose->second;
+  input.camera = camera_;
+  input.has_robot_position = RobotPosition(&input.robot_xy_mm);
+  input.landmarks.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    MapLandmark& l = input.landmarks[i];
+    l.id = msg.id[i];
+    l.position_mm = Eigen::Vector3d(msg.position_mm[i][0], msg.position_mm[i][1], msg.position_mm[i][2]);
+    l.num_observations = msg.num_observations[i];
+    l.reprojection_error_px = msg.reprojection_error_px[i];
+  }
+  std::string error;
+  const int64_t update_start_us = MonotonicMicros();
+  if (!finder_.Update(input, &error)) {
+    status_.Reject("landmarks: finder error", error + ", " + seq);
+    return;
+  }
+  const double update_ms = (MonotonicMicros() - update_start_us) * 1e-3;
+  status_.CountIn();
+  status_.SetLastDataUtime(msg.utime);
+  last_landmarks_seq_ = msg.seq;
+  const FinderResult& r = finder_.result();
+  LogChanges(r);
+  target_.utime = r.utime;
+  target_.seq = r.seq;
+  target_.state = static_cast<int8_t>(r.state);
+  target_.frame = "world";
+  for (int k = 0; k < 3; ++k) {
+    target_.center_mm[k] = r.box.centre_mm[k];
+    target_.size_mm[k] = r.box.size_mm[k];
+  }
+  target_.yaw_rad = r.box.yaw_rad;
+  target_.confidence = r.confidence;
+  target_.roi_u = r.roi.u;
+  target_.roi_v = r.roi.v;
+  target_.roi_width = r.roi.width;
+  target_.roi_height = r.roi.height;
+  have_target_ = true;
+  PublishTarget(WallTimeMicros());
+  SetStatusValues(r, update_ms, static_cast<int>(n));
+  if (!finished_ && status_.state() != +process_status_t::STATE_RUNNING)
+    status_.SetState(+process_status_t::STATE_RUNNING);
+  status_.RecordLatencyMs((MonotonicMicros() - start_us) * 1e-3);
+}
+
+void ObjectFinderNode::SetStatusValues(const FinderResult& r, double update_ms, int landmarks) {
+  status_.SetValue("state", static_cast<double>(r.state));
+  status_.SetValue("candidates", r.candidates);
+  status_.SetValue("clusters", static_cast<double>(r.clusters.size()));
+  status_.SetValue("floor_points", r.floor_points);
+  status_.SetValue("update_ms", update_ms);
+  status_.SetValue("confirmed_seq", static_cast<double>(r.confirmed_seq));
+  status_.SetValue("views", r.views);
+  status_.SetValue("landmarks", landmarks);
+  status_.SetValue("dropped_landmarks", r.rejected_landmarks);
+  status_.SetValue("lost_poses", static_cast<double>(lost_poses_));
+}
+
+void ObjectFinderNode::LogChanges(const FinderResult& r) {
+  const std::string at = " (keyframe seq " + std::to_string(r.seq) + ")";
+  if (r.floor_valid && !logged_floor_) {
+    LogInfo(Format("floor found: normal (%.3f, %.3f, %.3f), offset %.1f mm, %.0f landmarks", r.floor.normal.x(),
+                   r.floor.normal.y(), r.floor.normal.z(), r.floor.offset_mm, r.floor_points) +
+            at);
+    logged_floor_ = true;
+  }
+  if (r.rejected_landmarks > 0 && !logged_dropped_landmarks_) {
+    LogWarning(std::to_string(r.rejected_landmarks) + " non-finite landmarks dropped" + at +
+               " [later ones are only counted in the status value dropped_landmarks]");
+    logged_dropped_landmarks_ = true;
+  }
+  const bool was_confirmed = logged_state_ == TargetState::kConfirmed || logged_state_ == TargetState::kLost;
+  if (r.state != logged_state_ || r.track_id != logged_track_) {
+    const std::string box = Describe(r.box);
+    switch (r.state) {
+      case TargetState::kSearching:
+        LogInfo(std::string(was_confirmed ? "confirmed target dropped (rejected by the later views)"
+                                          : "searching: no candidate") +
+                at);
+        break;
+      case TargetState::kCandidate:
+        LogInfo((was_confirmed ? "confirmed target dropped; " : "") + std::string("candidate ") + box + ", " +
+                std::to_string(r.points) + " points, " + Views(r.views) + at);
+        break;
+      case TargetState::kConfirmed:
+        LogInfo(std::string(logged_state_ == TargetState::kLost && r.track_id == logged_track_ ? "found again "
+                                                                                               : "confirmed ") +
+                box + Format(", yaw %.1f deg, ", r.box.yaw_rad * 180 / M_PI) + std::to_string(r.points) + " points, " +
+                Views(r.views) + at);
+        break;
+      case TargetState::kLost:
+        LogInfo("lost: target " + box + " not seen where it should be" + at);
+        break;
+    }
+    logged_state_ = r.state;
+    logged_track_ = r.track_id;
+  }
+  std::vector<int> others;
+  for (const auto& c : r.other_candidates) others.push_back(c.track_id);
+  if (others != logged_others_ && !others.empty()) {
+    std::string text = "other candidates:";
+    for (const auto& c : r.other_candidates)
+      text += " #" + std::to_string(c.track_id) + " " + Describe(c.box) + " (" + std::to_string(c.points) + " points);";
+    LogInfo(text + at);
+  }
+  logged_others_ = others;
+}
+
+void ObjectFinderNode::PublishTarget(int64_t wall_utime) {
+  if (!have_target_) return;
+  if (bus_.PublishMessage(options_.target_channel, target_))
+    status_.CountOut();
+  else
+    LogWarning("publishing on " + options_.target_channel + " failed");
+  target_published_us_ = wall_utime;
+}
+
+void ObjectFinderNode::OnControl(const control_t& msg) {
+  if (msg.command != control_t::COMMAND_END_OF_STREAM) return;
+  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  status_.CountIn();
+  if (finished_) return;
+  const FinderResult& r = finder_.result();
+  LogInfo("end of stream from " + msg.sender + ": " + TargetStateName(r.state) +
+          (r.state == TargetState::kSearching ? std::string(", no target found") : " target " + Describe(r.box)) +
+          ", " + std::to_string(finder_.updates()) + " maps");
+  if (!options_.output_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options_.output_dir, ec);
+    const std::string path = options_.output_dir + "/target.json";
+    std::ofstream out(path);
+    out << TargetJson(r, finder_.updates());
+    out.close();
+    if (out)
+      LogInfo("wrote " + path);
+    else
+      LogError("cannot write " + path);
+  }
+  PublishTarget(WallTimeMicros());
+  control_t reply;
+  reply.utime = last_landmarks_seq_ >= 0 ? r.utime : msg.utime;
+  reply.sender = options_.name;
+  reply.target = "*";
+  reply.command = control_t::COMMAND_FINISHED;
+  reply.last_seq = last_landmarks_seq_;
+  reply.argument = "";
+  if (bus_.PublishMessage(options_.control_channel, reply))
+    status_.CountOut();
+  else
+    LogWarning("publishing on " + options_.control_channel + " failed");
+  finished_ = true;
+  status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+void ObjectFinderNode::Tick(int64_t wall_utime) {
+  if (have_target_ && wall_utime - target_published_us_ >= static_cast<int64_t>(options_.target_period_s * 1e6))
+    PublishTarget(wall_utime);
+  status_.PublishIfDue(wall_utime);
+}
+
+void ObjectFinderNode::OnShutdown() { status_.PublishIfDue(WallTimeMicros(), true); }
+
+}  // namespace objscan

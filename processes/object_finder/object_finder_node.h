@@ -1,0 +1,128 @@
+// ObjectFinderNode: the "object_finder" process, a thin LCM adapter around ObjectFinder (object_finder.h).
+// Inputs:
+//   LANDMARKS       landmarks_t (frame "world"): one ObjectFinder update per message, with the camera pose of the
+//                   message's keyframe (the CAMERA_POSE of the same seq, else the newest one before it) and the
+//                   latest CAMERA_INFO. A message whose seq is below the last one used is rejected; the same seq again
+//                   (the pose solver's final map after its global adjustment) is a normal update.
+//   CAMERA_POSE     pose_t world_from_camera (mm); the last 64 by seq are kept (a late republication of a seq
+//                   replaces it); STATUS_LOST poses are ignored (counted in the status value lost_poses).
+//   CAMERA_INFO     camera_info_t: fx, fy, cx, cy, width, height (distortion is ignored: the region is a box outline).
+//   ROBOT_ODOMETRY  odometry_t: the robot position for "nearest first" when there is no camera pose yet, and the pan
+//                   angle. With a pose, the base is under the pan axis: camera centre minus the camera offset of
+//                   common/robot_model.h's RobotGeometry defaults (40 mm forward in the tilt frame; mast offsets 0).
+//   OBJSCAN_CONTROL control_t COMMAND_END_OF_STREAM (target "*", "" or the process name): writes
+//                   output_dir/target.json (when set), publishes TARGET once more and control_t COMMAND_FINISHED
+//                   (sender = name, last_seq / utime = the last map's keyframe, -1 / the message's utime if none);
+//                   then Finished() (with exit_when_finished).
+// Outputs:
+//   TARGET          target_t after every update (utime/seq of the map's keyframe, frame "world", state, centre,
+//                   size, yaw, confidence, roi in that keyframe's image), repeated every target_period_s (stateless).
+//                   Nothing is published before the first update.
+//   PROCESS_STATUS  values: state (target_t::STATE_*), candidates, clusters, floor_points, update_ms (wall clock),
+//                   confirmed_seq (-1 when none), views, landmarks, dropped_landmarks (non-finite, in the last map),
+//                   lost_poses.
+// State changes are logged in one line each ("candidate at (x, y) mm, 150x120x140 mm, ...", "confirmed at ...",
+// "lost ...", "found again ...", "dropped ..."), and the other candidates whenever their set changes.
+// Rejections (counted, logged once per reason, never fatal): "landmarks: malformed" (declared array sizes checked
+// against the byte count before decoding, message_size_check.h), "landmarks: not in world frame",
+// "landmarks: array length mismatch", "landmarks: out of order", "landmarks: no camera pose",
+// "landmarks: no camera_info", "landmarks: finder error", "pose: malformed" and PoseFromMessage's reasons,
+// "pose: not in world frame", "camera_info: malformed" and CameraFromMessage's reasons, "odometry: malformed" and
+// OdometryFromMessage's reasons, "control: malformed".
+// target.json: {"state": "confirmed", "centre_mm": [x, y, z], "size_mm": [x, y, z], "yaw_rad", "confidence",
+// "confirmed_seq", "confirmed_utime", "views", "points", "seq", "utime", "updates", "frame": "world",
+// "other_candidates": [{"centre_mm", "size_mm", "points"}], "floor": {"found", "normal": [3], "offset_mm"}}
+// (world frame = the pose solver's, as trajectory.txt; zeros when searching; height(p) = normal . p + offset_mm).
+// Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/node.h"
+#include "common/status.h"
+#include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
+#include "objscan/landmarks_t.hpp"
+#include "objscan/odometry_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/target_t.hpp"
+#include "processes/object_finder/object_finder.h"
+
+namespace objscan {
+
+class Bus;
+class OptionParser;
+
+struct ObjectFinderNodeOptions {
+  std::string name = "object_finder";               // process name (status name, control sender)
+  std::string landmarks_channel = "LANDMARKS";      // input sparse map (landmarks_t)
+  std::string pose_channel = "CAMERA_POSE";         // input camera poses (pose_t)
+  std::string info_channel = "CAMERA_INFO";         // input intrinsics (camera_info_t)
+  std::string odometry_channel = "ROBOT_ODOMETRY";  // input odometry (odometry_t); "" = none
+  std::string target_channel = "TARGET";            // output (target_t)
+  std::string control_channel = "OBJSCAN_CONTROL";  // control_t in/out
+  std::string status_channel = "PROCESS_STATUS";    // process status (process_status_t)
+  double target_period_s = 1.0;                     // s, the latest TARGET is repeated this often (> 0)
+  double status_period_s = 1.0;                     // s, status publication period (> 0)
+  bool exit_when_finished = true;                   // Finished() turns true after end of stream was answered
+  std::string output_dir;                           // write target.json here at end of stream ("" = none)
+  ObjectFinderOptions finder;                       // the finder's options
+};
+
+// Registers every option (the finder's without prefix, e.g. --cluster-distance).
+void AddObjectFinderNodeOptions(OptionParser& parser, ObjectFinderNodeOptions* options);
+bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& options, std::string* why);
+
+// target.json text for a result (see above). updates: updates so far.
+std::string TargetJson(const FinderResult& result, int updates);
+
+class ObjectFinderNode : public Node {
+ public:
+  // Subscribes on bus (which must outlive the node). Throws std::invalid_argument on invalid options.
+  ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& options);
+
+  void Tick(int64_t wall_utime) override;
+  bool Finished() const override { return finished_ && options_.exit_when_finished; }
+  void OnShutdown() override;
+
+  const StatusReporter& status() const { return status_; }
+  const ObjectFinder& finder() const { return finder_; }
+  bool end_of_stream_answered() const { return finished_; }
+
+ private:
+  void OnLandmarks(const landmarks_t& msg);
+  void OnPose(const pose_t& msg);
+  void OnCameraInfo(const camera_info_t& msg);
+  void OnOdometry(const odometry_t& msg);
+  void OnControl(const control_t& msg);
+  bool RobotPosition(Eigen::Vector2d* xy_mm) const;
+  void PublishTarget(int64_t wall_utime);
+  void LogChanges(const FinderResult& r);
+  void SetStatusValues(const FinderResult& r, double update_ms, int landmarks);
+
+  Bus& bus_;
+  ObjectFinderNodeOptions options_;
+  ObjectFinder finder_;
+  StatusReporter status_;
+  std::map<int64_t, Eigen::Isometry3d> poses_;  // world_from_camera by seq, the last kPoseHistory
+  bool have_camera_ = false;
+  FinderCamera camera_;
+  bool have_odometry_ = false;
+  double odometry_x_mm_ = 0, odometry_y_mm_ = 0, odometry_pan_rad_ = 0;
+  int64_t last_landmarks_seq_ = -1;
+  int64_t lost_poses_ = 0;
+  bool have_target_ = false;
+  target_t target_;                  // the latest TARGET
+  int64_t target_published_us_ = 0;  // wall clock of its last publication
+  TargetState logged_state_ = TargetState::kSearching;
+  int logged_track_ = -1;
+  std::vector<int> logged_others_;
+  bool logged_floor_ = false;
+  bool logged_dropped_landmarks_ = false;
+  bool finished_ = false;
+};
+
+}  // namespace objscan

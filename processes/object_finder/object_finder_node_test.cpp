@@ -1,0 +1,319 @@
+#include "processes/object_finder/object_finder_node.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <opencv2/core/persistence.hpp>
+#include <vector>
+
+#include "common/adapters.h"
+#include "common/bus.h"
+#include "common/options.h"
+#include "common/time.h"
+#include "objscan/process_status_t.hpp"
+#include "processes/object_finder/message_size_check.h"
+#include "processes/object_finder/synthetic_room.h"
+
+namespace objscan {
+namespace {
+
+using testing_support::SyntheticRoom;
+
+const Eigen::Vector3d kBoxCentre(400, -200, 70);  // the target: 150 x 120 x 140 mm box
+
+landmarks_t LandmarksMessage(const FinderInput& in) {
+  landmarks_t m;
+  m.utime = in.utime;
+  m.seq = in.seq;
+  m.frame = "world";
+  m.num_landmarks = static_cast<int32_t>(in.landmarks.size());
+  for (const MapLandmark& l : in.landmarks) {
+    m.id.push_back(l.id);
+    m.position_mm.push_back({static_cast<float>(l.position_mm.x()), static_cast<float>(l.position_mm.y()),
+                             static_cast<float>(l.position_mm.z())});
+    m.num_observations.push_back(l.num_observations);
+    m.reprojection_error_px.push_back(static_cast<float>(l.reprojection_error_px));
+    m.rgb.push_back({128, 128, 128});
+  }
+  return m;
+}
+
+std::vector<uint8_t> Encode(const landmarks_t& m) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Overwrites a big-endian int32 field (the caller's offset lies inside the message).
+void PutInt32(std::vector<uint8_t>* bytes, size_t offset, int32_t value) {
+  const uint32_t v = static_cast<uint32_t>(value);
+  const uint8_t be[4] = {static_cast<uint8_t>(v >> 24), static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 8),
+                         static_cast<uint8_t>(v)};
+  if (offset + 4 <= bytes->size()) std::memcpy(bytes->data() + offset, be, 4);
+}
+
+class ObjectFinderNodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    bus_ = MakeLcmBus("memq://");
+    bus_->SubscribeMessage<target_t>("TARGET", [this](const target_t& m, const RawMessage&) { targets_.push_back(m); });
+    bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
+      if (m.command == control_t::COMMAND_FINISHED) finished_.push_back(m);
+    });
+    room_.AddFloor(2500, 2000, 2.0);
+    room_.AddBox("box", kBoxCentre.head<2>(), Eigen::Vector3d(150, 120, 140), 0.3, 12);
+    room_.AddSphere("sphere", Eigen::Vector2d(-2000, 1500), 200, 12);
+    room_.AddWall("wall", Eigen::Vector2d(2200, -2000), Eigen::Vector2d(2200, 2000), 1000, 3);
+    room_.AddPhantoms(30, 2000, 100, 1000);
+    out_dir_ = std::filesystem::temp_directory_path() /
+               ("object_finder_node_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(out_dir_);
+    options_.output_dir = out_dir_.string();
+  }
+  void TearDown() override { std::filesystem::remove_all(out_dir_); }
+
+  void Start() { node_ = std::make_unique<ObjectFinderNode>(*bus_, options_); }
+  void Drain() {
+    while (bus_->Handle(0) > 0) {
+    }
+  }
+  void PublishInfo() {
+    PinholeCamera camera;
+    camera.name = "sim";
+    camera.width = room_.camera().width;
+    camera.height = room_.camera().height;
+    camera.fx = room_.camera().fx;
+    camera.fy = room_.camera().fy;
+    camera.cx = room_.camera().cx;
+    camera.cy = room_.camera().cy;
+    ASSERT_TRUE(bus_->PublishMessage("CAMERA_INFO", CameraToMessage(camera, 0)));
+  }
+  void PublishPose(int64_t seq, const Eigen::Isometry3d& world_from_camera, PoseStatus status = PoseStatus::kTracking) {
+    CameraPoseEstimate pose;
+    pose.seq = seq;
+    pose.utime = seq * 100000;
+    pose.world_from_camera = world_from_camera;
+    pose.status = status;
+    ASSERT_TRUE(bus_->PublishMessage("CAMERA_POSE", PoseToMessage(pose)));
+  }
+  // Keyframe k of a circle about the box: CAMERA_POSE then LANDMARKS, as the pose solver publishes them.
+  FinderInput Keyframe(int k) {
+    const Eigen::Isometry3d pose = room_.OnCircle(kBoxCentre.head<2>(), 1200, k * 25.0 - 60, kBoxCentre);
+    return room_.Observe(pose, 10 * k + 3);
+  }
+  void PublishKeyframe(int k) {
+    const FinderInput in = Keyframe(k);
+    PublishPose(in.seq, in.world_from_camera);
+    ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", LandmarksMessage(in)));
+  }
+  void EndOfStream() {
+    control_t c;
+    c.utime = 0;
+    c.sender = "robot_sim";
+    c.target = "*";
+    c.command = control_t::COMMAND_END_OF_STREAM;
+    c.last_seq = 100;
+    ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", c));
+  }
+
+  SyntheticRoom room_;
+  std::unique_ptr<Bus> bus_;
+  ObjectFinderNodeOptions options_;
+  std::unique_ptr<ObjectFinderNode> node_;
+  std::vector<target_t> targets_;
+  std::vector<control_t> finished_;
+  std::filesystem::path out_dir_;
+};
+
+TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
+  Start();
+  PublishInfo();
+  for (int k = 0; k < 6; ++k) {
+    // no pose of the keyframe itself: the newest usable one before it is taken, not a LOST one
+    const FinderInput in = Keyframe(k);
+    PublishPose(in.seq - 2, in.world_from_camera);
+    PublishPose(in.seq - 1, Eigen::Isometry3d(Eigen::Translation3d(9000, 9000, 9000)), PoseStatus::kLost);
+    ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", LandmarksMessage(in)));
+  }
+  Drain();
+  ASSERT_EQ(targets_.size(), 6u);
+  for (size_t i = 0; i < targets_.size(); ++i) {
+    EXPECT_EQ(targets_[i].seq, static_cast<int64_t>(10 * i + 3));
+    EXPECT_EQ(targets_[i].utime, targets_[i].seq * 100000);
+    EXPECT_EQ(targets_[i].frame, "world");
+  }
+  EXPECT_EQ(targets_[0].state, +target_t::STATE_CANDIDATE);
+  const target_t& t = targets_.back();
+  ASSERT_EQ(t.state, +target_t::STATE_CONFIRMED);
+  EXPECT_LT((Eigen::Vector3d(t.center_mm[0], t.center_mm[1], t.center_mm[2]) - kBoxCentre).norm(), 10.0);
+  EXPECT_NEAR(t.size_mm[0], 150, 15);
+  EXPECT_NEAR(t.size_mm[1], 120, 15);
+  EXPECT_NEAR(t.size_mm[2], 140, 15);
+  EXPECT_NEAR(t.yaw_rad, 0.3, 0.05);
+  EXPECT_GE(t.confidence, 0.5);
+  // the box is at the image centre, ~1.2 m away: ~100 px wide
+  EXPECT_GT(t.roi_width, 70);
+  EXPECT_LT(t.roi_width, 200);
+  EXPECT_NEAR(t.roi_u + 0.5 * t.roi_width, 320, 40);
+  EXPECT_EQ(node_->status().value("state"), +target_t::STATE_CONFIRMED);
+  EXPECT_EQ(node_->status().value("confirmed_seq"), node_->finder().result().confirmed_seq);
+  EXPECT_EQ(node_->status().value("lost_poses"), 6);
+  EXPECT_GT(node_->status().value("floor_points"), 1000);
+  EXPECT_EQ(node_->status().rejected_total(), 0);
+
+  // stateless: the latest TARGET again every target_period_s of wall time (clock given to Tick: deterministic)
+  const int64_t later = WallTimeMicros() + 1000000000;
+  node_->Tick(later);
+  Drain();
+  ASSERT_EQ(targets_.size(), 7u);
+  EXPECT_EQ(targets_.back().seq, t.seq);
+  EXPECT_EQ(targets_.back().state, +target_t::STATE_CONFIRMED);
+  node_->Tick(later + 300000);
+  Drain();
+  EXPECT_EQ(targets_.size(), 7u);
+  node_->Tick(later + 1000000);
+  Drain();
+  EXPECT_EQ(targets_.size(), 8u);
+
+  EndOfStream();
+  Drain();
+  ASSERT_EQ(finished_.size(), 1u);
+  EXPECT_EQ(finished_[0].sender, "object_finder");
+  EXPECT_EQ(finished_[0].last_seq, 53);
+  EXPECT_TRUE(node_->Finished());
+
+  cv::FileStorage json((out_dir_ / "target.json").string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON);
+  ASSERT_TRUE(json.isOpened());
+  EXPECT_EQ(static_cast<std::string>(json["state"]), "confirmed");
+  std::vector<double> centre, size, normal;
+  json["centre_mm"] >> centre;
+  json["size_mm"] >> size;
+  json["floor"]["normal"] >> normal;
+  ASSERT_EQ(centre.size(), 3u);
+  ASSERT_EQ(size.size(), 3u);
+  EXPECT_LT((Eigen::Vector3d(centre[0], centre[1], centre[2]) - kBoxCentre).norm(), 10.0);
+  EXPECT_NEAR(size[2], 140, 15);
+  EXPECT_NEAR(static_cast<double>(json["yaw_rad"]), 0.3, 0.05);
+  EXPECT_EQ(static_cast<int>(json["confirmed_seq"]), node_->finder().result().confirmed_seq);
+  EXPECT_GE(static_cast<int>(json["views"]), 3);
+  EXPECT_GE(static_cast<double>(json["confidence"]), 0.5);
+  ASSERT_EQ(normal.size(), 3u);
+  EXPECT_GT(normal[2], 0.999);
+  EXPECT_NEAR(static_cast<double>(json["floor"]["offset_mm"]), 0.0, 2.0);
+  EXPECT_TRUE(json["other_candidates"].isSeq());
+}
+
+TEST_F(ObjectFinderNodeTest, MalformedMessagesAreRejectedBeforeDecoding) {
+  Start();
+  PublishInfo();
+  const FinderInput first = Keyframe(0);
+  PublishPose(first.seq, first.world_from_camera);
+  std::vector<uint8_t> bytes = Encode(LandmarksMessage(first));
+  const size_t count_offset = 8 + 8 + 8 + 4 + 6;  // hash, utime, seq, frame "world" (length incl. NUL)
+  std::vector<uint8_t> huge = bytes;
+  PutInt32(&huge, count_offset, 100000000);  // would allocate ~3 GB in the generated decoder
+  std::vector<uint8_t> negative = bytes;
+  PutInt32(&negative, count_offset, -5);
+  std::vector<uint8_t> truncated(bytes.begin(), bytes.end() - 31);
+  const uint8_t junk[5] = {1, 2, 3, 4, 5};
+  std::string why;
+  EXPECT_FALSE(CheckLandmarksMessageSize(huge.data(), static_cast<int>(huge.size()), &why));
+  EXPECT_NE(why.find("declared 100000000 landmarks"), std::string::npos) << why;
+  EXPECT_FALSE(CheckLandmarksMessageSize(negative.data(), static_cast<int>(negative.size()), &why));
+  EXPECT_FALSE(CheckLandmarksMessageSize(truncated.data(), static_cast<int>(truncated.size()), &why));
+  EXPECT_TRUE(CheckLandmarksMessageSize(bytes.data(), static_cast<int>(bytes.size()), &why));
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", huge.data(), static_cast<int>(huge.size())));
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", negative.data(), static_cast<int>(negative.size())));
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", truncated.data(), static_cast<int>(truncated.size())));
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", junk, 5));
+  ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", control_t{}));  // another type
+  camera_info_t info;
+  info.width = 640;
+  info.height = 480;
+  info.fx = info.fy = 800;
+  info.cx = 320;
+  info.cy = 240;
+  info.distortion_model = "none";
+  info.num_distortion = 0;
+  std::vector<uint8_t> info_bytes(static_cast<size_t>(info.getEncodedSize()));
+  info.encode(info_bytes.data(), 0, static_cast<int>(info_bytes.size()));
+  PutInt32(&info_bytes, info_bytes.size() - 4, 50000000);  // num_distortion is the last field
+  EXPECT_FALSE(CheckCameraInfoMessageSize(info_bytes.data(), static_cast<int>(info_bytes.size()), &why));
+  ASSERT_TRUE(bus_->Publish("CAMERA_INFO", info_bytes.data(), static_cast<int>(info_bytes.size())));
+  ASSERT_TRUE(bus_->Publish("CAMERA_POSE", junk, 5));
+  ASSERT_TRUE(bus_->Publish("ROBOT_ODOMETRY", junk, 5));
+  ASSERT_TRUE(bus_->Publish("OBJSCAN_CONTROL", junk, 5));
+  landmarks_t other_frame = LandmarksMessage(first);
+  other_frame.frame = "camera";
+  ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", other_frame));
+  Drain();
+  EXPECT_TRUE(targets_.empty());
+  EXPECT_EQ(node_->status().rejected("landmarks: malformed"), 5);
+  EXPECT_EQ(node_->status().rejected("camera_info: malformed"), 1);
+  EXPECT_EQ(node_->status().rejected("pose: malformed"), 1);
+  EXPECT_EQ(node_->status().rejected("odometry: malformed"), 1);
+  EXPECT_EQ(node_->status().rejected("control: malformed"), 1);
+  EXPECT_EQ(node_->status().rejected("landmarks: not in world frame"), 1);
+
+  // the node goes on: the good message is used, an older keyframe is rejected, the same keyframe again is used
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", bytes.data(), static_cast<int>(bytes.size())));
+  PublishKeyframe(1);
+  ASSERT_TRUE(bus_->Publish("LANDMARKS", bytes.data(), static_cast<int>(bytes.size())));
+  Drain();
+  EXPECT_EQ(targets_.size(), 2u);
+  EXPECT_EQ(node_->status().rejected("landmarks: out of order"), 1);
+  PublishKeyframe(2);
+  ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", LandmarksMessage(Keyframe(2))));  // seq 23 again (a final map)
+  Drain();
+  ASSERT_EQ(targets_.size(), 4u);
+  EXPECT_EQ(targets_[3].seq, 23);
+  EXPECT_EQ(node_->status().rejected_total(), 11);
+}
+
+TEST_F(ObjectFinderNodeTest, NoPoseOrCameraYetIsRejectedAndNoTargetBeforeTheFirstMap) {
+  Start();
+  node_->Tick(WallTimeMicros() + 5000000);
+  Drain();
+  EXPECT_TRUE(targets_.empty());  // nothing before the first map
+  const FinderInput first = Keyframe(0);
+  ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", LandmarksMessage(first)));
+  Drain();
+  EXPECT_EQ(node_->status().rejected("landmarks: no camera_info"), 1);
+  PublishInfo();
+  ASSERT_TRUE(bus_->PublishMessage("LANDMARKS", LandmarksMessage(first)));
+  Drain();
+  EXPECT_EQ(node_->status().rejected("landmarks: no camera pose"), 1);
+  EndOfStream();
+  Drain();
+  ASSERT_EQ(finished_.size(), 1u);
+  EXPECT_EQ(finished_[0].last_seq, -1);
+  cv::FileStorage json((out_dir_ / "target.json").string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON);
+  ASSERT_TRUE(json.isOpened());
+  EXPECT_EQ(static_cast<std::string>(json["state"]), "searching");
+  EXPECT_EQ(static_cast<int>(json["confirmed_seq"]), -1);
+}
+
+TEST(ObjectFinderNodeOptionsTest, ParsesAndValidates) {
+  ObjectFinderNodeOptions o;
+  OptionParser parser("object_finder", "test");
+  AddObjectFinderNodeOptions(parser, &o);
+  std::string error;
+  ASSERT_TRUE(parser.ParseArgs({"--cluster-distance", "60", "--min-views=4", "--target-max-size", "250"}, &error))
+      << error;
+  EXPECT_EQ(o.finder.cluster_distance_mm, 60);
+  EXPECT_EQ(o.finder.min_views, 4);
+  EXPECT_EQ(o.finder.target_max_size_mm, 250);
+  EXPECT_TRUE(ValidateObjectFinderNodeOptions(o, &error));
+  o.target_period_s = 0;
+  o.finder.min_views = 0;
+  EXPECT_FALSE(ValidateObjectFinderNodeOptions(o, &error));
+  EXPECT_NE(error.find("target-period"), std::string::npos);
+  EXPECT_NE(error.find("min-views"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace objscan

@@ -1,0 +1,424 @@
+#include "processes/object_finder/object_finder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "processes/object_finder/synthetic_room.h"
+
+namespace objscan {
+namespace {
+
+using testing_support::SyntheticRoom;
+
+constexpr double kDeg = M_PI / 180.0;
+const Eigen::Vector3d kBoxSize(150, 120, 140);  // the target: 150 x 120 x 140 mm, yaw 20 deg, at the origin
+constexpr double kBoxYaw = 20 * kDeg;
+const Eigen::Vector2d kSingleViewAt(700, 150);  // a valid-looking box observed in one keyframe only
+constexpr int kSingleViewUpdate = 4;            // the keyframe that sees it (camera at (1300, 0) looking at -x)
+
+double Horizontal(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return (a - b).head<2>().norm(); }
+
+const ClusterReport* ClusterNear(const FinderResult& r, const Eigen::Vector3d& p, double radius) {
+  const ClusterReport* best = nullptr;
+  for (const auto& c : r.clusters)
+    if (Horizontal(c.box.centre_mm, p) < radius && (!best || c.box.points > best->box.points)) best = &c;
+  return best;
+}
+
+// The room: floor with noise, the target, a valid sphere far away, a wall segment, a table-sized box, a
+// pillar, a small untextured box, phantom points and a single-view cluster. Floor frame; world_from_floor places it.
+struct MainRoom {
+  explicit MainRoom(const Eigen::Isometry3d& world_from_floor = Eigen::Isometry3d::Identity()) {
+    room.world_from_floor = world_from_floor;
+    room.AddFloor(3000, 2500, 2.0);
+    box = room.AddBox("box", Eigen::Vector2d(0, 0), kBoxSize, kBoxYaw, 12);
+    room.AddSphere("sphere", Eigen::Vector2d(2300, 600), 200, 12);
+    room.AddWall("wall", Eigen::Vector2d(-2800, -1500), Eigen::Vector2d(-2800, 1500), 1000, 3);
+    room.AddBox("table", Eigen::Vector2d(500, 2600), Eigen::Vector3d(900, 600, 700), 0, 3);
+    room.AddCylinder("pillar", Eigen::Vector2d(600, -2500), 150, 1400, 3);
+    room.AddBox("untextured", Eigen::Vector2d(1800, -1200), Eigen::Vector3d(120, 120, 120), 0.3, 0.6);
+    single = room.AddBox("single", kSingleViewAt, Eigen::Vector3d(150, 150, 150), 0, 12);
+    room.object(single).only_update = kSingleViewUpdate;
+    room.AddPhantoms(40, 2500, 100, 1200);
+  }
+  // Keyframe k of a circle of radius 1300 mm about the target, 22.5 deg apart, looking at it.
+  Eigen::Isometry3d Pose(int k) const {
+    return room.OnCircle(Eigen::Vector2d(0, 0), 1300, k * 22.5 - 90, Eigen::Vector3d(0, 0, 70));
+  }
+  Eigen::Vector3d World(double x, double y, double z) const { return room.World(Eigen::Vector3d(x, y, z)); }
+
+  SyntheticRoom room;
+  int box = -1, single = -1;
+};
+
+void ExpectTargetBox(const FinderResult& r, const MainRoom& m) {
+  const Eigen::Vector3d truth = m.World(0, 0, 0.5 * kBoxSize.z());
+  EXPECT_LT((r.box.centre_mm - truth).norm(), 10.0) << r.box.centre_mm.transpose() << " vs " << truth.transpose();
+  EXPECT_NEAR(r.box.size_mm.x(), kBoxSize.x(), 15.0);
+  EXPECT_NEAR(r.box.size_mm.y(), kBoxSize.y(), 15.0);
+  EXPECT_NEAR(r.box.size_mm.z(), kBoxSize.z(), 15.0);
+  EXPECT_NEAR(r.box.yaw_rad, kBoxYaw, 3 * kDeg);
+  ::testing::Test::RecordProperty("centre_error_mm", std::to_string((r.box.centre_mm - truth).norm()));
+  ::testing::Test::RecordProperty("size_error_mm", std::to_string((r.box.size_mm - kBoxSize).cwiseAbs().maxCoeff()));
+  ::testing::Test::RecordProperty("yaw_error_deg", std::to_string((r.box.yaw_rad - kBoxYaw) / kDeg));
+}
+
+TEST(ObjectFinderTest, ConfirmsOnlyTheTargetInARoom) {
+  MainRoom m;
+  ObjectFinder finder;
+  const Eigen::Vector3d target = m.World(0, 0, 70);
+  bool single_view_was_candidate = false;
+  for (int k = 0; k < 16; ++k) {
+    ASSERT_TRUE(finder.Update(m.room.Observe(m.Pose(k), 100 + k)));
+    const FinderResult& r = finder.result();
+    ASSERT_TRUE(r.floor_valid);
+    if (k < 2) {
+      EXPECT_NE(r.state, TargetState::kConfirmed) << "confirmed after " << k + 1 << " views";
+    }
+    if (r.state == TargetState::kConfirmed || r.state == TargetState::kLost) {
+      EXPECT_LT(Horizontal(r.box.centre_mm, target), 20.0) << "update " << k << ": only the box may be confirmed";
+    }
+    for (const auto& c : r.other_candidates) {
+      const bool sphere = Horizontal(c.box.centre_mm, m.World(2300, 600, 0)) < 60;
+      const bool single = Horizontal(c.box.centre_mm, m.World(700, 150, 0)) < 60;
+      EXPECT_TRUE(sphere || single) << "update " << k << ": candidate at " << c.box.centre_mm.transpose();
+      if (single) {
+        EXPECT_EQ(c.views, 1);
+        single_view_was_candidate = true;
+      }
+    }
+  }
+  const FinderResult& r = finder.result();
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  ExpectTargetBox(r, m);
+  EXPECT_GE(r.confirmed_seq, 102);  // needs three spread views
+  EXPECT_LE(r.confirmed_seq, 104);
+  EXPECT_GE(r.views, 12);
+  EXPECT_GT(r.confidence, 0.8);
+  EXPECT_GT(r.roi.width, 50);  // the last camera looks at it from 1.3 m: ~90 px wide
+  EXPECT_TRUE(single_view_was_candidate) << "the single-view cluster passes the rule: persistence must stop it";
+  // the sphere is the other candidate, far from the robot (seen from one side 3.6 m away: its box leans that way)
+  ASSERT_EQ(r.other_candidates.size(), 1u);
+  EXPECT_LT(Horizontal(r.other_candidates[0].box.centre_mm, m.World(2300, 600, 0)), 60.0);
+  EXPECT_GT(r.other_candidates[0].distance_mm, 2000.0);
+  // too big or too high; their sparse pieces are not isolated
+  for (const auto& [x, y, size_x, size_y, what] :
+       {std::tuple<double, double, double, double, const char*>{-2800, 0, 100, 3000, "wall"},
+        {500, 2600, 900, 600, "table"},
+        {600, -2500, 300, 300, "pillar"}}) {
+    int clusters = 0, points = 0;
+    std::map<std::string, int> rejected_pieces;  // pieces of target size and more, by reason
+    for (const auto& c : r.clusters) {
+      const Eigen::Vector3d d = c.box.centre_mm - m.World(x, y, 0);
+      if (std::abs(d.x()) > 0.5 * size_x + 50 || std::abs(d.y()) > 0.5 * size_y + 50) continue;
+      ++clusters;
+      points += c.box.points;
+      EXPECT_FALSE(c.passes) << what << " piece of " << c.box.points << " points at " << c.box.centre_mm.transpose();
+      EXPECT_FALSE(c.rejection.empty()) << what;
+      if (c.box.points >= 15) ++rejected_pieces[c.rejection];
+    }
+    EXPECT_GT(points, 30) << what << " seen in " << clusters << " clusters";
+    std::string reasons;
+    for (const auto& [reason, n] : rejected_pieces) reasons += reason + " " + std::to_string(n) + ", ";
+    RecordProperty(what, reasons);
+    EXPECT_GT(rejected_pieces["too high"] + rejected_pieces["too large"], 0) << what << ": " << reasons;
+  }
+  const ClusterReport* untextured = ClusterNear(r, m.World(1800, -1200, 0), 200);
+  if (untextured) {
+    EXPECT_FALSE(untextured->passes);
+  }
+  EXPECT_GT(r.floor_points, 2000);
+}
+
+TEST(ObjectFinderTest, TiltedOffsetFloor) {
+  Eigen::Isometry3d world_from_floor = Eigen::Isometry3d::Identity();
+  world_from_floor.linear() = Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  world_from_floor.translation() = Eigen::Vector3d(200, -100, 150);
+  MainRoom m(world_from_floor);
+  ObjectFinder finder;
+  for (int k = 0; k < 16; ++k) ASSERT_TRUE(finder.Update(m.room.Observe(m.Pose(k), k)));
+  const FinderResult& r = finder.result();
+  ASSERT_TRUE(r.floor_valid);
+  const Eigen::Vector3d normal = world_from_floor.linear() * Eigen::Vector3d::UnitZ();
+  EXPECT_LT(std::acos(std::min(1.0, r.floor.normal.dot(normal))), 0.3 * kDeg);
+  EXPECT_NEAR(r.floor.Height(world_from_floor.translation()), 0.0, 2.0);
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  ExpectTargetBox(r, m);
+}
+
+// Two valid objects, both in every view: a box A at the origin and a 200 mm sphere B at (700, 0).
+struct TwoObjects {
+  TwoObjects() {
+    room.AddFloor(2500, 2000, 2.0);
+    room.AddBox("A", Eigen::Vector2d(0, 0), kBoxSize, 0, 12);
+    room.AddSphere("B", Eigen::Vector2d(700, 0), 200, 12);
+  }
+  FinderInput View(double angle_deg, int64_t seq) {
+    return room.Observe(room.OnCircle(Eigen::Vector2d(350, 0), 1500, angle_deg, Eigen::Vector3d(350, 0, 80)), seq);
+  }
+  SyntheticRoom room;
+};
+
+TEST(ObjectFinderTest, NearestCandidateWinsAndKeepsTheTarget) {
+  TwoObjects s;
+  ObjectFinder finder;
+  int64_t seq = 0;
+  for (double a = -40; a <= 35; a += 15) ASSERT_TRUE(finder.Update(s.View(a, seq++)));  // the robot is nearer B
+  const FinderResult& r = finder.result();
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  // the sphere is seen from one side only: its box centre leans towards the cameras
+  EXPECT_LT(Horizontal(r.box.centre_mm, Eigen::Vector3d(700, 0, 0)), 40.0);
+  ASSERT_EQ(r.other_candidates.size(), 1u);
+  EXPECT_LT(Horizontal(r.other_candidates[0].box.centre_mm, Eigen::Vector3d(0, 0, 0)), 15.0);
+  EXPECT_GE(r.other_candidates[0].views, 3);  // A would have been confirmable too
+  const int target = r.track_id;
+  // now the robot is nearer A: a confirmed target is not taken over
+  for (double a = 145; a <= 215; a += 15) ASSERT_TRUE(finder.Update(s.View(a, seq++)));
+  EXPECT_EQ(r.state, TargetState::kConfirmed);
+  EXPECT_EQ(r.track_id, target);
+  ASSERT_EQ(r.other_candidates.size(), 1u);
+  const Eigen::Vector3d robot(350 + 1500 * std::cos(215 * kDeg), 1500 * std::sin(215 * kDeg), 0);
+  EXPECT_LT(r.other_candidates[0].distance_mm, Horizontal(r.box.centre_mm, robot) - 400);
+}
+
+TEST(ObjectFinderTest, NearestCandidateFromTheOtherSide) {
+  TwoObjects s;
+  ObjectFinder finder;
+  int64_t seq = 0;
+  for (double a = 145; a <= 220; a += 15) ASSERT_TRUE(finder.Update(s.View(a, seq++)));
+  const FinderResult& r = finder.result();
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  EXPECT_LT(Horizontal(r.box.centre_mm, Eigen::Vector3d(0, 0, 0)), 15.0);
+  ASSERT_EQ(r.other_candidates.size(), 1u);
+  EXPECT_LT(Horizontal(r.other_candidates[0].box.centre_mm, Eigen::Vector3d(700, 0, 0)), 40.0);
+}
+
+TEST(ObjectFinderTest, OneViewpointNeverConfirms) {
+  SyntheticRoom room;
+  room.AddFloor(2500, 2000, 2.0);
+  room.AddBox("box", Eigen::Vector2d(0, 0), kBoxSize, 0, 12);
+  ObjectFinder finder;
+  const Eigen::Isometry3d pose = room.OnCircle(Eigen::Vector2d(0, 0), 1000, 30, Eigen::Vector3d(0, 0, 70));
+  for (int k = 0; k < 12; ++k) {
+    // the robot stands still (the map is re-observed every keyframe) and pans a little
+    const Eigen::Isometry3d panned = pose * Eigen::AngleAxisd((k % 3 - 1) * 2 * kDeg, Eigen::Vector3d::UnitY());
+    ASSERT_TRUE(finder.Update(room.Observe(panned, k)));
+    EXPECT_EQ(finder.result().state, TargetState::kCandidate) << k;
+    EXPECT_EQ(finder.result().views, 1) << k;
+  }
+}
+
+TEST(ObjectFinderTest, PhantomsAndSingleViewClustersNeverConfirmed) {
+  SyntheticRoom room;
+  room.AddFloor(3000, 2500, 2.0);
+  const int single = room.AddBox("single", kSingleViewAt, Eigen::Vector3d(150, 150, 150), 0, 12);
+  room.object(single).only_update = kSingleViewUpdate;
+  room.AddPhantoms(150, 2500, 30, 1200, 150);
+  ObjectFinder finder;
+  for (int k = 0; k < 16; ++k) {
+    ASSERT_TRUE(finder.Update(
+        room.Observe(room.OnCircle(Eigen::Vector2d(0, 0), 1300, k * 22.5 - 90, Eigen::Vector3d(0, 0, 70)), k)));
+    const FinderResult& r = finder.result();
+    EXPECT_NE(r.state, TargetState::kConfirmed) << k;
+    EXPECT_NE(r.state, TargetState::kLost) << k;
+    for (const auto& c : r.clusters) EXPECT_GE(c.box.points, 3);
+    if (k < kSingleViewUpdate) {
+      EXPECT_EQ(r.state, TargetState::kSearching) << k << ": phantoms are no candidates";
+    }
+    if (k == kSingleViewUpdate) {
+      EXPECT_EQ(r.state, TargetState::kCandidate) << "the single-view cluster passes the rule";
+      EXPECT_LT(Horizontal(r.box.centre_mm, Eigen::Vector3d(700, 150, 0)), 20.0);
+    }
+  }
+  // never seen again where it should be: no longer a candidate
+  EXPECT_EQ(finder.result().state, TargetState::kSearching);
+}
+
+// The target, then: the camera turns away (still confirmed), looks at it while it is hidden (lost after 5
+// keyframes), sees it again (confirmed, same track).
+TEST(ObjectFinderTest, LostWhenNotSeenWhereExpectedThenFoundAgain) {
+  SyntheticRoom room;
+  room.AddFloor(2500, 2000, 2.0);
+  const int box = room.AddBox("box", Eigen::Vector2d(0, 0), kBoxSize, kBoxYaw, 12);
+  ObjectFinder finder;
+  const FinderResult& r = finder.result();
+  auto pose = [&](int k, bool away) {
+    const double a = (k * 30 - 90) * kDeg;
+    const Eigen::Vector3d eye(1300 * std::cos(a), 1300 * std::sin(a), 400);
+    return room.LookAt(eye, away ? Eigen::Vector3d(2 * eye.x(), 2 * eye.y(), 70) : Eigen::Vector3d(0, 0, 70));
+  };
+  int64_t seq = 0;
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE(finder.Update(room.Observe(pose(k, false), seq++)));
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  const int track = r.track_id;
+  const Eigen::Vector3d centre = r.box.centre_mm;
+  for (int k = 4; k < 10; ++k) {
+    ASSERT_TRUE(finder.Update(room.Observe(pose(k, true), seq++)));
+    EXPECT_EQ(r.state, TargetState::kConfirmed) << "out of view is not lost";
+    EXPECT_EQ(r.roi.width, 0);
+  }
+  room.object(box).hidden = true;
+  for (int k = 10; k < 16; ++k) {
+    ASSERT_TRUE(finder.Update(room.Observe(pose(k, false), seq++)));
+    EXPECT_EQ(r.state, k < 14 ? TargetState::kConfirmed : TargetState::kLost) << k;
+    EXPECT_GT(r.roi.width, 0) << "the region says where it should be";
+  }
+  EXPECT_LT(r.confidence, 0.5);
+  room.object(box).hidden = false;
+  ASSERT_TRUE(finder.Update(room.Observe(pose(16, false), seq++)));
+  EXPECT_EQ(r.state, TargetState::kConfirmed);
+  EXPECT_EQ(r.track_id, track);
+  EXPECT_LT((r.box.centre_mm - centre).norm(), 10.0);
+}
+
+TEST(ObjectFinderTest, ConfirmedTargetDroppedWhenManyViewsRejectIt) {
+  SyntheticRoom room;
+  room.AddFloor(2500, 2000, 2.0);
+  room.AddBox("box", Eigen::Vector2d(0, 0), kBoxSize, 0, 12);
+  const int pole = room.AddCylinder("pole", Eigen::Vector2d(0, 95), 20, 600, 12);  // 15 mm from the box's side
+  room.object(pole).hidden = true;
+  ObjectFinder finder;
+  const FinderResult& r = finder.result();
+  int64_t seq = 0;
+  auto pose = [&](int k) { return room.OnCircle(Eigen::Vector2d(0, 0), 1300, k * 25 - 90, Eigen::Vector3d(0, 0, 70)); };
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE(finder.Update(room.Observe(pose(k), seq++)));
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  room.object(pole).hidden = false;  // what looked like the target is part of something tall
+  for (int k = 4; k < 10; ++k) {
+    ASSERT_TRUE(finder.Update(room.Observe(pose(k), seq++)));
+    const ClusterReport* c = ClusterNear(r, Eigen::Vector3d(0, 0, 0), 100);
+    ASSERT_NE(c, nullptr);
+    EXPECT_EQ(c->rejection, "too high");
+    EXPECT_EQ(r.state, k < 8 ? TargetState::kConfirmed : TargetState::kSearching) << k;
+  }
+  EXPECT_EQ(r.confirmed_seq, -1);
+}
+
+TEST(ObjectFinderTest, NonFiniteLandmarksAreDroppedAndCounted) {
+  MainRoom clean_room, dirty_room;
+  ObjectFinder clean, dirty;
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 8; ++k) {
+    ASSERT_TRUE(clean.Update(clean_room.room.Observe(clean_room.Pose(k), k)));
+    FinderInput in = dirty_room.room.Observe(dirty_room.Pose(k), k);
+    for (int i = 0; i < 20; ++i) {
+      MapLandmark bad;
+      bad.id = 900000 + i;
+      bad.num_observations = 10;
+      bad.position_mm = Eigen::Vector3d(100, i % 2 ? nan : inf, 50);
+      if (i >= 15) {
+        bad.position_mm = Eigen::Vector3d(100, 0, 50);
+        bad.reprojection_error_px = i % 2 ? nan : -1;
+      }
+      if (i == 19) bad.num_observations = -3;
+      in.landmarks.insert(in.landmarks.begin() + i * 7, bad);
+    }
+    ASSERT_TRUE(dirty.Update(in));
+    EXPECT_EQ(dirty.result().rejected_landmarks, 20);
+    EXPECT_EQ(clean.result().rejected_landmarks, 0);
+    EXPECT_EQ(dirty.result().state, clean.result().state);
+    EXPECT_EQ(dirty.result().box.centre_mm, clean.result().box.centre_mm);
+    EXPECT_EQ(dirty.result().clusters.size(), clean.result().clusters.size());
+  }
+  EXPECT_EQ(dirty.result().state, TargetState::kConfirmed);
+}
+
+TEST(ObjectFinderTest, EmptyAndInvalidInputsAreSafe) {
+  ObjectFinder finder;
+  FinderInput empty;
+  std::string error;
+  EXPECT_FALSE(finder.Update(empty, &error));  // no intrinsics
+  EXPECT_EQ(error, "invalid camera intrinsics");
+  SyntheticRoom room;
+  empty.camera = room.camera();
+  ASSERT_TRUE(finder.Update(empty, &error));
+  EXPECT_EQ(finder.result().state, TargetState::kSearching);
+  EXPECT_FALSE(finder.result().floor_valid);
+  EXPECT_TRUE(finder.result().clusters.empty());
+  FinderInput bad_pose = empty;
+  bad_pose.world_from_camera.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(finder.Update(bad_pose, &error));
+  bad_pose.world_from_camera = Eigen::Isometry3d::Identity();
+  bad_pose.world_from_camera.linear() *= 2.0;  // not a rotation
+  EXPECT_FALSE(finder.Update(bad_pose, &error));
+  EXPECT_EQ(finder.updates(), 1);
+
+  // a confirmed target survives an empty map (the floor and the target are kept)
+  MainRoom m;
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(finder.Update(m.room.Observe(m.Pose(k), k)));
+  ASSERT_EQ(finder.result().state, TargetState::kConfirmed);
+  const Eigen::Vector3d centre = finder.result().box.centre_mm;
+  empty.world_from_camera = m.Pose(5);
+  ASSERT_TRUE(finder.Update(empty));
+  EXPECT_EQ(finder.result().state, TargetState::kConfirmed);
+  EXPECT_TRUE(finder.result().floor_valid);
+  EXPECT_EQ(finder.result().box.centre_mm, centre);
+}
+
+TEST(ObjectFinderTest, Deterministic) {
+  MainRoom a, b;
+  ObjectFinder fa, fb;
+  for (int k = 0; k < 10; ++k) {
+    ASSERT_TRUE(fa.Update(a.room.Observe(a.Pose(k), k)));
+    ASSERT_TRUE(fb.Update(b.room.Observe(b.Pose(k), k)));
+    ASSERT_EQ(fa.result().clusters.size(), fb.result().clusters.size());
+    for (size_t i = 0; i < fa.result().clusters.size(); ++i) {
+      EXPECT_EQ(fa.result().clusters[i].box.centre_mm, fb.result().clusters[i].box.centre_mm);
+      EXPECT_EQ(fa.result().clusters[i].track_id, fb.result().clusters[i].track_id);
+    }
+    EXPECT_EQ(fa.result().floor.normal, fb.result().floor.normal);
+    EXPECT_EQ(fa.result().box.centre_mm, fb.result().box.centre_mm);
+  }
+}
+
+TEST(ObjectFinderTest, ImageRegionOfABox) {
+  FinderCamera camera;
+  camera.width = 640;
+  camera.height = 480;
+  camera.fx = camera.fy = 800;
+  camera.cx = 319.5;
+  camera.cy = 239.5;
+  // camera at the origin looking along world +x (optical z = world x, optical x = -world y, optical y = -world z)
+  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+  world_from_camera.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  TargetBox box{Eigen::Vector3d(1000, 0, 0), Eigen::Vector3d(100, 200, 100), 0};
+  ImageRegion roi = ProjectBox(box, world_from_camera, camera);
+  // nearest face at x = 950: +-100 mm -> +-84.2 px about the centre
+  EXPECT_EQ(roi.u, 235);
+  EXPECT_EQ(roi.width, 170);
+  EXPECT_EQ(roi.v, 197);
+  EXPECT_EQ(roi.height, 86);
+  box.centre_mm.x() = -1000;  // behind
+  roi = ProjectBox(box, world_from_camera, camera);
+  EXPECT_EQ(roi.width, 0);
+  EXPECT_EQ(roi.height, 0);
+  box.centre_mm = Eigen::Vector3d(1000, 2000, 0);  // off to the left, outside the image
+  EXPECT_EQ(ProjectBox(box, world_from_camera, camera).width, 0);
+  box.centre_mm = Eigen::Vector3d(1000, 500, 0);  // partly outside on the left: clamped
+  roi = ProjectBox(box, world_from_camera, camera);
+  EXPECT_EQ(roi.u, 0);
+  EXPECT_GT(roi.width, 0);
+  box.centre_mm = Eigen::Vector3d(20, 0, 0);  // around the camera: the corners in front fill the image
+  roi = ProjectBox(box, world_from_camera, camera);
+  EXPECT_EQ(roi.width, 640);
+  EXPECT_EQ(roi.height, 480);
+}
+
+TEST(ObjectFinderTest, InvalidOptionsThrow) {
+  ObjectFinderOptions o;
+  o.target_max_size_mm = 50;  // below the minimum
+  std::string why;
+  EXPECT_FALSE(ValidateObjectFinderOptions(o, &why));
+  EXPECT_NE(why.find("target-max-size"), std::string::npos);
+  EXPECT_THROW(ObjectFinder{o}, std::invalid_argument);
+  EXPECT_TRUE(ValidateObjectFinderOptions(ObjectFinderOptions{}, &why));
+}
+
+}  // namespace
+}  // namespace objscan
