@@ -21,7 +21,7 @@
 //       --write-visible FILE the completeness set, e.g. to see where the errors and the holes are;
 //       --write-errors FILE writes "x y z distance" per model point (truth frame, the accuracy_* distances).
 //   objscan_evaluate target TARGET.json TRUTH.json [--align EST.txt TRUTH.txt]
-//       the object finder's box (target.json: center_mm, size_mm, state) against the true one (robot_sim's
+//       the object finder's box (target.json: centre_mm, size_mm, state) against the true one (robot_sim's
 //       ground_truth/sim_outcome.json: center_mm, size_mm of the target), the estimate first mapped by the Sim(3)
 //       that aligns the estimated trajectory to the true one; prints center_error_mm (3-D), center_error_xy_mm and
 //       the extents' errors (larger and smaller floor extent, height).
@@ -200,11 +200,14 @@ int main(int argc, char** argv) {
       buffer << in.rdbuf();
       texts[k] = buffer.str();
     }
+    // The object finder writes centre_mm (as the issue names it), the simulator center_mm: either is read.
+    auto read_box = [](const std::string& text, std::vector<double>* centre, std::vector<double>* size) {
+      return (JsonNumbers(text, "centre_mm", 3, centre) || JsonNumbers(text, "center_mm", 3, centre)) &&
+             JsonNumbers(text, "size_mm", 3, size);
+    };
     std::vector<double> c, sz, tc, tsz;
-    if (!JsonNumbers(texts[0], "center_mm", 3, &c) || !JsonNumbers(texts[0], "size_mm", 3, &sz))
-      return Fail(std::string(argv[2]) + ": no center_mm / size_mm (3 numbers each)");
-    if (!JsonNumbers(texts[1], "center_mm", 3, &tc) || !JsonNumbers(texts[1], "size_mm", 3, &tsz))
-      return Fail(std::string(argv[3]) + ": no center_mm / size_mm (3 numbers each)");
+    if (!read_box(texts[0], &c, &sz)) return Fail(std::string(argv[2]) + ": no centre_mm / size_mm (3 numbers each)");
+    if (!read_box(texts[1], &tc, &tsz)) return Fail(std::string(argv[3]) + ": no centre_mm / size_mm (3 numbers each)");
     Sim3 truth_from_estimate;
     if (!align_est.empty()) {
       std::vector<StampedPose> est, tru;
