@@ -1,0 +1,63 @@
+// Motion primitives of the planner, LCM-free: a path follower (pure pursuit), a circle follower (tangential driving
+// around a centre), the swept-footprint check, and the head's rate limits.
+// Units: mm, rad, s. Velocities: v_mm_s forward (>= 0: the camera looks ahead, the robot never backs up),
+// omega_rad_s counter-clockwise.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "processes/planner/occupancy_map.h"
+#include "processes/planner/planner_geometry.h"
+
+namespace objscan {
+
+struct Velocity {
+  double v_mm_s = 0;
+  double omega_rad_s = 0;
+};
+
+// Pure pursuit along a polyline. The lookahead point is the farthest path point within 350 mm whose straight line
+// from the robot crosses only Passable cells (no corner cutting through cells the path avoided). The robot turns in
+// place while the lookahead point is more than 50 deg off its heading, slows down over the last 300 mm.
+class PathFollower {
+ public:
+  void SetPath(std::vector<Eigen::Vector2d> path);
+  void Clear() { path_.clear(); }
+  bool empty() const { return path_.empty(); }
+  const std::vector<Eigen::Vector2d>& path() const { return path_; }
+  Eigen::Vector2d goal() const { return path_.empty() ? Eigen::Vector2d::Zero() : path_.back(); }
+  // Advances along the path and returns the velocity towards the lookahead point (zero when reached).
+  Velocity Follow(const OccupancyMap& map, const BasePose& base, double speed_mm_s, double max_omega_rad_s);
+  bool Reached(const BasePose& base, double tolerance_mm) const;
+  // Point `distance_mm` further along the path from the robot's progress (extrapolated beyond the goal along the
+  // last segment's direction, or the robot's heading for a one-point path).
+  Eigen::Vector2d PointAhead(const BasePose& base, double distance_mm) const;
+  // False when a path point within `distance_mm` ahead of the progress is no longer Passable.
+  bool StillFree(const OccupancyMap& map, double distance_mm) const;
+
+ private:
+  std::vector<Eigen::Vector2d> path_;
+  size_t index_ = 0;  // the path point nearest the robot so far
+};
+
+// Circle of radius_mm around centre, counter-clockwise (or clockwise): heading along the tangent, corrected towards
+// the circle, yaw rate = feed-forward +-v / radius plus a heading gain. Turns in place when the heading is > 30 deg
+// off.
+Velocity FollowCircle(const BasePose& base, const Eigen::Vector2d& centre, double radius_mm, double speed_mm_s,
+                      double max_omega_rad_s, bool clockwise = false);
+
+// True when every point of the segment a -> b (every 25 mm) lies in a Passable cell.
+bool LineOfSight(const OccupancyMap& map, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+
+// Integrates a unicycle for dt seconds.
+BasePose Integrate(const BasePose& base, const Velocity& velocity, double dt_s);
+
+// The swept-footprint check: the velocity if the round footprint stays FootprintSafe along the motion over
+// horizon_s (checked every 20 mm / 0.05 s), else the same at half and quarter speed, else turning in place (always
+// safe for a round footprint). A robot already in an unsafe spot may move when the motion increases its distance to
+// obstacles and unknown cells. *limited tells whether the speed was cut.
+Velocity SafeVelocity(const OccupancyMap& map, const BasePose& base, const Velocity& wanted, double horizon_s,
+                      bool* limited);
+
+}  // namespace objscan

@@ -1,0 +1,26 @@
+// plan.json: the planner's record of a run (LCM-free).
+//   outcome          "modeled" (FINISH reached) | "no_target" (NO_TARGET) | "stopped" (the stream ended first)
+//   phases           [{name, start_utime, end_utime, seconds}] in order (a running phase ends at end_utime)
+//   path_length_mm   estimated path of the base; views = frames with a usable camera pose; frames = poses handled
+//   orbit_percent    share of the circle's 1-degree bins driven in ORBIT
+//   next_views       [{x, y, pan, tilt, radius, azimuth, gain, coverage_before, coverage_after}] (mm, rad, fractions;
+//                    coverage_after -1 when the stream ended before the view was evaluated)
+//   coverage         final coverage fraction, coverage_samples its sample count
+//   disagreement     max odometry-vs-estimate distance (mm) and heading difference (deg)
+//   target           confirmed, centre_mm, size_mm, yaw_rad, confirmed_seq
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "processes/planner/planner.h"
+
+namespace objscan {
+
+// Outcome word for a summary: "modeled", "no_target" or "stopped".
+std::string PlanOutcome(const PlanSummary& summary);
+std::string PlanJson(const PlanSummary& summary, int64_t end_utime);
+// Writes PlanJson to path; false with *error when the file cannot be written.
+bool WritePlanJson(const std::string& path, const PlanSummary& summary, int64_t end_utime, std::string* error);
+
+}  // namespace objscan

@@ -1,0 +1,827 @@
+#include "processes/planner/planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace objscan {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr int64_t kSecond = 1000000;  // µs
+constexpr double kNearSpinTiltRad = 50 * kDeg;  // head low: the floor from ~0.2 m to ~0.65 m around the robot
+constexpr double kFarSpinTiltRad = 18 * kDeg;   // head up: the floor from ~0.6 m to the view range
+constexpr double kLookAheadMm = 1200;           // mm, where the head looks along a path while exploring
+constexpr double kGoalToleranceMm = 60;         // mm, a view or orbit point counts as reached
+constexpr double kMaxDetourMm = 600;            // mm, largest local detour outward from the orbit circle
+constexpr int64_t kReplanUs = 3 * kSecond;      // µs between routine replans
+
+std::string Mm(const Eigen::Vector2d& p) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "(%.0f, %.0f) mm", p.x(), p.y());
+  return buffer;
+}
+
+double Ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+const char* PhaseName(Phase phase) {
+  switch (phase) {
+    case Phase::kExplore: return "EXPLORE";
+    case Phase::kApproach: return "APPROACH";
+    case Phase::kOrbit: return "ORBIT";
+    case Phase::kNextViews: return "NEXT_VIEWS";
+    case Phase::kFinish: return "FINISH";
+    case Phase::kNoTarget: return "NO_TARGET";
+  }
+  return "?";
+}
+
+bool ValidatePlannerOptions(const PlannerOptions& o, std::string* why) {
+  std::ostringstream e;
+  std::string sub;
+  if (!o.robot.IsValid(&sub)) e << sub << "; ";
+  if (!ValidateOccupancyMapOptions(o.map, &sub)) e << sub << "; ";
+  auto positive = [&](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) e << name << " must be > 0; ";
+  };
+  positive(o.limits.max_speed_mm_s, "max speed");
+  positive(o.limits.max_omega_rad_s, "max yaw rate");
+  positive(o.limits.max_pan_rad, "pan limit");
+  if (!(o.limits.max_tilt_rad > o.limits.min_tilt_rad)) e << "tilt limits: max must be > min; ";
+  positive(o.orbit_speed_mm_s, "orbit speed");
+  positive(o.explore_speed_mm_s, "explore speed");
+  positive(o.capture_speed_mm_s, "capture speed");
+  positive(o.tracking_turn_rad_s, "tracking turn rate");
+  positive(o.explore_budget_s, "explore budget");
+  positive(o.next_views_budget_s, "next views budget");
+  if (!(o.lost_search_s >= 0)) e << "lost search time must be >= 0; ";
+  for (double speed : {o.orbit_speed_mm_s, o.explore_speed_mm_s, o.capture_speed_mm_s})
+    if (speed > o.limits.max_speed_mm_s) e << "speeds must be <= the max speed; ";
+  if (o.tracking_turn_rad_s > o.limits.max_omega_rad_s) e << "tracking turn rate must be <= the max yaw rate; ";
+  const double clear = o.map.footprint_radius_mm + o.map.safety_margin_mm;
+  if (!(o.orbit_radius_mm > clear) || !std::isfinite(o.orbit_radius_mm))
+    e << "orbit radius must be > footprint radius + safety margin; ";
+  if (!(o.coverage_target > 0 && o.coverage_target <= 1)) e << "coverage target must be in (0, 1]; ";
+  if (o.max_next_views < 0) e << "max next views must be >= 0; ";
+  positive(o.coverage.sample_mm, "coverage sample spacing");
+  positive(o.coverage.max_range_mm, "coverage range");
+  if (!(o.coverage.max_incidence_deg > 0 && o.coverage.max_incidence_deg <= 90))
+    e << "max incidence must be in (0, 90] deg; ";
+  if (o.coverage.views_needed < 1) e << "views needed must be >= 1; ";
+  if (o.next_view.radii_mm.empty()) e << "next-view radii must not be empty; ";
+  for (double r : o.next_view.radii_mm)
+    if (!(r > o.map.footprint_radius_mm) || !std::isfinite(r)) e << "next-view radii must be > the footprint; ";
+  if (!(o.next_view.azimuth_step_deg > 0 && o.next_view.azimuth_step_deg <= 180))
+    e << "next-view azimuth step must be in (0, 180] deg; ";
+  if (!(o.next_view.capture_arc_deg >= 0 && o.next_view.capture_arc_deg <= 90))
+    e << "capture arc must be in [0, 90] deg; ";
+  const std::string message = e.str();
+  if (message.empty()) return true;
+  if (why) *why = message.substr(0, message.size() - 2);
+  return false;
+}
+
+namespace {
+const PlannerOptions& ValidatedOrThrow(const PlannerOptions& o) {
+  std::string why;
+  if (!ValidatePlannerOptions(o, &why)) throw std::invalid_argument("planner: " + why);
+  return o;
+}
+}  // namespace
+
+Planner::Planner(const PlannerOptions& options)
+    : options_(ValidatedOrThrow(options)),
+      estimator_(options_.robot),
+      map_(options_.map),
+      coverage_(options_.coverage) {
+  coverage_.SetCamera(camera_);
+}
+
+void Planner::SetCamera(const CameraIntrinsics& camera) {
+  if (!camera.IsValid()) return;
+  camera_ = camera;
+  coverage_.SetCamera(camera);
+}
+
+bool Planner::AddOdometry(const OdometryReading& reading) {
+  if (!estimator_.AddOdometry(reading)) return false;
+  if (!head_initialised_) {
+    pan_command_ = std::clamp(reading.pan_rad, -options_.limits.max_pan_rad, options_.limits.max_pan_rad);
+    tilt_command_ = std::clamp(reading.tilt_rad, options_.limits.min_tilt_rad, options_.limits.max_tilt_rad);
+    head_initialised_ = true;
+  }
+  return true;
+}
+
+void Planner::SetLandmarks(const std::vector<MapLandmark>& landmarks) { map_.SetLandmarks(landmarks); }
+
+void Planner::SetVoxels(const VoxelCloud& voxels) { coverage_.SetVoxels(voxels); }
+
+void Planner::SetTarget(const TargetObservation& t) {
+  if (!t.centre_mm.allFinite() || !t.size_mm.allFinite() || !std::isfinite(t.yaw_rad)) return;
+  const TargetState previous = target_state_;
+  target_state_ = t.state;
+  const Eigen::Vector2d xy = t.centre_mm.head<2>();
+  switch (t.state) {
+    case TargetState::kConfirmed:
+      if (!confirmed_) {
+        confirmed_ = true;
+        confirmed_seq_ = t.seq;
+        Event("target confirmed at " + Mm(xy) + ", frame " + std::to_string(t.seq));
+      }
+      target_ = t;
+      have_target_position_ = true;
+      coverage_.SetTarget({t.centre_mm, t.size_mm, t.yaw_rad});
+      break;
+    case TargetState::kCandidate:
+      if (confirmed_) break;  // the confirmed estimate stays
+      if (!have_target_position_ || (target_.centre_mm.head<2>() - xy).norm() > 500) {
+        Event("candidate at " + Mm(xy));
+        investigate_spots_.clear();
+      }
+      target_ = t;
+      have_target_position_ = true;
+      break;
+    case TargetState::kLost:
+      if (previous != TargetState::kLost && have_target_position_) Event("target lost (last seen at " + Mm(xy) + ")");
+      break;
+    case TargetState::kSearching:
+      break;
+  }
+}
+
+void Planner::Event(const std::string& text) { events_.push_back(text); }
+
+std::vector<std::string> Planner::TakeEvents() {
+  std::vector<std::string> out;
+  out.swap(events_);
+  return out;
+}
+
+bool Planner::Stuck() const { return blocked_since_ >= 0 && now_ - blocked_since_ > 2 * kSecond; }
+
+double Planner::PhaseSeconds() const {
+  return phases_.empty() ? 0.0 : (now_ - phases_.back().start_utime) * 1e-6;
+}
+
+void Planner::EnterPhase(Phase phase, const std::string& why) {
+  const Phase from = phase_;
+  if (!phases_.empty()) phases_.back().end_utime = now_;
+  phases_.push_back({phase, now_, -1});
+  if (phase == Phase::kFinish || phase == Phase::kNoTarget) phases_.back().end_utime = now_;
+  phase_ = phase;
+  follower_.Clear();
+  if (phase == Phase::kExplore && from == Phase::kExplore)
+    Event(std::string("phase ") + PhaseName(phase) + ": " + why);
+  else
+    Event(std::string("phase ") + PhaseName(from) + " -> " + PhaseName(phase) + ": " + why);
+}
+
+double Planner::orbit_percent() const {
+  int n = 0;
+  for (uint8_t b : orbit_bins_) n += b;
+  return n * 100.0 / static_cast<double>(orbit_bins_.size());
+}
+
+PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
+  const auto start = std::chrono::steady_clock::now();
+  now_ = pose.utime;
+  double dt = 1.0 / 30.0;
+  if (last_step_utime_ >= 0 && now_ > last_step_utime_) dt = std::clamp((now_ - last_step_utime_) * 1e-6, 1e-3, 0.2);
+  last_step_utime_ = now_;
+  ++frames_;
+  if (phases_.empty()) EnterPhase(Phase::kExplore, "start");
+  const bool used = estimator_.AddCameraPose(pose);
+  const BasePose base = estimator_.Estimate();
+  if (have_base_) {
+    const double moved = (base.position() - base_.position()).norm();
+    if (moved < 300) path_length_mm_ += moved;  // a relocalization jump is no travel
+  }
+  base_ = base;
+  have_base_ = true;
+  if (used) {
+    ++views_;
+    coverage_.AddView(pose.world_from_camera);
+    const Eigen::Isometry3d& c = pose.world_from_camera;
+    const double moved = (c.translation() - last_marked_.translation()).norm();
+    const double turned = Eigen::AngleAxisd(last_marked_.linear().transpose() * c.linear()).angle();
+    if (!marked_once_ || moved >= 50 || turned >= 3 * kDeg) {
+      map_.MarkView(c, camera_);
+      last_marked_ = c;
+      marked_once_ = true;
+    }
+  }
+  map_.MarkFootprint(base_.position());
+  map_.Update();
+  if (confirmed_ && frames_ % 30 == 0) coverage_.Update();  // ~1 Hz for the status
+  dt_ = dt;
+  Motion motion;
+  switch (phase_) {
+    case Phase::kExplore: motion = Explore(); break;
+    case Phase::kApproach: motion = Approach(); break;
+    case Phase::kOrbit: motion = Orbit(); break;
+    case Phase::kNextViews: motion = NextViews(); break;
+    default: break;
+  }
+  PlannerCommand command;
+  if (!done()) command = Finalize(motion, dt);
+  else activity_ = "stopped";
+  last_step_ms_ = Ms(start);
+  return command;
+}
+
+PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
+  const RobotLimits& l = options_.limits;
+  const double turn = std::min(options_.tracking_turn_rad_s, l.max_omega_rad_s);
+  Velocity v = motion.velocity;
+  v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, 0.0, l.max_speed_mm_s);
+  v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
+  bool limited = false;
+  const bool wants_to_move = v.v_mm_s > 1;
+  v = SafeVelocity(map_, base_, v, 0.5, &limited);
+  if (limited) ++safety_stops_;
+  if (wants_to_move && v.v_mm_s <= 0) {
+    if (blocked_since_ < 0) blocked_since_ = now_;
+  } else {
+    blocked_since_ = -1;
+  }
+  double pan = motion.pan_rad, tilt = motion.tilt_rad;
+  if (motion.aim_at_point) AimHead(options_.robot, Integrate(base_, v, dt), motion.aim_point, &pan, &tilt);
+  if (!std::isfinite(pan) || !std::isfinite(tilt)) {
+    pan = pan_command_;
+    tilt = tilt_command_;
+  }
+  pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
+  tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
+  // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
+  const double step = turn * dt, base_turn = v.omega_rad_s * dt;
+  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -step, step);
+  pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
+  tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
+  pan_command_ = pan;
+  tilt_command_ = tilt;
+  PlannerCommand command;
+  command.stop = false;
+  command.v_mm_s = v.v_mm_s;
+  command.omega_rad_s = v.omega_rad_s;
+  command.pan_rad = pan;
+  command.tilt_rad = tilt;
+  return command;
+}
+
+Planner::Motion Planner::Hold(const Eigen::Vector3d& point) {
+  Motion m;
+  m.aim_point = point;
+  return m;
+}
+
+Planner::Motion Planner::FollowPathLookingAt(const Eigen::Vector3d& point, double speed) {
+  Motion m;
+  m.velocity = follower_.Follow(map_, base_, speed, options_.tracking_turn_rad_s);
+  m.aim_point = point;
+  return m;
+}
+
+Planner::Motion Planner::LookAhead(const Velocity& v) {
+  Motion m;
+  m.velocity = v;
+  const Eigen::Vector2d ahead = follower_.PointAhead(base_, kLookAheadMm);
+  m.aim_point = Eigen::Vector3d(ahead.x(), ahead.y(), 0);
+  return m;
+}
+
+// ---------------------------------------------------------------- EXPLORE
+
+Planner::Motion Planner::Explore() {
+  if (confirmed_) {
+    EnterPhase(Phase::kApproach, "target confirmed at " + Mm(target_.centre_mm.head<2>()));
+    return Approach();
+  }
+  if (PhaseSeconds() >= options_.explore_budget_s) {
+    EnterPhase(Phase::kNoTarget, "exploration budget of " + std::to_string(options_.explore_budget_s) +
+                                     " s spent, no target found");
+    return {};
+  }
+  const bool candidate = have_target_position_ &&
+                         (target_state_ == TargetState::kCandidate || target_state_ == TargetState::kLost);
+  if (candidate && explore_step_ != ExploreStep::kInvestigate && investigate_spots_.size() < 4) {
+    explore_step_ = ExploreStep::kInvestigate;
+    candidate_missing_since_ = -1;
+    follower_.Clear();
+  }
+  switch (explore_step_) {
+    case ExploreStep::kLookNear: return Spin(kNearSpinTiltRad);
+    case ExploreStep::kLookFar: return Spin(kFarSpinTiltRad);
+    case ExploreStep::kFrontier: return Frontier();
+    case ExploreStep::kInvestigate: return Investigate();
+  }
+  return {};
+}
+
+Planner::Motion Planner::Spin(double tilt) {
+  activity_ = explore_step_ == ExploreStep::kLookNear ? "look around (near)" : "look around";
+  if (!spinning_) {
+    spinning_ = true;
+    spin_turned_ = 0;
+    last_theta_ = base_.theta_rad;
+  }
+  spin_turned_ += std::abs(WrapAngle(base_.theta_rad - last_theta_));
+  last_theta_ = base_.theta_rad;
+  if (spin_turned_ >= 2 * M_PI + 0.2) {
+    spinning_ = false;
+    explore_step_ = explore_step_ == ExploreStep::kLookNear ? ExploreStep::kLookFar : ExploreStep::kFrontier;
+    if (explore_step_ == ExploreStep::kFrontier) return Frontier();
+  }
+  Motion m;
+  m.velocity.omega_rad_s = 0.9 * options_.tracking_turn_rad_s;
+  m.aim_at_point = false;
+  m.pan_rad = 0;
+  m.tilt_rad = tilt;
+  return m;
+}
+
+bool Planner::ChooseFrontier() {
+  cost_field_.Compute(map_, base_.position());
+  const double frontier_distance = options_.map.footprint_radius_mm + 2 * options_.map.cell_mm;
+  const Eigen::Vector2d current_goal = follower_.empty() ? Eigen::Vector2d(1e12, 1e12) : follower_.goal();
+  int best = -1;
+  double best_score = 0;
+  reachable_cells_ = 0;
+  for (int i = 0; i < map_.num_cells(); ++i) {
+    if (!cost_field_.Reachable(i)) continue;
+    ++reachable_cells_;
+    if (!map_.Traversable(i) || map_.UnknownDistanceMm(i) > frontier_distance) continue;
+    if (map_.UnknownCellsNear(i, 500) < 10) continue;  // a sliver of unknown is not worth the trip
+    const Eigen::Vector2d c = map_.CentreOf(i);
+    const double cost = cost_field_.CostMm(i);
+    if (cost < 250) continue;
+    bool visited = false;
+    for (const Eigen::Vector2d& g : visited_goals_) visited = visited || (g - c).norm() < 500;
+    if (visited) continue;
+    const double turn = std::abs(WrapAngle(std::atan2(c.y() - base_.y_mm, c.x() - base_.x_mm) - base_.theta_rad));
+    double score = cost + 300 * turn;
+    if ((c - current_goal).norm() < 200) score *= 0.7;  // keep the goal unless another is clearly nearer
+    if (best < 0 || score < best_score) {
+      best = i;
+      best_score = score;
+    }
+  }
+  if (best < 0) return false;
+  std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, best);
+  const double length = PathLength(path);
+  follower_.SetPath(std::move(path));
+  goal_deadline_ = now_ + static_cast<int64_t>((2 * length / options_.explore_speed_mm_s + 15) * kSecond);
+  return true;
+}
+
+Planner::Motion Planner::Frontier() {
+  activity_ = "frontier";
+  bool replan = follower_.empty() || now_ >= next_replan_ || !follower_.StillFree(map_, 1000);
+  if (!follower_.empty() && (follower_.Reached(base_, 150) || now_ > goal_deadline_ || Stuck())) {
+    blocked_since_ = -1;
+    visited_goals_.push_back(follower_.goal());
+    follower_.Clear();
+    replan = true;
+  }
+  if (replan) {
+    next_replan_ = now_ + kReplanUs;
+    if (!ChooseFrontier()) {
+      follower_.Clear();
+      const double reachable_m2 = reachable_cells_ * options_.map.cell_mm * options_.map.cell_mm * 1e-6;
+      if (views_ == 0 || reachable_m2 < 1.0) {  // no map around the robot yet (no usable poses?): look around again
+        char text[96];
+        std::snprintf(text, sizeof(text), "nothing reachable to explore yet (%.2f m2 known): looking around again",
+                      reachable_m2);
+        Event(text);
+        explore_step_ = ExploreStep::kLookNear;
+        return Spin(kNearSpinTiltRad);
+      }
+      EnterPhase(Phase::kNoTarget, "room explored (no frontier left), no target found");
+      return {};
+    }
+  }
+  return LookAhead(follower_.Follow(map_, base_, options_.explore_speed_mm_s, options_.tracking_turn_rad_s));
+}
+
+Planner::Motion Planner::Investigate() {
+  activity_ = "investigate candidate";
+  const Eigen::Vector3d centre = TargetCentre();
+  if (target_state_ == TargetState::kSearching) {
+    if (candidate_missing_since_ < 0) candidate_missing_since_ = now_;
+    if (now_ - candidate_missing_since_ > 5 * kSecond) {
+      Event("candidate gone: exploring again");
+      explore_step_ = ExploreStep::kFrontier;
+      have_target_position_ = false;
+      follower_.Clear();
+      return Frontier();
+    }
+  } else {
+    candidate_missing_since_ = -1;
+  }
+  const bool reached = !follower_.empty() && follower_.Reached(base_, 150);
+  if (reached) investigate_spots_.push_back(follower_.goal());
+  if (follower_.empty() || reached || now_ > goal_deadline_ || !follower_.StillFree(map_, 1000) || Stuck()) {
+    blocked_since_ = -1;
+    if (!follower_.empty() && !reached) investigate_spots_.push_back(follower_.goal());
+    follower_.Clear();
+    if (investigate_spots_.size() >= 4) {
+      Event("candidate not confirmed from 4 places: exploring again");
+      explore_step_ = ExploreStep::kFrontier;
+      return Frontier();
+    }
+    cost_field_.Compute(map_, base_.position());
+    int best = -1;
+    for (int i = 0; i < map_.num_cells(); ++i) {
+      if (!cost_field_.Reachable(i) || !map_.Traversable(i)) continue;
+      const Eigen::Vector2d c = map_.CentreOf(i);
+      const double d = (c - centre.head<2>()).norm();
+      if (d < 900 || d > 1500 || (c - base_.position()).norm() < 300) continue;
+      bool used = false;
+      for (const Eigen::Vector2d& s : investigate_spots_) used = used || (s - c).norm() < 600;
+      if (!used && (best < 0 || cost_field_.CostMm(i) < cost_field_.CostMm(best))) best = i;
+    }
+    if (best < 0) {  // nowhere to look from: turn to it where we are
+      investigate_spots_.push_back(base_.position());
+      return Hold(centre);
+    }
+    std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, best);
+    const double length = PathLength(path);
+    follower_.SetPath(std::move(path));
+    goal_deadline_ = now_ + static_cast<int64_t>((2 * length / options_.explore_speed_mm_s + 10) * kSecond);
+  }
+  return FollowPathLookingAt(centre, options_.explore_speed_mm_s);
+}
+
+// ---------------------------------------------------------------- APPROACH
+
+bool Planner::PlanToOrbit() {
+  cost_field_.Compute(map_, base_.position());
+  const Eigen::Vector2d c = TargetCentre().head<2>();
+  for (double extra = 0; extra <= 400; extra += 100) {
+    const double r = options_.orbit_radius_mm + extra;
+    int best = -1;
+    for (int k = 0; k < 72; ++k) {
+      const double a = k * 5 * kDeg;
+      int index;
+      if (!map_.IndexOf(c + r * Eigen::Vector2d(std::cos(a), std::sin(a)), &index)) continue;
+      if (!map_.Traversable(index) || !cost_field_.Reachable(index)) continue;
+      if (best < 0 || cost_field_.CostMm(index) < cost_field_.CostMm(best)) best = index;
+    }
+    if (best >= 0) {
+      std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, best);
+      const double length = PathLength(path);
+      follower_.SetPath(std::move(path));
+      goal_deadline_ = now_ + static_cast<int64_t>((2 * length / options_.explore_speed_mm_s + 15) * kSecond);
+      return true;
+    }
+  }
+  return false;
+}
+
+Planner::Motion Planner::Approach() {
+  activity_ = "approach";
+  const Eigen::Vector3d centre = TargetCentre();
+  const double d = (base_.position() - centre.head<2>()).norm();
+  if ((std::abs(d - options_.orbit_radius_mm) <= kGoalToleranceMm && map_.TraversableAt(base_.position())) ||
+      (!follower_.empty() && follower_.Reached(base_, kGoalToleranceMm))) {
+    EnterPhase(Phase::kOrbit, "on the orbit circle (" + std::to_string(static_cast<int>(d)) + " mm from the target)");
+    return Orbit();
+  }
+  const bool replan = follower_.empty() || now_ >= next_replan_ || now_ > goal_deadline_ ||
+                      !follower_.StillFree(map_, 1000) || Stuck();
+  if (replan) {
+    next_replan_ = now_ + kReplanUs;
+    blocked_since_ = -1;
+    if (!PlanToOrbit()) {
+      if (!ChooseFrontier()) {
+        EnterPhase(Phase::kNextViews, "the orbit circle is not reachable and nothing is left to explore");
+        return NextViews();
+      }
+      activity_ = "approach: circle not reachable yet, exploring";
+    }
+  }
+  return FollowPathLookingAt(centre, options_.explore_speed_mm_s);
+}
+
+// ---------------------------------------------------------------- ORBIT
+
+bool Planner::StartBypass(double azimuth) {
+  cost_field_.Compute(map_, base_.position());
+  const Eigen::Vector2d c = TargetCentre().head<2>();
+  const double r = options_.orbit_radius_mm;
+  bool passed_block = false;  // the goal lies beyond the blocked part of the circle
+  for (double delta = 5 * kDeg; delta <= 1.5 * M_PI; delta += 5 * kDeg) {
+    const double a = azimuth + delta;
+    int index;
+    if (!map_.IndexOf(c + r * Eigen::Vector2d(std::cos(a), std::sin(a)), &index)) continue;
+    if (!map_.Traversable(index)) {
+      passed_block = true;
+      continue;
+    }
+    if (!passed_block || !cost_field_.Reachable(index)) continue;
+    follower_.SetPath(cost_field_.PathTo(map_, index));
+    orbit_bypass_ = true;
+    Event("orbit: circle blocked ahead, bypass to " + Mm(map_.CentreOf(index)));
+    return true;
+  }
+  return false;
+}
+
+bool Planner::TargetHidden() const {
+  const OdometryReading* odometry = estimator_.latest_odometry();
+  if (odometry == nullptr) return false;
+  const Eigen::Vector2d camera =
+      WorldFromCamera(options_.robot, base_, odometry->pan_rad, odometry->tilt_rad).translation().head<2>();
+  const Eigen::Vector2d target = TargetCentre().head<2>();
+  const double target_radius = 0.5 * target_.size_mm.head<2>().norm() + 2 * options_.map.cell_mm;
+  const Eigen::Vector2d d = target - camera;
+  const double length = d.norm();
+  for (double s = 0; s < length - target_radius; s += 0.5 * options_.map.cell_mm) {
+    int index;
+    if (map_.IndexOf(camera + d * (s / length), &index) && map_.StateOf(index) == OccupancyMap::State::kOccupied)
+      return true;
+  }
+  return false;
+}
+
+double Planner::OrbitRadiusAhead(double azimuth, double* blocked_azimuth) const {
+  const Eigen::Vector2d c = TargetCentre().head<2>();
+  *blocked_azimuth = azimuth;
+  auto arc_free = [&](double radius, bool note_block) {
+    for (double s = 100; s <= 900; s += 100) {
+      const double a = azimuth + s / radius;
+      if (!map_.TraversableAt(c + radius * Eigen::Vector2d(std::cos(a), std::sin(a)))) {
+        if (note_block) *blocked_azimuth = a;
+        return false;
+      }
+    }
+    return true;
+  };
+  if (arc_free(options_.orbit_radius_mm, true)) return options_.orbit_radius_mm;
+  for (double extra = 100; extra <= kMaxDetourMm; extra += 100) {
+    const double radius = options_.orbit_radius_mm + extra;
+    if (!arc_free(radius, false)) continue;
+    // 100 mm more where free: the obstacle's far side, not seen yet, may reach farther out than its near side.
+    return extra + 100 <= kMaxDetourMm && arc_free(radius + 100, false) ? radius + 100 : radius;
+  }
+  return -1;
+}
+
+Planner::Motion Planner::Orbit() {
+  activity_ = "orbit";
+  const Eigen::Vector3d centre = TargetCentre();
+  const Eigen::Vector2d c = centre.head<2>();
+  const Eigen::Vector2d r = base_.position() - c;
+  const double azimuth = std::atan2(r.y(), r.x());
+  if (!orbit_started_) {
+    orbit_started_ = true;
+    orbit_last_azimuth_ = azimuth;
+    orbit_progress_ = 0;
+    orbit_radius_set_ = options_.orbit_radius_mm;
+  }
+  orbit_progress_ += WrapAngle(azimuth - orbit_last_azimuth_);
+  orbit_last_azimuth_ = azimuth;
+  const bool hidden = TargetHidden();
+  if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
+    if (lost_since_ < 0) {
+      lost_since_ = now_;
+      Event("orbit paused: target lost, searching");
+    }
+    if (now_ - lost_since_ < static_cast<int64_t>(options_.lost_search_s * kSecond)) {
+      activity_ = "orbit paused: searching the target";
+      const double sweep = 0.25 * std::sin(2 * M_PI * (now_ - lost_since_) * 1e-6 / 4.0);  // ~±14 deg
+      const Eigen::Vector2d side(-r.y(), r.x());
+      return Hold(centre + Eigen::Vector3d(side.x(), side.y(), 0) * sweep);
+    }
+  } else if (lost_since_ >= 0 && target_state_ != TargetState::kLost) {
+    lost_since_ = -1;
+    Event("orbit continues: target found again");
+  }
+  if (orbit_progress_ >= 2 * M_PI) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "orbit complete (%.0f %% of the circle driven)", orbit_percent());
+    EnterPhase(Phase::kNextViews, text);
+    return NextViews();
+  }
+  const int quarter = static_cast<int>(orbit_progress_ / (M_PI / 2));
+  if (quarter > orbit_reported_quarter_) {
+    orbit_reported_quarter_ = quarter;
+    Event("orbit " + std::to_string(25 * quarter) + " %");
+  }
+  if (orbit_bypass_) {
+    if (follower_.empty() || follower_.Reached(base_, 80) || Stuck()) {
+      blocked_since_ = -1;
+      orbit_bypass_ = false;
+      follower_.Clear();
+    } else if (follower_.StillFree(map_, 1000) || StartBypass(azimuth)) {
+      activity_ = "orbit: bypass";
+      return FollowPathLookingAt(centre, options_.orbit_speed_mm_s);
+    }
+  }
+  double blocked_azimuth;
+  double wanted = OrbitRadiusAhead(azimuth, &blocked_azimuth);
+  if (Stuck()) {  // the circle (or its detour) cannot be driven from here: take the shortest path past it
+    blocked_since_ = -1;
+    glancing_ = false;
+    glances_ += glances_ == 0 ? 1 : 0;
+    glanced_azimuth_ = blocked_azimuth;
+    wanted = -1;
+  }
+  if (wanted < 0) {
+    // Blocked ahead. Unknown floor may only be unseen (the camera looks at the target): look at it once while
+    // creeping along, then take the shortest path past the blocked part.
+    if (!glancing_ && (glances_ == 0 || std::abs(WrapAngle(blocked_azimuth - glanced_azimuth_)) > 20 * kDeg)) {
+      glancing_ = true;
+      glance_start_ = now_;
+      glanced_azimuth_ = blocked_azimuth;
+      ++glances_;
+    }
+    if (glancing_ && now_ - glance_start_ < 3 * kSecond) {
+      activity_ = "orbit: looking ahead";
+      const double sweep = 300 * std::sin(2 * M_PI * (now_ - glance_start_) * 1e-6 / 2.0);
+      const double a = glanced_azimuth_ + sweep / options_.orbit_radius_mm;
+      Motion m;
+      m.velocity = FollowCircle(base_, c, orbit_radius_set_, 0.5 * options_.orbit_speed_mm_s,
+                                options_.tracking_turn_rad_s);
+      m.aim_point = Eigen::Vector3d(c.x() + options_.orbit_radius_mm * std::cos(a),
+                                    c.y() + options_.orbit_radius_mm * std::sin(a), 0);
+      return m;
+    }
+    glancing_ = false;
+    if (!StartBypass(azimuth)) {
+      EnterPhase(Phase::kNextViews, "the rest of the orbit circle is not reachable");
+      return NextViews();
+    }
+    activity_ = "orbit: bypass";
+    return FollowPathLookingAt(centre, options_.orbit_speed_mm_s);
+  }
+  glancing_ = false;
+  if (target_state_ == TargetState::kLost && hidden) activity_ = "orbit: target behind an obstacle";
+  orbit_radius_set_ += std::clamp(wanted - orbit_radius_set_, -400 * dt_, 400 * dt_);
+  const double off_circle = std::abs(r.norm() - orbit_radius_set_);
+  if (orbit_radius_set_ > options_.orbit_radius_mm + 5)
+    activity_ = "orbit: detour outward";
+  else if (off_circle > 30)
+    activity_ = "orbit: joining the circle";
+  else if (hidden)
+    activity_ = "orbit: target behind an obstacle";
+  const int bin = static_cast<int>(std::floor((WrapAngle(azimuth) + M_PI) / (2 * M_PI) * 360.0)) % 360;
+  orbit_bins_[static_cast<size_t>(bin)] = 1;
+  Motion m;
+  m.velocity = FollowCircle(base_, c, orbit_radius_set_, options_.orbit_speed_mm_s, options_.tracking_turn_rad_s);
+  m.aim_point = centre;
+  return m;
+}
+
+// ---------------------------------------------------------------- NEXT_VIEWS
+
+void Planner::ChooseView() {
+  const auto start = std::chrono::steady_clock::now();
+  coverage_.Update();
+  const double fraction = coverage_.Fraction();
+  char text[160];
+  if (!next_views_.empty() && next_views_.back().coverage_after < 0) {
+    next_views_.back().coverage_after = fraction;
+    std::snprintf(text, sizeof(text), "next view %zu done: coverage %.1f %%", next_views_.size(), 100 * fraction);
+    Event(text);
+  }
+  std::snprintf(text, sizeof(text), "coverage %.1f %% of %d samples", 100 * fraction, coverage_.num_samples());
+  const std::string coverage_text = text;
+  if (fraction >= options_.coverage_target) return EnterPhase(Phase::kFinish, "coverage target reached: " + coverage_text);
+  if (static_cast<int>(next_views_.size()) >= options_.max_next_views)
+    return EnterPhase(Phase::kFinish, "next-view budget of " + std::to_string(options_.max_next_views) +
+                                          " views used: " + coverage_text);
+  if (PhaseSeconds() >= options_.next_views_budget_s)
+    return EnterPhase(Phase::kFinish, "next-view time budget spent: " + coverage_text);
+  cost_field_.Compute(map_, base_.position());
+  const NextViewResult result = ChooseNextView(coverage_, map_, cost_field_, options_.robot, options_.limits,
+                                               options_.next_view, used_views_);
+  last_next_view_ms_ = Ms(start);
+  if (!result.found) return EnterPhase(Phase::kFinish, "no reachable view adds coverage: " + coverage_text);
+  const ViewCandidate& v = result.best;
+  used_views_.insert(v.key);
+  current_view_ = v;
+  NextViewRecord record;
+  record.utime = now_;
+  record.x_mm = v.base.x_mm;
+  record.y_mm = v.base.y_mm;
+  record.pan_rad = v.pan_rad;
+  record.tilt_rad = v.tilt_rad;
+  record.radius_mm = v.radius_mm;
+  record.azimuth_rad = v.azimuth_rad;
+  record.gain = v.gain;
+  record.coverage_before = fraction;
+  next_views_.push_back(record);
+  std::snprintf(text, sizeof(text),
+                "next view %zu at (%.0f, %.0f) mm: radius %.0f mm, azimuth %.0f deg, tilt %.0f deg, %d new samples "
+                "expected (%s, %.0f ms)",
+                next_views_.size(), v.base.x_mm, v.base.y_mm, v.radius_mm, v.azimuth_rad / kDeg, v.tilt_rad / kDeg,
+                v.gain, coverage_text.c_str(), last_next_view_ms_);
+  Event(text);
+  int index;
+  map_.IndexOf(v.base.position(), &index);
+  std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, index);
+  const double length = PathLength(path);
+  follower_.SetPath(std::move(path));
+  goal_deadline_ = now_ + static_cast<int64_t>((2 * length / options_.explore_speed_mm_s + 20) * kSecond);
+  view_step_ = ViewStep::kTravel;
+}
+
+Planner::Motion Planner::NextViews() {
+  const Eigen::Vector3d centre = TargetCentre();
+  const Eigen::Vector2d r = base_.position() - centre.head<2>();
+  const double azimuth = std::atan2(r.y(), r.x());
+  if (view_step_ == ViewStep::kChoose) {
+    ChooseView();
+    if (done()) return {};
+  }
+  const std::string k = std::to_string(next_views_.size());
+  if (view_step_ == ViewStep::kTravel) {
+    activity_ = "next view " + k + ": travelling";
+    if (follower_.Reached(base_, kGoalToleranceMm) || follower_.empty()) {
+      view_step_ = ViewStep::kAlign;
+      step_started_ = now_;
+      follower_.Clear();
+    } else if (now_ > goal_deadline_ || Stuck()) {
+      blocked_since_ = -1;
+      Event("next view " + k + " not reached: choosing another");
+      view_step_ = ViewStep::kChoose;
+      return Hold(centre);
+    } else if (!follower_.StillFree(map_, 1000)) {
+      std::vector<Eigen::Vector2d> path;
+      if (PlanPath(map_, base_.position(), current_view_.base.position(), &path)) {
+        follower_.SetPath(std::move(path));
+      } else {
+        Event("next view " + k + " no longer reachable: choosing another");
+        view_step_ = ViewStep::kChoose;
+        return Hold(centre);
+      }
+    } else {
+      return FollowPathLookingAt(centre, options_.explore_speed_mm_s);
+    }
+  }
+  if (view_step_ == ViewStep::kAlign) {
+    activity_ = "next view " + k + ": aiming";
+    if (now_ == step_started_) {  // along the ring in the direction that needs the smaller turn
+      const double ccw = WrapAngle(current_view_.azimuth_rad + M_PI / 2);
+      const double arc = options_.next_view.capture_arc_deg * kDeg;
+      auto ring_free = [&](double a) {
+        return map_.TraversableAt(centre.head<2>() + current_view_.radius_mm * Eigen::Vector2d(std::cos(a), std::sin(a)));
+      };
+      const bool cw_free = ring_free(current_view_.azimuth_rad - arc), ccw_free = ring_free(current_view_.azimuth_rad + arc);
+      capture_clockwise_ = cw_free && (!ccw_free || std::abs(WrapAngle(ccw - base_.theta_rad)) > M_PI / 2);
+      current_view_.base.theta_rad = capture_clockwise_ ? WrapAngle(ccw + M_PI) : ccw;
+    }
+    const double error = WrapAngle(current_view_.base.theta_rad - base_.theta_rad);
+    Motion m = Hold(current_view_.aim_mm);
+    m.velocity.omega_rad_s = std::clamp(2.0 * error, -options_.tracking_turn_rad_s, options_.tracking_turn_rad_s);
+    if (std::abs(error) < 5 * kDeg && now_ - step_started_ >= kSecond / 2) {
+      view_step_ = ViewStep::kCapture;
+      step_started_ = now_;
+      capture_start_azimuth_ = azimuth;
+    }
+    return m;
+  }
+  // kCapture: a short arc along the view's ring, head on the view's aim point.
+  activity_ = "next view " + k + ": capturing";
+  const double arc = options_.next_view.capture_arc_deg * kDeg;
+  const double swept = WrapAngle(azimuth - capture_start_azimuth_) * (capture_clockwise_ ? -1 : 1);
+  if (swept >= arc || now_ - step_started_ > 15 * kSecond) {
+    view_step_ = ViewStep::kChoose;
+    return Hold(current_view_.aim_mm);
+  }
+  Motion m;
+  m.velocity = FollowCircle(base_, centre.head<2>(), current_view_.radius_mm, options_.capture_speed_mm_s,
+                            options_.tracking_turn_rad_s, capture_clockwise_);
+  m.aim_point = current_view_.aim_mm;
+  return m;
+}
+
+PlanSummary Planner::Summary() const {
+  PlanSummary s;
+  s.phase = phase_;
+  s.phases = phases_;
+  s.path_length_mm = path_length_mm_;
+  s.frames = frames_;
+  s.views = views_;
+  s.orbit_percent = orbit_percent();
+  s.next_views = next_views_;
+  s.coverage = coverage_.Fraction();
+  s.coverage_samples = coverage_.num_samples();
+  s.max_disagreement = estimator_.max_disagreement();
+  s.target_confirmed = confirmed_;
+  s.target = target_;
+  s.confirmed_seq = confirmed_seq_;
+  s.safety_stops = safety_stops_;
+  s.orbit_glances = glances_;
+  return s;
+}
+
+}  // namespace objscan

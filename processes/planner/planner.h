@@ -1,0 +1,262 @@
+// Planner: drives the robot through the object-modeling mission, LCM-free. One decision per camera pose (Step).
+//
+// Phases (values as in PROCESS_STATUS "phase"):
+//   0 EXPLORE     look around (a slow turn in place with the head low, then one with the head up), then frontier
+//                 exploration: drive to the nearest reachable frontier (free cells next to unknown ones) along the
+//                 shortest path on the inflated map, the head looking at the floor ~1.2 m ahead along the path.
+//                 A CANDIDATE (or LOST, not yet confirmed) target is investigated: the robot drives to points 0.9-1.5 m
+//                 from it with the head on it, so the finder sees it from several places. Ends when the target is
+//                 CONFIRMED (-> APPROACH), or after explore_budget_s or with nothing left to explore (-> NO_TARGET).
+//                 Nothing reachable at all (no usable camera pose yet): the look-around starts again.
+//   1 APPROACH    to the nearest reachable free point of the orbit circle (orbit_radius_mm around the target centre),
+//                 head on the target centre.
+//   2 ORBIT       counter-clockwise around the target at orbit_radius_mm and orbit_speed_mm_s, head on the target.
+//                 An obstacle on the next 0.9 m of circle: the radius rises locally (up to +600 mm) where that is
+//                 free; else (unknown floor ahead: the camera looks at the target, not ahead) the head looks at the
+//                 blocked arc for up to 3 s while the robot creeps on, then the robot takes the shortest path past
+//                 the blocked part to the next free circle point. A LOST target pauses the orbit (head on its last
+//                 position, sweeping) for at most lost_search_s, unless an obstacle of the map lies on the line of
+//                 sight (hidden, not lost: the orbit goes on). Ends after a full turn (-> NEXT_VIEWS).
+//   3 NEXT_VIEWS  next-best-view (next_best_view.h) from the coverage model: go to the view, turn along its ring,
+//                 aim the head, drive capture_arc_deg along the ring (frames for motion stereo), choose again; until
+//                 coverage_target, max_next_views, next_views_budget_s, or no view adds coverage (-> FINISH).
+//   4 FINISH      stop. Outcome "modeled".
+//   5 NO_TARGET   stop. Outcome "no_target".
+// Every command: v in [0, max speed], |omega| <= tracking_turn_rad_s (<= the base limit), pan/tilt within the joint
+// limits, the camera's yaw rate (base + pan) and the tilt rate <= tracking_turn_rad_s (the tracker must keep up);
+// the swept footprint over the next 0.5 s never enters an obstacle's or an unknown cell (SafeVelocity).
+// Times are data times (the poses' utime); the planner never reads a clock except to measure its own compute time.
+// Inputs that are non-finite or invalid are ignored (the node counts them).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/robot_model.h"
+#include "common/sensor_data.h"
+#include "processes/planner/coverage.h"
+#include "processes/planner/motion.h"
+#include "processes/planner/next_best_view.h"
+#include "processes/planner/occupancy_map.h"
+#include "processes/planner/path_search.h"
+#include "processes/planner/planner_geometry.h"
+#include "processes/planner/pose_estimator.h"
+
+namespace objscan {
+
+enum class Phase : int { kExplore = 0, kApproach = 1, kOrbit = 2, kNextViews = 3, kFinish = 4, kNoTarget = 5 };
+const char* PhaseName(Phase phase);
+
+// The object finder's view of the target (target_t).
+enum class TargetState : int { kSearching = 0, kCandidate = 1, kConfirmed = 2, kLost = 3 };
+struct TargetObservation {
+  int64_t utime = 0;  // µs
+  int64_t seq = 0;
+  TargetState state = TargetState::kSearching;
+  Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();  // world
+  Eigen::Vector3d size_mm = Eigen::Vector3d::Zero();    // box extents
+  double yaw_rad = 0;
+  double confidence = 0;
+};
+
+struct PlannerOptions {
+  RobotGeometry robot;
+  RobotLimits limits;
+  OccupancyMapOptions map;
+  CoverageOptions coverage;
+  NextViewOptions next_view;
+  double orbit_radius_mm = 800;                    // mm
+  double orbit_speed_mm_s = 200;                   // mm/s
+  double explore_speed_mm_s = 200;                 // mm/s, exploring and approaching
+  double capture_speed_mm_s = 100;                 // mm/s, along the ring at a next view
+  double tracking_turn_rad_s = 30 * M_PI / 180;    // rad/s, fastest base and camera rotation
+  double explore_budget_s = 300;                   // s of EXPLORE before NO_TARGET
+  double coverage_target = 0.95;                   // coverage fraction that ends NEXT_VIEWS
+  int max_next_views = 12;                         // views NEXT_VIEWS adds at most
+  double next_views_budget_s = 240;                // s of NEXT_VIEWS at most
+  double lost_search_s = 15;                       // s an ORBIT waits for a LOST target before going on
+};
+
+bool ValidatePlannerOptions(const PlannerOptions& options, std::string* why);
+
+struct PlannerCommand {
+  bool stop = true;  // true: MODE_STOP; false: velocity with pan/tilt
+  double v_mm_s = 0, omega_rad_s = 0;
+  double pan_rad = 0, tilt_rad = 0;
+};
+
+struct PhaseRecord {
+  Phase phase = Phase::kExplore;
+  int64_t start_utime = 0;
+  int64_t end_utime = -1;  // -1 while running
+};
+
+struct NextViewRecord {
+  int64_t utime = 0;  // µs, when it was chosen
+  double x_mm = 0, y_mm = 0, pan_rad = 0, tilt_rad = 0;
+  double radius_mm = 0, azimuth_rad = 0;
+  int gain = 0;                // uncovered samples it was expected to see
+  double coverage_before = 0;  // fraction
+  double coverage_after = -1;  // fraction after its capture (-1 until known)
+};
+
+struct PlanSummary {
+  Phase phase = Phase::kExplore;
+  std::vector<PhaseRecord> phases;
+  double path_length_mm = 0;  // estimated
+  int64_t frames = 0;         // camera poses handled
+  int64_t views = 0;          // of them with a usable pose
+  double orbit_percent = 0;
+  std::vector<NextViewRecord> next_views;
+  double coverage = 0;
+  int coverage_samples = 0;
+  PoseDisagreement max_disagreement;
+  bool target_confirmed = false;
+  TargetObservation target;           // last confirmed estimate (or last candidate)
+  int64_t confirmed_seq = -1;         // frame of the first confirmation
+  int64_t safety_stops = 0;           // decisions whose speed the swept-footprint check cut
+  int orbit_glances = 0;              // ORBIT looked at a blocked arc ahead (target out of view meanwhile)
+};
+
+class Planner {
+ public:
+  // Throws std::invalid_argument on invalid options.
+  explicit Planner(const PlannerOptions& options);
+
+  void SetCamera(const CameraIntrinsics& camera);
+  bool AddOdometry(const OdometryReading& reading);
+  void SetLandmarks(const std::vector<MapLandmark>& landmarks);
+  void SetTarget(const TargetObservation& target);
+  void SetVoxels(const VoxelCloud& voxels);
+  // The decision for one camera pose (any status; LOST / INITIALIZING poses dead-reckon).
+  PlannerCommand Step(const CameraPoseEstimate& pose);
+
+  Phase phase() const { return phase_; }
+  bool done() const { return phase_ == Phase::kFinish || phase_ == Phase::kNoTarget; }
+  std::string activity() const { return activity_; }  // what the phase is doing now, e.g. "frontier"
+  PlanSummary Summary() const;
+  // Log lines since the last call (phase changes, candidate / confirmed at ..., orbit %, next views).
+  std::vector<std::string> TakeEvents();
+
+  BasePose estimate() const { return base_; }
+  double coverage() const { return coverage_.Fraction(); }
+  double orbit_percent() const;
+  int num_next_views() const { return static_cast<int>(next_views_.size()); }
+  double path_length_mm() const { return path_length_mm_; }
+  double last_step_ms() const { return last_step_ms_; }
+  double last_next_view_ms() const { return last_next_view_ms_; }
+  const RobotPoseEstimator& pose_estimator() const { return estimator_; }
+  const OccupancyMap& map() const { return map_; }
+  const CoverageModel& coverage_model() const { return coverage_; }
+  const PlannerOptions& options() const { return options_; }
+
+ private:
+  struct Motion {  // what a phase wants this step
+    Velocity velocity;
+    bool aim_at_point = true;
+    Eigen::Vector3d aim_point = Eigen::Vector3d::Zero();  // world
+    double pan_rad = 0, tilt_rad = 0;                      // when not aiming at a point
+  };
+
+  void EnterPhase(Phase phase, const std::string& why);
+  void Event(const std::string& text);
+  double PhaseSeconds() const;
+  // True when the swept-footprint check has held the robot still for > 2 s although the phase wants to move.
+  bool Stuck() const;
+  Motion Explore();
+  Motion Spin(double tilt_rad);
+  Motion Frontier();
+  Motion Investigate();
+  Motion Approach();
+  Motion Orbit();
+  Motion NextViews();
+  Motion FollowPathLookingAt(const Eigen::Vector3d& point, double speed);
+  Motion LookAhead(const Velocity& v);
+  Motion Hold(const Eigen::Vector3d& point);
+  bool ChooseFrontier();
+  bool PlanToOrbit();
+  bool StartBypass(double azimuth);
+  // Orbit radius (circle first, then up to kMaxDetourMm outward) whose next 0.9 m of arc is Traversable; -1 when
+  // none. *blocked_azimuth: the first blocked point of the circle itself.
+  double OrbitRadiusAhead(double azimuth, double* blocked_azimuth) const;
+  // True when an obstacle cell lies on the line of sight from the camera to the target (a LOST target there is
+  // only hidden: the orbit goes on).
+  bool TargetHidden() const;
+  void ChooseView();
+  PlannerCommand Finalize(const Motion& motion, double dt_s);
+  Eigen::Vector3d TargetCentre() const { return target_.centre_mm; }
+
+  PlannerOptions options_;
+  CameraIntrinsics camera_;
+  RobotPoseEstimator estimator_;
+  OccupancyMap map_;
+  CoverageModel coverage_;
+  PathFollower follower_;
+  CostField cost_field_;
+
+  Phase phase_ = Phase::kExplore;
+  std::string activity_ = "waiting";
+  std::vector<PhaseRecord> phases_;
+  std::vector<std::string> events_;
+  int64_t now_ = 0;             // µs, utime of the current pose
+  int64_t last_step_utime_ = -1;
+  BasePose base_;               // the estimate used for this step
+  bool have_base_ = false;
+  double path_length_mm_ = 0;
+  int64_t frames_ = 0, views_ = 0, safety_stops_ = 0;
+  Eigen::Isometry3d last_marked_ = Eigen::Isometry3d::Identity();
+  bool marked_once_ = false;
+  double pan_command_ = 0, tilt_command_ = 0;  // last commanded head angles
+  bool head_initialised_ = false;
+  double dt_ = 1.0 / 30.0;      // s, period of the current step
+  int64_t blocked_since_ = -1;  // µs, since when the safety check holds a robot that wants to move
+  double last_step_ms_ = 0, last_next_view_ms_ = 0;
+
+  // target
+  TargetObservation target_;     // last confirmed (after confirmation) or last candidate / lost position
+  bool have_target_position_ = false;
+  bool confirmed_ = false;
+  TargetState target_state_ = TargetState::kSearching;
+  int64_t confirmed_seq_ = -1;
+
+  // EXPLORE
+  enum class ExploreStep { kLookNear, kLookFar, kFrontier, kInvestigate } explore_step_ = ExploreStep::kLookNear;
+  bool spinning_ = false;
+  double spin_turned_ = 0;      // rad turned in the current look-around
+  double last_theta_ = 0;
+  int reachable_cells_ = 0;     // cells the last cost field reached
+  int64_t goal_deadline_ = 0;
+  int64_t next_replan_ = 0;
+  std::vector<Eigen::Vector2d> visited_goals_;  // frontier goals reached or given up (not chosen again)
+  std::vector<Eigen::Vector2d> investigate_spots_;
+  int64_t candidate_missing_since_ = -1;
+
+  // ORBIT
+  bool orbit_started_ = false;
+  double orbit_progress_ = 0;   // rad, counter-clockwise azimuth travelled
+  double orbit_last_azimuth_ = 0;
+  std::vector<uint8_t> orbit_bins_ = std::vector<uint8_t>(360, 0);
+  double orbit_radius_set_ = 0;
+  bool orbit_bypass_ = false;
+  bool glancing_ = false;          // looking at the blocked arc ahead
+  int64_t glance_start_ = 0;
+  double glanced_azimuth_ = 0;     // rad, blocked point looked at last (when glances_ > 0)
+  int glances_ = 0;
+  int64_t lost_since_ = -1;
+  int orbit_reported_quarter_ = 0;
+
+  // NEXT_VIEWS
+  enum class ViewStep { kChoose, kTravel, kAlign, kCapture } view_step_ = ViewStep::kChoose;
+  std::set<int> used_views_;
+  std::vector<NextViewRecord> next_views_;
+  ViewCandidate current_view_;
+  double capture_start_azimuth_ = 0;
+  bool capture_clockwise_ = false;
+  int64_t step_started_ = 0;
+};
+
+}  // namespace objscan
