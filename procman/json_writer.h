@@ -49,6 +49,12 @@ class JsonWriter {
     out_ += value ? "true" : "false";
     return *this;
   }
+  // A value that is already JSON text (e.g. a result file a process wrote), inserted as it is.
+  JsonWriter& Raw(const std::string& json_value) {
+    Separator();
+    out_ += json_value;
+    return *this;
+  }
   const std::string& str() const { return out_; }
 
  private:

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -94,6 +95,22 @@ std::string Hz(double v) {
 }
 
 }  // namespace
+
+bool ParseResultsList(const std::string& text, std::vector<std::pair<std::string, std::string>>* results,
+                      std::string* error) {
+  results->clear();
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) {
+      *error = "results: '" + item + "' is not name=path";
+      return false;
+    }
+    results->emplace_back(item.substr(0, eq), item.substr(eq + 1));
+  }
+  return true;
+}
 
 bool ParseProcessList(const std::string& text, std::vector<SessionProcess>* processes, std::string* error) {
   std::istringstream in(text);
@@ -275,6 +292,11 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
         dropped_inputs += kv.second.dropped_inputs;
       }
       line << " | dropped " << gaps << " on bus, " << dropped_inputs << " at inputs | rejected " << rejected;
+      if (!options.progress_detail.empty()) {
+        auto it = monitor->statuses_.find(options.progress_detail);
+        if (it != monitor->statuses_.end() && !it->second.state_detail.empty())
+          line << " | " << options.progress_detail << ": " << it->second.state_detail;
+      }
       std::fprintf(stderr, "%s\n", line.str().c_str());
     }
   }
@@ -304,6 +326,12 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     // LCM's own start-up self test is sent by each udpm instance as it starts, some before the logger listens.
     if (kv.first == "LCM_SELF_TEST") continue;
     if (!logged.count(kv.first) || logged[kv.first].count < kv.second.messages) log_complete = false;
+  }
+
+  // A process that ended in its error state says why the session failed (the planner: no target found).
+  for (const auto& kv : monitor->statuses_) {
+    if (failure.empty() && !interrupted && kv.second.state == process_status_t::STATE_ERROR)
+      failure = kv.first + ": " + kv.second.state_detail;
   }
 
   // Summary.
@@ -370,6 +398,24 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     json.EndObject();
   }
   json.EndObject();
+  if (!options.results.empty()) {
+    json.Key("results").BeginObject();
+    for (const auto& [name, relative] : options.results) {
+      std::ifstream in(options.out_dir + "/" + relative);
+      if (!in) continue;
+      std::stringstream text;
+      text << in.rdbuf();
+      std::string value = text.str();
+      while (!value.empty() && std::isspace(static_cast<unsigned char>(value.back()))) value.pop_back();
+      const size_t first = value.find_first_not_of(" \t\r\n");
+      if (first == std::string::npos || value[first] != '{' || value.back() != '}') {
+        json.Key(name).String("unreadable result file " + relative);
+        continue;
+      }
+      json.Key(name).Raw(value.substr(first));
+    }
+    json.EndObject();
+  }
   json.Key("log").BeginObject();
   json.Key("path").String(log_path);
   json.Key("events").Int(logged_events);

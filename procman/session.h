@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace objscan {
@@ -29,7 +30,16 @@ struct SessionOptions {
   int flush_wait_ms = 1500;             // ms, wait after publishers stop before stopping lcm-logger
   int progress_period_ms = 1000;        // ms between progress lines
   std::string label;                    // free text copied into summary.json (e.g. "sim sphere")
+  std::string progress_detail;          // process whose status detail (e.g. the planner's phase) ends each
+                                        // progress line ("" = none)
+  // Result files the processes write (JSON objects, paths relative to out_dir), copied into summary.json under
+  // "results" by name when they exist after the session: {name, path}.
+  std::vector<std::pair<std::string, std::string>> results;
 };
+
+// Parses "name=path,name=path" (the --results option). False with *error on an empty name or path.
+bool ParseResultsList(const std::string& text, std::vector<std::pair<std::string, std::string>>* results,
+                      std::string* error);
 
 // Parses a process list: one process per line "NAME driver|processor COMMAND ARGS...", '#' comments,
 // arguments split on whitespace with '...' or "..." quoting. Returns false with *error on a malformed line.

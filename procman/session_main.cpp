@@ -23,8 +23,18 @@ int main(int argc, char** argv) {
   parser.Add("start-timeout", &options.start_timeout_s, "s, time a processor has to report PROCESS_STATUS");
   parser.Add("flush-wait-ms", &options.flush_wait_ms, "ms to wait after publishers stop before stopping the logger");
   parser.Add("label", &options.label, "text copied into summary.json");
+  parser.Add("progress-detail", &options.progress_detail,
+             "process whose status detail (e.g. the planner's phase) ends each progress line");
+  std::string results;
+  parser.Add("results", &results,
+             "name=path,... result files (JSON, relative to --out) copied into summary.json under \"results\"");
   int exit_code = 0;
   if (!objscan::ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
+  std::string results_error;
+  if (!results.empty() && !objscan::ParseResultsList(results, &options.results, &results_error)) {
+    objscan::LogError(results_error);
+    return 2;
+  }
   if (options.out_dir.empty() || process_list.empty()) {
     objscan::LogError("--out and --processes are required");
     return 2;

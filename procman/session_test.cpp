@@ -30,5 +30,18 @@ TEST(SessionTest, RejectsMalformedLines) {
   EXPECT_FALSE(ParseProcessList("tracker processor '/bin/tracker\n", &p, &error));
 }
 
+TEST(SessionTest, ParsesResultsList) {
+  std::vector<std::pair<std::string, std::string>> r;
+  std::string error;
+  ASSERT_TRUE(ParseResultsList("plan=plan.json,simulation=ground_truth/sim_outcome.json", &r, &error)) << error;
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_EQ(r[1].first, "simulation");
+  EXPECT_EQ(r[1].second, "ground_truth/sim_outcome.json");
+  EXPECT_FALSE(ParseResultsList("plan.json", &r, &error));
+  EXPECT_NE(error.find("name=path"), std::string::npos);
+  EXPECT_FALSE(ParseResultsList("=plan.json", &r, &error));
+  EXPECT_FALSE(ParseResultsList("plan=", &r, &error));
+}
+
 }  // namespace
 }  // namespace objscan
