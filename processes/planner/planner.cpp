@@ -157,7 +157,11 @@ void Planner::SetTarget(const TargetObservation& t) {
   }
 }
 
-void Planner::Event(const std::string& text) { events_.push_back(text); }
+void Planner::Event(const std::string& text) {
+  char when[32];  // data time, so a log line can be matched with the frames
+  std::snprintf(when, sizeof(when), "%.1f s: ", now_ * 1e-6);
+  events_.push_back(when + text);
+}
 
 std::vector<std::string> Planner::TakeEvents() {
   std::vector<std::string> out;

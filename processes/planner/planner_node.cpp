@@ -392,7 +392,23 @@ void PlannerNode::OnControl(const control_t& msg) {
   else
     LogWarning("publishing on " + options_.control_channel + " failed");
   finished_ = true;
-  status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered: " + PlanOutcome(summary));
+  // A mission that did not end with a model is an error of the session (it says what happened and what to try).
+  const std::string outcome = PlanOutcome(summary);
+  char travelled[96];
+  std::snprintf(travelled, sizeof(travelled), "after %.1f m and %lld views", summary.path_length_mm * 1e-3,
+                static_cast<long long>(summary.views));
+  if (outcome == "no_target") {
+    status_.SetState(+process_status_t::STATE_ERROR,
+                     std::string("no target found ") + travelled +
+                         " (room explored or explore budget spent); try a longer --explore-budget and --frames, "
+                         "check the object finder's target rule (size, texture), or start the robot nearer the object");
+  } else if (outcome == "stopped") {
+    status_.SetState(+process_status_t::STATE_ERROR,
+                     std::string("the stream ended during ") + PhaseName(summary.phase) + " " + travelled +
+                         ", before the plan finished; try more frames for the driver (objscan run --frames)");
+  } else {
+    status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered: " + outcome);
+  }
   UpdateStatusValues();
   status_.PublishIfDue(WallTimeMicros(), true);
 }

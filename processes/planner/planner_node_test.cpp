@@ -150,6 +150,11 @@ TEST_F(PlannerNodeTest, FinishedPlanStopsAsksTheDriverToEndAndWritesPlanJson) {
   EXPECT_NE(text.str().find("\"outcome\": \"no_target\""), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("\"name\": \"NO_TARGET\""), std::string::npos);
   EXPECT_NE(text.str().find("\"seconds\": 1.000"), std::string::npos);  // EXPLORE lasted 1 s of data time
+  // No model: the last status is the error state, saying what happened and what to try (the session fails on it).
+  ASSERT_FALSE(statuses_.empty());
+  EXPECT_EQ(statuses_.back().state, +process_status_t::STATE_ERROR);
+  EXPECT_NE(statuses_.back().state_detail.find("no target found"), std::string::npos) << statuses_.back().state_detail;
+  EXPECT_NE(statuses_.back().state_detail.find("try"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 
