@@ -14,7 +14,7 @@
 #include "common/robot_model.h"
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
-#include "processes/object_finder/message_size_check.h"
+#include "common/message_size_check.h"
 
 namespace objscan {
 
@@ -46,32 +46,6 @@ std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
   return "[" + Format(format, v.x()) + ", " + Format(format, v.y()) + ", " + Format(format, v.z()) + "]";
 }
 
-// Subscribes to an LCM type whose declared array sizes are checked against the byte count before decoding.
-template <class Msg, class Handler>
-void SubscribeChecked(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& what,
-                      bool (*check)(const void*, int, std::string*), Handler handler, int queue_capacity) {
-  bus.Subscribe(
-      channel,
-      [&status, what, check, handler](const RawMessage& raw) {
-        std::string why;
-        bool ok = check(raw.data, raw.size, &why);
-        Msg msg;
-        if (ok) {
-          try {
-            ok = msg.decode(raw.data, 0, raw.size) == raw.size;
-          } catch (const std::exception&) {
-            ok = false;
-          }
-          if (!ok) why = "does not decode (" + std::to_string(raw.size) + " bytes)";
-        }
-        if (!ok) {
-          status.Reject(what + ": malformed", why + " on " + raw.channel);
-          return;
-        }
-        handler(msg);
-      },
-      queue_capacity);
-}
 
 }  // namespace
 

@@ -24,7 +24,7 @@
 // State changes are logged in one line each ("candidate at (x, y) mm, 150x120x140 mm, ...", "confirmed at ...",
 // "lost ...", "found again ...", "dropped ..."), and the other candidates whenever their set changes.
 // Rejections (counted, logged once per reason, never fatal): "landmarks: malformed" (declared array sizes checked
-// against the byte count before decoding, message_size_check.h), "landmarks: not in world frame",
+// against the byte count before decoding, common/message_size_check.h), "landmarks: not in world frame",
 // "landmarks: array length mismatch", "landmarks: out of order", "landmarks: no camera pose",
 // "landmarks: no camera_info", "landmarks: finder error", "pose: malformed" and PoseFromMessage's reasons,
 // "pose: not in world frame", "camera_info: malformed" and CameraFromMessage's reasons, "odometry: malformed" and

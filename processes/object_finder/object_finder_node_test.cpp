@@ -14,7 +14,7 @@
 #include "common/options.h"
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
-#include "processes/object_finder/message_size_check.h"
+#include "common/message_size_check.h"
 #include "processes/object_finder/synthetic_room.h"
 
 namespace objscan {

@@ -13,38 +13,14 @@
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
 #include "objscan/robot_command_t.hpp"
-#include "processes/object_finder/message_size_check.h"
+#include "common/message_size_check.h"
 #include "processes/planner/plan_report.h"
-#include "processes/planner/voxel_map_size_check.h"
 
 namespace objscan {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// Subscribes to an LCM type whose declared array sizes are checked against the byte count before decoding.
-template <class Msg, class Handler>
-void SubscribeChecked(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& what,
-                      bool (*check)(const void*, int, std::string*), Handler handler) {
-  bus.Subscribe(channel, [&status, what, check, handler](const RawMessage& raw) {
-    std::string why;
-    bool ok = check(raw.data, raw.size, &why);
-    Msg msg;
-    if (ok) {
-      try {
-        ok = msg.decode(raw.data, 0, raw.size) == raw.size;
-      } catch (const std::exception&) {
-        ok = false;
-      }
-      if (!ok) why = "does not decode (" + std::to_string(raw.size) + " bytes)";
-    }
-    if (!ok) {
-      status.Reject(what + ": malformed", why + " on " + raw.channel);
-      return;
-    }
-    handler(msg);
-  });
-}
 
 bool ParseRadii(const std::string& text, std::vector<double>* radii) {
   radii->clear();

@@ -1,9 +1,10 @@
-#include "processes/object_finder/message_size_check.h"
+#include "common/message_size_check.h"
 
 #include <cstdint>
 
 #include "objscan/camera_info_t.hpp"
 #include "objscan/landmarks_t.hpp"
+#include "objscan/voxel_map_t.hpp"
 
 namespace objscan {
 
@@ -79,6 +80,16 @@ bool CheckCameraInfoMessageSize(const void* data, int size, std::string* why) {
   if (hash != camera_info_t::getHash()) return Fail(why, "wrong type");
   if (!r.Skip(8) || !r.String() || !r.Skip(4 + 4 + 5 * 8) || !r.String()) return Fail(why, "truncated");
   return CheckArray(r, 8, "distortion coefficients", size, why);
+}
+
+bool CheckVoxelMapMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != voxel_map_t::getHash()) return Fail(why, "wrong type");
+  // utime, seq, frame, voxel_size_mm, origin_mm[3], vote_threshold, is_final, truncated
+  if (!r.Skip(8 + 8) || !r.String() || !r.Skip(8 + 24 + 4 + 1 + 1)) return Fail(why, "truncated");
+  return CheckArray(r, 12 + 4 + 3, "voxels", size, why);
 }
 
 }  // namespace objscan
