@@ -124,13 +124,48 @@ void OccupancyMap::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
   std::fill(obstacle_.begin(), obstacle_.end(), 0);
   std::fill(floor_.begin(), floor_.end(), 0);
   obstacle_landmarks_ = floor_landmarks_ = 0;
+  // The local floor: the mean height of the near-floor landmarks (|z| <= 2.5 floor bands) in 500 mm blocks, over
+  // the 3 x 3 blocks around a landmark (>= kMinLocalFloorPoints of them, else z = 0). A map whose height drifts by
+  // a few cm over metres (the pose solver's, exploring) would otherwise turn the far floor into obstacles.
+  constexpr double kBlockMm = 500;
+  constexpr int kMinLocalFloorPoints = 8;
+  const int blocks = static_cast<int>(std::ceil(options_.size_mm / kBlockMm)) + 1;
+  std::vector<double> block_sum(static_cast<size_t>(blocks) * blocks, 0.0);
+  std::vector<int> block_count(block_sum.size(), 0);
+  auto block_of = [&](const Eigen::Vector3f& p, int* bx, int* by) {
+    *bx = static_cast<int>(std::floor((p.x() - origin_) / kBlockMm));
+    *by = static_cast<int>(std::floor((p.y() - origin_) / kBlockMm));
+    return *bx >= 0 && *by >= 0 && *bx < blocks && *by < blocks;
+  };
+  auto usable = [&](const MapLandmark& l) {
+    return l.position_mm.allFinite() && l.observations >= options_.min_observations &&
+           l.error_px <= options_.max_error_px;
+  };
   for (const MapLandmark& l : landmarks) {
-    if (!l.position_mm.allFinite() || l.observations < options_.min_observations ||
-        !(l.error_px <= options_.max_error_px))
+    int bx, by;
+    if (!usable(l) || std::abs(l.position_mm.z()) > 2.5 * options_.floor_band_mm || !block_of(l.position_mm, &bx, &by))
       continue;
+    block_sum[static_cast<size_t>(by) * blocks + bx] += l.position_mm.z();
+    ++block_count[static_cast<size_t>(by) * blocks + bx];
+  }
+  auto local_floor = [&](const Eigen::Vector3f& p) {
+    int bx, by;
+    if (!block_of(p, &bx, &by)) return 0.0;
+    double sum = 0;
+    int count = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (bx + dx < 0 || by + dy < 0 || bx + dx >= blocks || by + dy >= blocks) continue;
+        sum += block_sum[static_cast<size_t>(by + dy) * blocks + bx + dx];
+        count += block_count[static_cast<size_t>(by + dy) * blocks + bx + dx];
+      }
+    return count >= kMinLocalFloorPoints ? sum / count : 0.0;
+  };
+  for (const MapLandmark& l : landmarks) {
+    if (!usable(l)) continue;
     int index;
     if (!IndexOf(l.position_mm.head<2>().cast<double>(), &index)) continue;
-    const double z = l.position_mm.z();
+    const double z = l.position_mm.z() - local_floor(l.position_mm);
     if (z >= options_.obstacle_min_z_mm && z <= options_.obstacle_max_z_mm) {
       if (obstacle_[index] < 255) ++obstacle_[index];
       ++obstacle_landmarks_;
@@ -186,15 +221,21 @@ void OccupancyMap::MarkFootprint(const Eigen::Vector2d& p) {
   int centre;
   if (!IndexOf(p, &centre)) return;
   const double radius = options_.footprint_radius_mm + 0.5 * options_.cell_mm;
-  const int r = static_cast<int>(std::ceil(radius / options_.cell_mm));
+  const double seen_radius = radius + kBesideFootprintMm;
+  const int r = static_cast<int>(std::ceil(seen_radius / options_.cell_mm));
   for (int dy = -r; dy <= r; ++dy)
     for (int dx = -r; dx <= r; ++dx) {
       const int x = XOf(centre) + dx, y = YOf(centre) + dy;
       if (x < 1 || y < 1 || x >= size_ - 1 || y >= size_ - 1) continue;
       const int index = IndexAt(x, y);
-      if ((CentreOf(index) - p).norm() > radius || stood_[index]) continue;
-      stood_[index] = 1;
-      seen_dirty_ = true;
+      const double d = (CentreOf(index) - p).norm();
+      if (d <= radius && !stood_[index]) {
+        stood_[index] = 1;
+        seen_dirty_ = true;
+      } else if (d <= seen_radius && !seen_[index]) {
+        seen_[index] = 1;
+        seen_dirty_ = true;
+      }
     }
 }
 

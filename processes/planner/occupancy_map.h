@@ -1,11 +1,14 @@
 // OccupancyMap: the planner's own 2-D map of the floor in world (cells of cell_mm, a square of size_mm centred on the
 // world origin = the robot's start), LCM-free.
-//   obstacles  cells holding a sparse-map landmark between obstacle_min_z_mm and obstacle_max_z_mm above the floor
+//   obstacles  cells holding a sparse-map landmark between obstacle_min_z_mm and obstacle_max_z_mm above the local
+//              floor (the mean height of the near-floor landmarks within about a metre; z = 0 where there are few)
 //              (with >= min_observations views and <= max_error_px reprojection error); recomputed from each
 //              landmark set (the pose solver sends its whole map at every keyframe, so a removed point clears).
 //   seen       sticky: floor cells the camera's view rays reached (MarkView: inside the image, within
 //              view_range_mm, not behind an obstacle cell) and cells holding a floor landmark (|z| <= floor_band_mm)
-//              and their 8 neighbours.
+//              and their 8 neighbours, and the floor within kBesideFootprintMm beside the footprint wherever the
+//              robot stood (it came there looking ahead, so the camera saw that floor on the way, although one
+//              pose's view rays never reach the ring right around the robot; obstacles still win).
 //   free       seen, no obstacle, and (free_support_mm > 0) a floor landmark within free_support_mm: a textured floor
 //              seen there (an object standing there would have hidden it); free_support_mm = 0 lets the view rays
 //              alone mark free space (untextured floors). Cells the robot stood on (MarkFootprint) are free.
@@ -28,6 +31,8 @@
 #include "processes/planner/planner_geometry.h"
 
 namespace objscan {
+
+constexpr double kBesideFootprintMm = 300;  // mm, see "seen" above
 
 struct MapLandmark {
   Eigen::Vector3f position_mm = Eigen::Vector3f::Zero();  // mm, world

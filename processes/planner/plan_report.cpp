@@ -1,5 +1,6 @@
 #include "processes/planner/plan_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -60,6 +61,50 @@ bool WritePlanJson(const std::string& path, const PlanSummary& summary, int64_t 
   if (out) out << PlanJson(summary, end_utime);
   if (!out) {
     if (error) *error = "cannot write " + path;
+    return false;
+  }
+  return true;
+}
+
+bool WritePlanMapPgm(const std::string& path, const OccupancyMap& map, const std::vector<Eigen::Vector2d>& path_mm,
+                     std::string* error) {
+  int x0 = map.width(), y0 = map.height(), x1 = -1, y1 = -1;
+  for (int i = 0; i < map.num_cells(); ++i) {
+    if (map.StateOf(i) == OccupancyMap::State::kUnknown) continue;
+    x0 = std::min(x0, map.XOf(i));
+    x1 = std::max(x1, map.XOf(i));
+    y0 = std::min(y0, map.YOf(i));
+    y1 = std::max(y1, map.YOf(i));
+  }
+  if (x1 < 0) x0 = y0 = 0, x1 = y1 = 0;
+  const int pad = static_cast<int>(1000 / map.cell_mm());
+  x0 = std::max(0, x0 - pad);
+  y0 = std::max(0, y0 - pad);
+  x1 = std::min(map.width() - 1, x1 + pad);
+  y1 = std::min(map.height() - 1, y1 + pad);
+  const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+  std::vector<uint8_t> pixels(static_cast<size_t>(w) * h, 128);
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const int i = map.IndexAt(x, y);
+      uint8_t v = 128;
+      if (map.StateOf(i) == OccupancyMap::State::kOccupied) v = 0;
+      if (map.StateOf(i) == OccupancyMap::State::kFree) v = map.Traversable(i) ? 255 : 200;
+      pixels[static_cast<size_t>(y1 - y) * w + (x - x0)] = v;
+    }
+  for (const Eigen::Vector2d& p : path_mm) {
+    int i;
+    if (!map.IndexOf(p, &i) || map.XOf(i) < x0 || map.XOf(i) > x1 || map.YOf(i) < y0 || map.YOf(i) > y1) continue;
+    pixels[static_cast<size_t>(y1 - map.YOf(i)) * w + (map.XOf(i) - x0)] = 64;
+  }
+  std::ofstream out(path, std::ios::binary);
+  const Eigen::Vector2d top_left = map.CentreOf(map.IndexAt(x0, y1));
+  out << "P5\n# objscan planner map: cell " << map.cell_mm() << " mm, top-left pixel at x " << top_left.x()
+      << " y " << top_left.y() << " mm (world); up = +y\n"
+      << w << " " << h << "\n255\n";
+  out.write(reinterpret_cast<const char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
+  if (!out) {
+    *error = "cannot write " + path;
     return false;
   }
   return true;

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "processes/planner/planner.h"
 
@@ -22,5 +23,11 @@ std::string PlanOutcome(const PlanSummary& summary);
 std::string PlanJson(const PlanSummary& summary, int64_t end_utime);
 // Writes PlanJson to path; false with *error when the file cannot be written.
 bool WritePlanJson(const std::string& path, const PlanSummary& summary, int64_t end_utime, std::string* error);
+// The planner's own map as a binary PGM (plan_map.pgm; any image viewer), cropped to the known cells plus 1 m:
+// free 255, unknown 128, obstacle 0, free but not traversable for the footprint 200, the robot's path (the given
+// positions, world mm) 64. One pixel = one cell; image up = world +y. The header's comment line gives the cell size
+// and the world position of the top-left pixel. False with *error when it cannot be written.
+bool WritePlanMapPgm(const std::string& path, const OccupancyMap& map, const std::vector<Eigen::Vector2d>& path_mm,
+                     std::string* error);
 
 }  // namespace objscan

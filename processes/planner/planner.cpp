@@ -13,7 +13,11 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr int64_t kSecond = 1000000;  // µs
 constexpr double kNearSpinTiltRad = 50 * kDeg;  // head low: the floor from ~0.2 m to ~0.65 m around the robot
-constexpr double kFarSpinTiltRad = 18 * kDeg;   // head up: the floor from ~0.6 m to the view range
+constexpr double kFarSpinTiltRad = 18 * kDeg;
+constexpr double kStartArcSpeed = 100;          // mm/s
+constexpr double kStartArcTurn = 8 * kDeg;      // rad/s: the start span needs rotation as well as translation
+constexpr double kFixationMm = 1800;            // mm ahead on the path: the floor point the head fixates
+constexpr double kFixationRenewMm = 900;        // mm, a nearer fixation point is replaced   // head up: the floor from ~0.6 m to the view range
 constexpr double kLookAheadMm = 1200;           // mm, where the head looks along a path while exploring
 constexpr double kGoalToleranceMm = 60;         // mm, a view or orbit point counts as reached
 constexpr double kMaxDetourMm = 600;            // mm, largest local detour outward from the orbit circle
@@ -60,6 +64,7 @@ bool ValidatePlannerOptions(const PlannerOptions& o, std::string* why) {
   positive(o.capture_speed_mm_s, "capture speed");
   positive(o.tracking_turn_rad_s, "tracking turn rate");
   positive(o.explore_budget_s, "explore budget");
+  if (!(o.start_free_mm >= 0) || !std::isfinite(o.start_free_mm)) e << "start free must be >= 0 mm; ";
   positive(o.next_views_budget_s, "next views budget");
   if (!(o.lost_search_s >= 0)) e << "lost search time must be >= 0; ";
   for (double speed : {o.orbit_speed_mm_s, o.explore_speed_mm_s, o.capture_speed_mm_s})
@@ -120,7 +125,28 @@ bool Planner::AddOdometry(const OdometryReading& reading) {
   return true;
 }
 
-void Planner::SetLandmarks(const std::vector<MapLandmark>& landmarks) { map_.SetLandmarks(landmarks); }
+// Heights for the map are taken above the floor fitted among the landmarks (object_finder's FitFloor), not world z:
+// the pose solver's world is the odometry frame at its start, and a floor a few degrees off z = 0 in it makes the
+// far floor an obstacle (1 deg at 3 m = 52 mm; room_01's early map was 7.6 deg off).
+void Planner::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(landmarks.size());
+  for (const MapLandmark& l : landmarks)
+    if (l.position_mm.allFinite()) points.push_back(l.position_mm.cast<double>());
+  const FloorFit fit = FitFloor(points, FloorFitOptions{}, have_floor_ ? &floor_ : nullptr);
+  if (fit.found) {
+    floor_ = fit.plane;
+    have_floor_ = true;
+  }
+  if (!have_floor_) {
+    map_.SetLandmarks(landmarks);
+    return;
+  }
+  std::vector<MapLandmark> above_floor = landmarks;
+  for (MapLandmark& l : above_floor)
+    if (l.position_mm.allFinite()) l.position_mm.z() = static_cast<float>(floor_.Height(l.position_mm.cast<double>()));
+  map_.SetLandmarks(above_floor);
+}
 
 void Planner::SetVoxels(const VoxelCloud& voxels) { coverage_.SetVoxels(voxels); }
 
@@ -153,6 +179,16 @@ void Planner::SetTarget(const TargetObservation& t) {
       if (previous != TargetState::kLost && have_target_position_) Event("target lost (last seen at " + Mm(xy) + ")");
       break;
     case TargetState::kSearching:
+      // The finder dropped the target it had confirmed (later views rejected it): it was not the object.
+      if (confirmed_ && !done()) {
+        Event("the finder dropped the confirmed target at " + Mm(target_.centre_mm.head<2>()) + ": exploring again");
+        confirmed_ = false;
+        have_target_position_ = false;
+        investigate_spots_.clear();
+        follower_.Clear();
+        explore_step_ = ExploreStep::kFrontier;
+        if (phase_ != Phase::kExplore) EnterPhase(Phase::kExplore, "target dropped");
+      }
       break;
   }
 }
@@ -207,6 +243,7 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
   if (have_base_) {
     const double moved = (base.position() - base_.position()).norm();
     if (moved < 300) path_length_mm_ += moved;  // a relocalization jump is no travel
+    if (path_.empty() || (base.position() - path_.back()).norm() >= 50) path_.push_back(base.position());
   }
   base_ = base;
   have_base_ = true;
@@ -293,11 +330,20 @@ Planner::Motion Planner::FollowPathLookingAt(const Eigen::Vector3d& point, doubl
   return m;
 }
 
+// The head fixates a floor point ahead on the path and keeps it while the robot drives towards it, so the camera
+// turns about a point of the scene (what the pose solver's factorization and motion stereo need; a point that moves
+// with the robot makes the camera translate along its axis only: 6-DOF ATE 214 mm, scale 0.61 in room_01). A new
+// point is taken when the robot comes within kFixationRenewMm of it or it falls more than 60 deg off the heading.
 Planner::Motion Planner::LookAhead(const Velocity& v) {
   Motion m;
   m.velocity = v;
-  const Eigen::Vector2d ahead = follower_.PointAhead(base_, kLookAheadMm);
-  m.aim_point = Eigen::Vector3d(ahead.x(), ahead.y(), 0);
+  const Eigen::Vector2d offset = fixation_ - base_.position();
+  const double off_heading = std::abs(WrapAngle(std::atan2(offset.y(), offset.x()) - base_.theta_rad));
+  if (!has_fixation_ || offset.norm() < kFixationRenewMm || off_heading > 60 * kDeg) {
+    fixation_ = follower_.PointAhead(base_, kFixationMm);
+    has_fixation_ = true;
+  }
+  m.aim_point = Eigen::Vector3d(fixation_.x(), fixation_.y(), 0);
   return m;
 }
 
@@ -321,12 +367,42 @@ Planner::Motion Planner::Explore() {
     follower_.Clear();
   }
   switch (explore_step_) {
+    case ExploreStep::kStartArc: return StartArc();
     case ExploreStep::kLookNear: return Spin(kNearSpinTiltRad);
     case ExploreStep::kLookFar: return Spin(kFarSpinTiltRad);
     case ExploreStep::kFrontier: return Frontier();
     case ExploreStep::kInvestigate: return Investigate();
   }
   return {};
+}
+
+Planner::Motion Planner::StartArc() {
+  activity_ = "start arc";
+  if (!start_marked_) {  // the floor ahead of the start, as the operator put the robot down
+    start_marked_ = true;
+    start_position_ = base_.position();
+    BasePose along = base_;  // the footprint swept by the arc
+    const Velocity arc{kStartArcSpeed, kStartArcTurn};
+    const double step_s = 0.5 * options_.map.cell_mm / kStartArcSpeed;
+    for (double d = 0; d <= options_.start_free_mm; d += 0.5 * options_.map.cell_mm) {
+      map_.MarkFootprint(along.position());
+      along = Integrate(along, arc, step_s);
+    }
+    map_.Update();
+    const Eigen::Vector2d heading(std::cos(base_.theta_rad), std::sin(base_.theta_rad));
+    fixation_ = start_position_ + kFixationMm * heading;
+    has_fixation_ = true;
+  }
+  const double travelled = (base_.position() - start_position_).norm();
+  if (travelled >= 0.8 * options_.start_free_mm || PhaseSeconds() > 3 * options_.start_free_mm / kStartArcSpeed) {
+    explore_step_ = ExploreStep::kFrontier;
+    return Frontier();
+  }
+  Motion m;
+  m.velocity.v_mm_s = kStartArcSpeed;
+  m.velocity.omega_rad_s = kStartArcTurn;
+  m.aim_point = Eigen::Vector3d(fixation_.x(), fixation_.y(), 0);
+  return m;
 }
 
 Planner::Motion Planner::Spin(double tilt) {

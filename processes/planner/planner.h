@@ -1,8 +1,11 @@
 // Planner: drives the robot through the object-modeling mission, LCM-free. One decision per camera pose (Step).
 //
 // Phases (values as in PROCESS_STATUS "phase"):
-//   0 EXPLORE     look around (a slow turn in place with the head low, then one with the head up), then frontier
-//                 exploration: drive to the nearest reachable frontier (free cells next to unknown ones) along the
+//   0 EXPLORE     a gentle forward arc into the start_free_mm ahead of the start, the head fixating a floor point
+//                 ahead (one camera sees depth only once it moves, and the pose solver's factorization needs the
+//                 camera to turn about scene points: turning in place gives it neither), then frontier
+//                 exploration (a slow turn in place with the head low, then up, only while nothing reachable is
+//                 known): drive to the nearest reachable frontier (free cells next to unknown ones) along the
 //                 shortest path on the inflated map, the head looking at the floor ~1.2 m ahead along the path.
 //                 A CANDIDATE (or LOST, not yet confirmed) target is investigated: the robot drives to points 0.9-1.5 m
 //                 from it with the head on it, so the finder sees it from several places. Ends when the target is
@@ -38,6 +41,7 @@
 
 #include "common/robot_model.h"
 #include "common/sensor_data.h"
+#include "processes/object_finder/floor_plane.h"
 #include "processes/planner/coverage.h"
 #include "processes/planner/motion.h"
 #include "processes/planner/next_best_view.h"
@@ -75,6 +79,10 @@ struct PlannerOptions {
   double capture_speed_mm_s = 100;                 // mm/s, along the ring at a next view
   double tracking_turn_rad_s = 30 * M_PI / 180;    // rad/s, fastest base and camera rotation
   double explore_budget_s = 300;                   // s of EXPLORE before NO_TARGET
+  double start_free_mm = 400;                      // mm of floor ahead of the start taken as free: one camera sees
+                                                   // depth only once it moves, so the robot's first motion (a
+                                                   // gentle forward arc that starts the pose solver's map) goes
+                                                   // there; place the robot accordingly
   double coverage_target = 0.95;                   // coverage fraction that ends NEXT_VIEWS
   int max_next_views = 12;                         // views NEXT_VIEWS adds at most
   double next_views_budget_s = 240;                // s of NEXT_VIEWS at most
@@ -129,6 +137,7 @@ class Planner {
 
   void SetCamera(const CameraIntrinsics& camera);
   bool AddOdometry(const OdometryReading& reading);
+  // The sparse map (world); obstacle heights are taken above the floor plane fitted among these landmarks.
   void SetLandmarks(const std::vector<MapLandmark>& landmarks);
   void SetTarget(const TargetObservation& target);
   void SetVoxels(const VoxelCloud& voxels);
@@ -151,6 +160,8 @@ class Planner {
   double last_next_view_ms() const { return last_next_view_ms_; }
   const RobotPoseEstimator& pose_estimator() const { return estimator_; }
   const OccupancyMap& map() const { return map_; }
+  // The estimated base positions (world mm) every 50 mm of travel.
+  const std::vector<Eigen::Vector2d>& path() const { return path_; }
   const CoverageModel& coverage_model() const { return coverage_; }
   const PlannerOptions& options() const { return options_; }
 
@@ -169,6 +180,7 @@ class Planner {
   bool Stuck() const;
   Motion Explore();
   Motion Spin(double tilt_rad);
+  Motion StartArc();
   Motion Frontier();
   Motion Investigate();
   Motion Approach();
@@ -198,6 +210,13 @@ class Planner {
   PathFollower follower_;
   CostField cost_field_;
 
+  std::vector<Eigen::Vector2d> path_;
+  FloorPlane floor_;  // the floor among the landmarks (heights for the map are taken above it)
+  bool have_floor_ = false;
+  bool has_fixation_ = false;
+  Eigen::Vector2d fixation_ = Eigen::Vector2d::Zero();  // world, the floor point the head fixates while exploring
+  bool start_marked_ = false;
+  Eigen::Vector2d start_position_ = Eigen::Vector2d::Zero();
   Phase phase_ = Phase::kExplore;
   std::string activity_ = "waiting";
   std::vector<PhaseRecord> phases_;
@@ -224,7 +243,7 @@ class Planner {
   int64_t confirmed_seq_ = -1;
 
   // EXPLORE
-  enum class ExploreStep { kLookNear, kLookFar, kFrontier, kInvestigate } explore_step_ = ExploreStep::kLookNear;
+  enum class ExploreStep { kStartArc, kLookNear, kLookFar, kFrontier, kInvestigate } explore_step_ = ExploreStep::kStartArc;
   bool spinning_ = false;
   double spin_turned_ = 0;      // rad turned in the current look-around
   double last_theta_ = 0;

@@ -66,6 +66,7 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   p.Add("tracking-turn-deg-s", &o->tracking_turn_deg_s,
         "deg/s, fastest rotation of the base and of the camera (base + pan): the tracker must keep up");
   p.Add("explore-budget", &q->explore_budget_s, "s of exploring without a confirmed target before NO_TARGET");
+  p.Add("start-free", &q->start_free_mm, "mm of floor ahead of the start taken as free for the first motion");
   p.Add("coverage-target", &q->coverage_target, "coverage fraction that ends the next views, (0, 1]");
   p.Add("max-next-views", &q->max_next_views, "next views added at most");
   p.Add("next-views-budget", &q->next_views_budget_s, "s spent on next views at most");
@@ -355,6 +356,8 @@ void PlannerNode::OnControl(const control_t& msg) {
     std::filesystem::create_directories(options_.output_dir, ec);
     std::string error;
     if (!WritePlanJson(options_.output_dir + "/plan.json", summary, end_utime, &error)) LogError(error);
+    if (!WritePlanMapPgm(options_.output_dir + "/plan_map.pgm", planner_.map(), planner_.path(), &error))
+      LogError(error);
   }
   control_t reply;
   reply.utime = end_utime;

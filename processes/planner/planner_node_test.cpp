@@ -97,8 +97,11 @@ TEST_F(PlannerNodeTest, OneCommandPerPoseWithItsSeqAndUtime) {
     EXPECT_GE(c.tilt_rad, 0.0);
     EXPECT_LE(c.tilt_rad, 60 * kDeg + 1e-9);
   }
-  EXPECT_GT(commands_.back().omega_rad_s, 0.0);  // looking around: a slow turn in place
-  EXPECT_EQ(commands_.back().v_mm_s, 0.0);
+  // The start arc: slowly forward into the floor taken as free, turning gently, the head on a floor point ahead.
+  EXPECT_GT(commands_.back().omega_rad_s, 0.0);
+  EXPECT_GT(commands_.back().v_mm_s, 0.0);
+  EXPECT_LE(commands_.back().v_mm_s, 100.0 + 1e-9);
+  EXPECT_GT(commands_.back().tilt_rad, 5 * kDeg);
   // A republished older pose (the pose solver's late window) gets no command.
   CameraPoseEstimate late;
   late.utime = Utime(35);

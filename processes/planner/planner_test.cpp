@@ -29,7 +29,7 @@ struct RunLog {
   int64_t orbit_frames_checked = 0;    // ORBIT frames on the circle (settled, not paused or detouring)
   double orbit_max_radius_error_mm = 0;
   double orbit_max_off_axis_deg = 0;
-  double orbit_max_off_axis_all_deg = 0;  // every ORBIT frame but pauses and looks ahead (detours, bypasses too)
+  double orbit_max_off_axis_all_deg = 0;  // every ORBIT frame but pauses, glances ahead and bypasses (detours too)
   int64_t orbit_paused_frames = 0;
   int64_t orbit_frames = 0;
   double orbit_max_radius_mm = 0;      // truth, all ORBIT frames
@@ -59,6 +59,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
   planner.SetCamera(CameraIntrinsics{});
   const Eigen::Vector3d target = world.TargetCentre();
   int64_t orbit_start = -1;
+  int64_t last_looking_away = -1000;
   std::vector<MapLandmark> landmarks;
   VoxelCloud voxels;
   for (int64_t i = 0; i < max_frames; ++i) {
@@ -88,9 +89,14 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
       if (orbit_start < 0) orbit_start = world.seq();
       const double radius = (world.truth().position() - target.head<2>()).norm();
       log.orbit_max_radius_mm = std::max(log.orbit_max_radius_mm, radius);
+      // A glance at an unknown arc ahead and the bypass that follows it turn the camera away on purpose.
       const bool looking_away = planner.activity().find("paused") != std::string::npos ||
-                                planner.activity().find("looking ahead") != std::string::npos;
-      if (!looking_away && world.seq() - orbit_start > 15)  // the head follows its command one frame late
+                                planner.activity().find("looking ahead") != std::string::npos ||
+                                planner.activity().find("bypass") != std::string::npos;
+      if (looking_away) last_looking_away = world.seq();
+      // The head follows its command one frame late, and comes back from looking away at the tracking turn rate
+      // (30 deg/s: up to 1.5 s).
+      if (!looking_away && world.seq() - orbit_start > 15 && world.seq() - last_looking_away > 45)
         log.orbit_max_off_axis_all_deg =
             std::max(log.orbit_max_off_axis_all_deg, AngleOffAxis(world.WorldFromCamera(), target) / kDeg);
       if (planner.activity() != "orbit") {
@@ -227,6 +233,44 @@ TEST(PlannerClosedLoopTest, TargetLostDuringTheOrbitPausesAndResumes) {
   EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
   EXPECT_GE(log.summary.orbit_percent, 95.0);
   EXPECT_EQ(log.collisions, 0);
+}
+
+}  // namespace
+}  // namespace objscan
+
+namespace objscan {
+namespace {
+
+// The finder confirmed something that later views rejected (it drops it: SEARCHING): the planner must not go on
+// circling it but explore again, and take the next confirmed target.
+TEST(PlannerTargetTest, DroppedConfirmedTargetSendsTheRobotExploringAgain) {
+  toy::ToyWorld world(toy::MakeLivingRoom(true), TestOptions().robot);
+  Planner planner(TestOptions());
+  planner.SetCamera(CameraIntrinsics{});
+  TargetObservation phantom;
+  phantom.state = TargetState::kConfirmed;
+  phantom.centre_mm = Eigen::Vector3d(world.truth().x_mm + 1500, world.truth().y_mm, 100);
+  phantom.size_mm = Eigen::Vector3d(150, 150, 150);
+  auto step = [&]() {
+    planner.AddOdometry(world.Odometry());
+    planner.Step(world.CameraPose());
+  };
+  step();
+  planner.SetTarget(phantom);
+  step();
+  EXPECT_EQ(planner.phase(), Phase::kApproach);
+  TargetObservation dropped;
+  dropped.state = TargetState::kSearching;
+  planner.SetTarget(dropped);
+  step();
+  EXPECT_EQ(planner.phase(), Phase::kExplore);
+  EXPECT_FALSE(planner.Summary().target_confirmed);
+  bool said = false;
+  for (const std::string& e : planner.TakeEvents()) said = said || e.find("dropped the confirmed target") != std::string::npos;
+  EXPECT_TRUE(said);
+  planner.SetTarget(phantom);  // a target confirmed again is taken
+  step();
+  EXPECT_EQ(planner.phase(), Phase::kApproach);
 }
 
 }  // namespace
