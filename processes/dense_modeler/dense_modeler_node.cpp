@@ -748,14 +748,14 @@ void DenseModelerNode::PublishVoxelMap(int64_t utime, int64_t seq, bool is_final
     LogWarning("publishing on " + options_.voxel_map_channel + " failed");
 }
 
-void DenseModelerNode::RevoteWithFinalPoses() {
+bool DenseModelerNode::RevoteWithFinalPoses() {
   status_.SetValue("final_revoted_pairs", 0);
   status_.SetValue("final_revote_rejected", 0);
   status_.SetValue("final_revote_s", 0);
-  if (!RevoteEnabled()) return;
+  if (!RevoteEnabled()) return false;
   if (!stored_complete_) {
     LogWarning("final votes: the live ones (the pairs' matches exceeded max-stored-matches)");
-    return;
+    return false;
   }
   const int64_t start_us = MonotonicMicros();
   std::vector<StoredPair> pairs;
@@ -785,35 +785,23 @@ void DenseModelerNode::RevoteWithFinalPoses() {
   status_.SetValue("final_revote_s", seconds);
   if (with_final == 0) {
     LogInfo("final votes: the live ones (no pair has final poses)");
-    return;
+    return false;
   }
   if (2 * fresh.total_votes() < grid_.total_votes()) {
     LogWarning("final votes: the live ones, the final poses keep too few (" + counts + ")");
-    return;
+    return false;
   }
   LogInfo("final votes recomputed in " + std::to_string(seconds) + " s: " + counts);
   status_.SetValue("final_revoted_pairs", static_cast<double>(with_final));
   grid_ = std::move(fresh);
   status_.SetValue("voxels", static_cast<double>(grid_.num_voxels()));
   status_.SetValue("votes", static_cast<double>(grid_.total_votes()));
+  return true;
 }
 
 void DenseModelerNode::RunFinalPhase(int64_t utime) {
   if (finished_) return;
   const int64_t start_us = MonotonicMicros();
-  std::vector<CarvingView> views, refine_views;
-  int final_used = 0;
-  for (const StoredView& sv : carving_views_) {
-    CarvingView v = sv.view, r = sv.refine_view;
-    auto it = final_poses_.find(sv.seq);
-    if (it != final_poses_.end()) {
-      v.world_from_camera = r.world_from_camera = it->second;
-      ++final_used;
-    }
-    views.push_back(std::move(v));
-    if (!r.image.empty()) refine_views.push_back(std::move(r));
-  }
-  final_poses_used_ = final_used;
   UpdateRegion(true);
   RunWaitingPairs(true);
   if (region_.valid) {
@@ -826,7 +814,23 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   } else {
     LogWarning("no region of interest: the model is not restricted");
   }
-  RevoteWithFinalPoses();
+  // Carving and the mesh's views take the poses the votes were cast with: the final ones when the votes were
+  // recomputed with them, else the live ones (a grid from live poses carved with final ones in another frame lost
+  // 80 % of room_01's target).
+  const bool use_final_poses = RevoteWithFinalPoses();
+  std::vector<CarvingView> views, refine_views;
+  int final_used = 0;
+  for (const StoredView& sv : carving_views_) {
+    CarvingView v = sv.view, r = sv.refine_view;
+    auto it = final_poses_.find(sv.seq);
+    if (use_final_poses && it != final_poses_.end()) {
+      v.world_from_camera = r.world_from_camera = it->second;
+      ++final_used;
+    }
+    views.push_back(std::move(v));
+    if (!r.image.empty()) refine_views.push_back(std::move(r));
+  }
+  final_poses_used_ = final_used;
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_, &refine_views);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +

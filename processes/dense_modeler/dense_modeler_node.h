@@ -25,7 +25,8 @@
 // where both frames have one (else with the live poses) and the geometric checks, the final region included, and voted
 // into a fresh grid, which replaces the live one unless no pair had final poses or it holds under half the live votes
 // (then a warning; the live grid stays); seeds = voxels over the threshold (inside the target box when known), space
-// carving with the stored views, using the final poses where they arrived, marching tetrahedra mesh, files written to
+// carving with the stored views in the poses the votes were cast with (final when the re-vote ran, else live), marching
+// tetrahedra mesh, files written to
 // output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the re-voted one) to
 // control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves output_dir/votes_snapshot.bin when output_dir
 // is set. Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated" (only
@@ -209,8 +210,9 @@ class DenseModelerNode : public Node {
   bool RegionExpected() const;
   void PublishVoxelMap(int64_t utime, int64_t seq, bool is_final, const std::vector<VoxelRecord>* final_voxels);
   // Final phase: replaces grid_ by the stored pairs' matches triangulated with the final poses (the live ones for
-  // frames without) when revote_final_poses is set and every pair was stored.
-  void RevoteWithFinalPoses();
+  // frames without) when revote_final_poses is set and every pair was stored. True when it did (the carving views
+  // then take the final poses too; otherwise the live ones the kept votes were cast with).
+  bool RevoteWithFinalPoses();
   // revote_final_poses is set and final poses can arrive (final_pose_channel): the pairs' matches are kept.
   bool RevoteEnabled() const { return options_.revote_final_poses && !options_.final_pose_channel.empty(); }
   bool SaveSnapshot(const std::string& path);

@@ -169,14 +169,15 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_FALSE(out_.maps.back().is_final);
   EXPECT_GT(out_.maps.back().num_voxels, 1000);
   EXPECT_FALSE(node.Finished());
-  // Final poses (here the same true poses) for half of the frames: used by the carving.
+  // Final poses (here the same true poses) for half of the frames: no pair (gap 1) has both, so the live votes stay
+  // and the carving takes the live poses they were cast with, not a mix.
   for (int i = 0; i <= n; i += 2) PublishFinalPose(i, n);
   Drain();
   PublishControl(+control_t::COMMAND_FINISHED, "tracker");  // not the awaited sender
   EXPECT_FALSE(node.final_phase_done());
   PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
   EXPECT_TRUE(node.Finished());
-  EXPECT_EQ(node.final_poses_used(), n / 2 + 1);
+  EXPECT_EQ(node.final_poses_used(), 0);
   ASSERT_EQ(out_.models.size(), 1u);
   const model_t& m = out_.models[0];
   EXPECT_GT(m.num_voxels, 5000);
@@ -271,6 +272,7 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
     ASSERT_TRUE(node.final_phase_done());
     error_mm[revote ? 0 : 1] = FinalVoxelMedianErrorMm();
     ASSERT_FALSE(out_.statuses.empty());
+    EXPECT_EQ(node.final_poses_used(), revote ? n + 1 : 0) << "carving takes the poses the votes were cast with";
     if (revote) {
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revoted_pairs"), n);
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revote_rejected"), 0);  // a scale keeps the epipolar lines
