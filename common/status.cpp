@@ -1,5 +1,7 @@
 #include "common/status.h"
 
+#include "objscan/control_t.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -145,6 +147,21 @@ std::function<void(const RawMessage&)> StatusReporter::MalformedHandler(const st
   return [this, what](const RawMessage& raw) {
     Reject(what + ": malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
   };
+}
+
+void PublishFinished(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& sender,
+                     int64_t utime, int64_t last_seq, const std::string& argument) {
+  control_t reply;
+  reply.utime = utime;
+  reply.sender = sender;
+  reply.target = "*";
+  reply.command = control_t::COMMAND_FINISHED;
+  reply.last_seq = last_seq;
+  reply.argument = argument;
+  if (bus.PublishMessage(channel, reply))
+    status.CountOut();
+  else
+    LogWarning("publishing on " + channel + " failed");
 }
 
 }  // namespace objscan

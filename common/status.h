@@ -82,4 +82,10 @@ class StatusReporter {
   RecentValues latency_window_ms_;  // ms, the last 1000 handler latencies (kLatencyWindow)
 };
 
+// The answer of a processing node to end of stream: control_t COMMAND_FINISHED from sender to "*" with the data time
+// and seq of its last input and a free-text argument, on channel; counted as an output on status, a failed
+// publication logged.
+void PublishFinished(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& sender,
+                     int64_t utime, int64_t last_seq, const std::string& argument = "");
+
 }  // namespace objscan

@@ -930,14 +930,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     m.bbox_max_mm[k] = model.bbox_max[k];
   }
   if (bus_.PublishMessage(options_.model_channel, m)) status_.CountOut();
-  control_t reply;
-  reply.utime = data_utime;
-  reply.sender = options_.name;
-  reply.target = "*";
-  reply.command = control_t::COMMAND_FINISHED;
-  reply.last_seq = last_seq_;
-  reply.argument = paths.voxels_ply.empty() ? "" : options_.output_dir;
-  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
+  PublishFinished(bus_, status_, options_.control_channel, options_.name, data_utime, last_seq_,
+                  paths.voxels_ply.empty() ? "" : options_.output_dir);
   finished_ = true;
   status_.SetValue("final_ms", (MonotonicMicros() - start_us) * 1e-3);
   status_.SetValue("final_voxels", static_cast<double>(model.voxels.size()));

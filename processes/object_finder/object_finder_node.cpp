@@ -399,17 +399,8 @@ void ObjectFinderNode::OnControl(const control_t& msg) {
       LogError("cannot write " + path);
   }
   PublishTarget(WallTimeMicros());
-  control_t reply;
-  reply.utime = last_landmarks_seq_ >= 0 ? r.utime : msg.utime;
-  reply.sender = options_.name;
-  reply.target = "*";
-  reply.command = control_t::COMMAND_FINISHED;
-  reply.last_seq = last_landmarks_seq_;
-  reply.argument = "";
-  if (bus_.PublishMessage(options_.control_channel, reply))
-    status_.CountOut();
-  else
-    LogWarning("publishing on " + options_.control_channel + " failed");
+  PublishFinished(bus_, status_, options_.control_channel, options_.name,
+                  last_landmarks_seq_ >= 0 ? r.utime : msg.utime, last_landmarks_seq_);
   finished_ = true;
   status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
   status_.PublishIfDue(WallTimeMicros(), true);

@@ -359,17 +359,8 @@ void PlannerNode::OnControl(const control_t& msg) {
     if (!WritePlanMapPgm(options_.output_dir + "/plan_map.pgm", planner_.map(), planner_.path(), &error))
       LogError(error);
   }
-  control_t reply;
-  reply.utime = end_utime;
-  reply.sender = options_.name;
-  reply.target = "*";
-  reply.command = control_t::COMMAND_FINISHED;
-  reply.last_seq = have_pose_ ? last_pose_seq_ : -1;
-  reply.argument = PlanOutcome(summary);
-  if (bus_.PublishMessage(options_.control_channel, reply))
-    status_.CountOut();
-  else
-    LogWarning("publishing on " + options_.control_channel + " failed");
+  PublishFinished(bus_, status_, options_.control_channel, options_.name, end_utime, have_pose_ ? last_pose_seq_ : -1,
+                  PlanOutcome(summary));
   finished_ = true;
   // A mission that did not end with a model is an error of the session (it says what happened and what to try).
   const std::string outcome = PlanOutcome(summary);

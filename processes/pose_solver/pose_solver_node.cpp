@@ -413,14 +413,8 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
         LogInfo("results written to " + options_.output_dir);
     }
   }
-  control_t reply;
-  reply.utime = last_seq_ >= 0 ? last_utime_ : msg.utime;
-  reply.sender = options_.name;
-  reply.target = "*";
-  reply.command = control_t::COMMAND_FINISHED;
-  reply.last_seq = last_seq_;
-  reply.argument = options_.output_dir;
-  if (bus_.PublishMessage(options_.control_channel, reply)) status_.CountOut();
+  PublishFinished(bus_, status_, options_.control_channel, options_.name, last_seq_ >= 0 ? last_utime_ : msg.utime,
+                  last_seq_, options_.output_dir);
   finished_ = true;
   status_.SetState(+process_status_t::STATE_FINISHED, "final phase done");
   status_.PublishIfDue(WallTimeMicros(), true);

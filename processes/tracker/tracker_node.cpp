@@ -266,17 +266,8 @@ void TrackerNode::OnControl(const control_t& msg) {
   if (finished_) return;  // answered already
   LogInfo("end of stream from " + msg.sender + " (last_seq " + std::to_string(msg.last_seq) + "), tracked " +
           std::to_string(frames_tracked_) + " frames, last seq " + std::to_string(last_seq_));
-  control_t reply;
-  reply.utime = last_seq_ >= 0 ? last_utime_ : msg.utime;
-  reply.sender = options_.name;
-  reply.target = "*";
-  reply.command = control_t::COMMAND_FINISHED;
-  reply.last_seq = last_seq_;
-  reply.argument = "";
-  if (bus_.PublishMessage(options_.control_channel, reply))
-    status_.CountOut();
-  else
-    LogWarning("publishing on " + options_.control_channel + " failed");
+  PublishFinished(bus_, status_, options_.control_channel, options_.name, last_seq_ >= 0 ? last_utime_ : msg.utime,
+                  last_seq_);
   finished_ = true;
   status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
   status_.PublishIfDue(WallTimeMicros(), true);
