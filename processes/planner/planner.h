@@ -213,6 +213,7 @@ class Planner {
   std::vector<Eigen::Vector2d> path_;
   FloorPlane floor_;  // the floor among the landmarks (heights for the map are taken above it)
   bool have_floor_ = false;
+  Eigen::Isometry3d camera_pose_ = Eigen::Isometry3d::Identity();  // world_from_camera of the current step
   bool has_fixation_ = false;
   Eigen::Vector2d fixation_ = Eigen::Vector2d::Zero();  // world, the floor point the head fixates while exploring
   bool start_marked_ = false;
