@@ -1,9 +1,9 @@
 # The real image sets the tests read (../shared/data: Middlebury rings, Oxford dinosaur; see each set's SOURCE.txt):
-# OBJSCAN_DATA_DIR, else the first of <source>/../shared/data and /work/shared/data that exists. Tests get it in
+# OBJSCAN_DATA_DIR, else <source>/../shared/data (the checkout's sibling shared/) when it exists. Tests get it in
 # their environment (OBJSCAN_DATA_DIR); without it the real-data tests skip and say so.
-set(OBJSCAN_DATA_DIR "" CACHE PATH "folder of the real image sets (default: <source>/../shared/data or /work/shared/data)")
+set(OBJSCAN_DATA_DIR "" CACHE PATH "folder of the real image sets (default: <source>/../shared/data)")
 if(NOT OBJSCAN_DATA_DIR)
-  foreach(candidate "${PROJECT_SOURCE_DIR}/../shared/data" "/work/shared/data")
+  foreach(candidate "${PROJECT_SOURCE_DIR}/../shared/data")
     if(IS_DIRECTORY "${candidate}")
       get_filename_component(OBJSCAN_DATA_DIR_FOUND "${candidate}" REALPATH)
       break()
@@ -15,7 +15,7 @@ endif()
 if(OBJSCAN_DATA_DIR_FOUND)
   message(STATUS "real image sets for the tests: ${OBJSCAN_DATA_DIR_FOUND}")
 else()
-  message(WARNING "no real image sets (../shared/data, /work/shared/data; or set OBJSCAN_DATA_DIR): "
+  message(WARNING "no real image sets (../shared/data next to the checkout; or set OBJSCAN_DATA_DIR): "
                   "the Middlebury and Oxford dinosaur tests will skip")
 endif()
 
