@@ -51,4 +51,25 @@ Eigen::Isometry3d WorldFromCamera(const RobotGeometry& robot, double x_mm, doubl
   return WorldFromBase(x_mm, y_mm, theta_rad) * BaseFromCamera(robot, pan_rad, tilt_rad);
 }
 
+void AimHead(const RobotGeometry& robot, double x_mm, double y_mm, double theta_rad,
+             const Eigen::Vector3d& point_world, double* pan_rad, double* tilt_rad) {
+  const Eigen::Isometry3d world_from_base = WorldFromBase(x_mm, y_mm, theta_rad);
+  const Eigen::Vector3d pivot(robot.mast_offset_x_mm, robot.mast_offset_y_mm, robot.mast_height_mm);
+  const Eigen::Vector3d d = world_from_base.inverse() * point_world - pivot;
+  double pan = std::atan2(d.y(), d.x());
+  double tilt = std::atan2(-d.z(), std::hypot(d.x(), d.y()));
+  // Refine for camera offsets off the optical axis (exact in one step for the default offset along the axis).
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    const Eigen::Vector3d p = WorldFromCamera(robot, x_mm, y_mm, theta_rad, pan, tilt).inverse() * point_world;
+    if (p.z() <= 0) break;
+    const double ex = std::atan2(p.x(), p.z()), ey = std::atan2(p.y(), p.z());
+    pan -= ex;
+    tilt += ey;
+    if (std::abs(ex) + std::abs(ey) < 1e-12) break;
+  }
+  pan = std::fmod(pan + M_PI, 2 * M_PI);  // into [-pi, pi)
+  *pan_rad = (pan < 0 ? pan + 2 * M_PI : pan) - M_PI;
+  *tilt_rad = tilt;
+}
+
 }  // namespace objscan

@@ -36,5 +36,10 @@ Eigen::Isometry3d WorldFromCamera(const RobotGeometry& robot, double x_mm, doubl
                                   double pan_rad, double tilt_rad);
 // The fixed rotation tilt_from_camera (optical axes to x-forward/y-left/z-up).
 Eigen::Matrix3d TiltFromCameraRotation();
+// Pan and tilt (rad; pan in [-pi, pi), tilt > 0 = down) that put `point_world` on the optical axis of a robot at
+// base pose (x, y, theta): exact for camera offsets along the optical axis, refined by Newton steps otherwise. Not
+// limited to the joints' range.
+void AimHead(const RobotGeometry& robot, double x_mm, double y_mm, double theta_rad,
+             const Eigen::Vector3d& point_world, double* pan_rad, double* tilt_rad);
 
 }  // namespace objscan

@@ -32,7 +32,7 @@ Eigen::Isometry3d OrbitView(double angle_deg, const Eigen::Vector3d& look_at, do
   const double a = angle_deg * M_PI / 180.0;
   const double x = radius * std::cos(a), y = radius * std::sin(a), theta = a + M_PI / 2;
   double pan = 0, tilt = 0;
-  RobotSimulator::AimHead(geometry, x, y, theta, look_at, &pan, &tilt);
+  AimHead(geometry, x, y, theta, look_at, &pan, &tilt);
   return WorldFromCamera(geometry, x, y, theta, pan, tilt);
 }
 

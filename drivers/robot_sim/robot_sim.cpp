@@ -100,26 +100,6 @@ int64_t RobotSimulator::UtimeOf(int64_t seq) const {
 
 bool RobotSimulator::Done() const { return options_.frames > 0 && next_seq_ >= options_.frames; }
 
-void RobotSimulator::AimHead(const RobotGeometry& geometry, double x_mm, double y_mm, double theta_rad,
-                             const Eigen::Vector3d& point, double* pan_rad, double* tilt_rad) {
-  const Eigen::Isometry3d world_from_base = WorldFromBase(x_mm, y_mm, theta_rad);
-  const Eigen::Vector3d pivot(geometry.mast_offset_x_mm, geometry.mast_offset_y_mm, geometry.mast_height_mm);
-  const Eigen::Vector3d d = world_from_base.inverse() * point - pivot;
-  double pan = std::atan2(d.y(), d.x());
-  double tilt = std::atan2(-d.z(), std::hypot(d.x(), d.y()));
-  // Refine for camera offsets off the optical axis (exact in one step for the default offset along the axis).
-  for (int iteration = 0; iteration < 20; ++iteration) {
-    const Eigen::Vector3d p = WorldFromCamera(geometry, x_mm, y_mm, theta_rad, pan, tilt).inverse() * point;
-    if (p.z() <= 0) break;
-    const double ex = std::atan2(p.x(), p.z()), ey = std::atan2(p.y(), p.z());
-    pan -= ex;
-    tilt += ey;
-    if (std::abs(ex) + std::abs(ey) < 1e-12) break;
-  }
-  *pan_rad = WrapAngle(pan);
-  *tilt_rad = tilt;
-}
-
 RobotState RobotSimulator::OrbitState(int64_t seq) const {
   const double sweep = options_.orbit_degrees * kPi / 180.0;
   const double frames = static_cast<double>(std::max<int64_t>(1, options_.frames));

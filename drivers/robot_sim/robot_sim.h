@@ -139,9 +139,6 @@ class RobotSimulator {
   const RobotSimOptions& options() const { return options_; }
   int64_t UtimeOf(int64_t seq) const;
 
-  // Pan/tilt (rad) that point the optical axis of a robot at base pose (x, y, theta) through `point` (world).
-  static void AimHead(const RobotGeometry& geometry, double x_mm, double y_mm, double theta_rad,
-                      const Eigen::Vector3d& point, double* pan_rad, double* tilt_rad);
 
  private:
   RobotState OrbitState(int64_t seq) const;

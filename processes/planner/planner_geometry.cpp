@@ -61,21 +61,7 @@ Eigen::Isometry3d WorldFromCamera(const RobotGeometry& robot, const BasePose& ba
 
 void AimHead(const RobotGeometry& robot, const BasePose& base, const Eigen::Vector3d& point, double* pan_rad,
              double* tilt_rad) {
-  const Eigen::Isometry3d world_from_base = WorldFromBase(base.x_mm, base.y_mm, base.theta_rad);
-  const Eigen::Vector3d pivot(robot.mast_offset_x_mm, robot.mast_offset_y_mm, robot.mast_height_mm);
-  const Eigen::Vector3d d = world_from_base.inverse() * point - pivot;
-  double pan = std::atan2(d.y(), d.x());
-  double tilt = std::atan2(-d.z(), std::hypot(d.x(), d.y()));
-  for (int iteration = 0; iteration < 20; ++iteration) {  // camera offsets off the optical axis
-    const Eigen::Vector3d p = WorldFromCamera(robot, base, pan, tilt).inverse() * point;
-    if (p.z() <= 0) break;
-    const double ex = std::atan2(p.x(), p.z()), ey = std::atan2(p.y(), p.z());
-    pan -= ex;
-    tilt += ey;
-    if (std::abs(ex) + std::abs(ey) < 1e-12) break;
-  }
-  *pan_rad = WrapAngle(pan);
-  *tilt_rad = tilt;
+  AimHead(robot, base.x_mm, base.y_mm, base.theta_rad, point, pan_rad, tilt_rad);
 }
 
 double AngleOffAxis(const Eigen::Isometry3d& world_from_camera, const Eigen::Vector3d& point_world) {

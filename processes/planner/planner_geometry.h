@@ -44,9 +44,7 @@ BasePose BasePoseFromCamera(const RobotGeometry& robot, const Eigen::Isometry3d&
                             double tilt_rad);
 Eigen::Isometry3d WorldFromCamera(const RobotGeometry& robot, const BasePose& base, double pan_rad, double tilt_rad);
 
-// Pan/tilt (rad; tilt > 0 = down) that put `point_world` on the optical axis of a robot at `base` (same computation
-// as the simulator's AimHead: the exact angles for camera offsets along the optical axis, refined otherwise).
-// Not limited to the joints' range.
+// common/robot_model.h's AimHead for a BasePose.
 void AimHead(const RobotGeometry& robot, const BasePose& base, const Eigen::Vector3d& point_world, double* pan_rad,
              double* tilt_rad);
 
