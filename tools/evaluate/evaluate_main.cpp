@@ -42,6 +42,18 @@ int Fail(const std::string& message) {
   return 1;
 }
 
+// The Sim(3) that aligns the estimated trajectory (TUM file) to the true one (--align of surface and target).
+bool TruthFromEstimate(const std::string& estimated_path, const std::string& truth_path, objscan::Sim3* out,
+                       std::string* error) {
+  std::vector<objscan::StampedPose> est, tru;
+  if (!objscan::ReadTumTrajectory(estimated_path, &est, error) || !objscan::ReadTumTrajectory(truth_path, &tru, error))
+    return false;
+  objscan::TrajectoryEvaluation e;
+  if (!objscan::EvaluateTumTrajectories(est, tru, true, 0.005, &e, error)) return false;
+  *out = e.error.alignment;
+  return true;
+}
+
 // "x y z" per point, or "x y z value" with values (one per point).
 bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& points, std::string* error,
               const std::vector<double>* values = nullptr) {
@@ -143,12 +155,9 @@ int main(int argc, char** argv) {
     for (int i : candidates)
       if (truth[i].z() >= min_z) visible.push_back(truth[i]);
     if (!align_est.empty()) {
-      std::vector<StampedPose> est, tru;
-      if (!ReadTumTrajectory(align_est, &est, &error) || !ReadTumTrajectory(align_truth, &tru, &error))
-        return Fail(error);
-      TrajectoryEvaluation e;
-      if (!EvaluateTumTrajectories(est, tru, true, 0.005, &e, &error)) return Fail(error);
-      for (auto& p : model) p = e.error.alignment * p;
+      Sim3 truth_from_estimate;
+      if (!TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error)) return Fail(error);
+      for (auto& p : model) p = truth_from_estimate * p;
     }
     if (!write_aligned.empty() && !WriteXyz(write_aligned, model, &error)) return Fail(error);
     if (!write_visible.empty() && !WriteXyz(write_visible, visible, &error)) return Fail(error);
@@ -209,14 +218,8 @@ int main(int argc, char** argv) {
     if (!read_box(texts[0], &c, &sz)) return Fail(std::string(argv[2]) + ": no centre_mm / size_mm (3 numbers each)");
     if (!read_box(texts[1], &tc, &tsz)) return Fail(std::string(argv[3]) + ": no centre_mm / size_mm (3 numbers each)");
     Sim3 truth_from_estimate;
-    if (!align_est.empty()) {
-      std::vector<StampedPose> est, tru;
-      if (!ReadTumTrajectory(align_est, &est, &error) || !ReadTumTrajectory(align_truth, &tru, &error))
-        return Fail(error);
-      TrajectoryEvaluation e;
-      if (!EvaluateTumTrajectories(est, tru, true, 0.005, &e, &error)) return Fail(error);
-      truth_from_estimate = e.error.alignment;
-    }
+    if (!align_est.empty() && !TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error))
+      return Fail(error);
     const TargetEvaluation t = EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, {tc[0], tc[1], tc[2]},
                                               {tsz[0], tsz[1], tsz[2]}, truth_from_estimate);
     std::printf("center_error_mm %.3f\ncenter_error_xy_mm %.3f\ncenter_x %.3f\ncenter_y %.3f\ncenter_z %.3f\n"
