@@ -38,6 +38,7 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (o.start_span.min_frames < 3) e << "start span min frames must be >= 3; ";
   if (o.start_span.max_frames < o.start_span.min_frames) e << "start span max frames must be >= min frames; ";
   if (!(o.start_span.min_rotation_deg > 0)) e << "start span min rotation must be > 0; ";
+  if (!(o.min_span_baseline_mm >= 0)) e << "min span baseline must be >= 0 mm; ";
   if (o.pnp.min_inliers < 6) e << "pnp min inliers must be >= 6; ";
   if (!(o.pnp.ransac_threshold_px > 0) || !(o.pnp.inlier_threshold_px > 0)) e << "pnp thresholds must be > 0; ";
   if (o.pnp.ransac_iterations < 1) e << "pnp ransac iterations must be >= 1; ";
@@ -213,6 +214,7 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
   fr.outlier.assign(fr.ids.size(), 0);
   if (odometry) {
     fr.has_odometry = true;
+    fr.odometry_base_mm = Eigen::Vector2d(odometry->x_mm, odometry->y_mm);
     fr.odometry_world_from_camera = WorldFromCamera(options_.robot, odometry->x_mm, odometry->y_mm, odometry->theta_rad,
                                                     odometry->pan_rad, odometry->tilt_rad);
   }
@@ -352,7 +354,22 @@ void PoseEstimator::FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_wo
 }
 
 bool PoseEstimator::TryInitialize(int newest) {
-  const int first_considered = std::max(init_start_, newest - options_.start_span.max_frames + 1);
+  int first_considered = std::max(init_start_, newest - options_.start_span.max_frames + 1);
+  // With odometry, the span starts after the base last stood still or turned in place (synthetic: a span of 57
+  // turning and 10 orbit frames initialised at ATE 335 mm, scale 0.67; room_03: a restart on 8 turning frames, map
+  // 1.3x off).
+  constexpr double kStillBaseSpeedMmS = 20;
+  for (int f = newest; f > first_considered; --f) {
+    const Frame& a = frames_[f - 1];
+    const Frame& b = frames_[f];
+    if (!a.has_odometry || !b.has_odometry) continue;
+    const double dt_s = std::max(1e-3, (b.utime - a.utime) * 1e-6);
+    if ((b.odometry_base_mm - a.odometry_base_mm).norm() / dt_s < kStillBaseSpeedMmS) {
+      first_considered = f;
+      break;
+    }
+  }
+  if (newest - first_considered + 1 < options_.start_span.min_frames) return false;
   std::vector<TrackList> lists(newest - first_considered + 1);
   for (int f = first_considered; f <= newest; ++f) {
     lists[f - first_considered].ids = frames_[f].ids;
@@ -361,6 +378,25 @@ bool PoseEstimator::TryInitialize(int newest) {
   int first = 0, last = 0;
   std::vector<int64_t> common;
   if (!SelectStartSpan(lists, options_.start_span, &first, &last, &common)) return false;
+  // A span turned in place (the robot turning on the spot after a loss) has rotation but no depth: its structure and
+  // odometry scale are noise (room_03: a restart on 8 frames of turning gave a map 1.3x off). Wait for travel.
+  double travel_mm = 0;
+  bool all_odometry = true;
+  const Frame& start = frames_[first + first_considered];
+  for (int f = first + first_considered; f <= last + first_considered; ++f) {
+    all_odometry = all_odometry && frames_[f].has_odometry;
+    if (all_odometry)
+      travel_mm = std::max(travel_mm, (frames_[f].odometry_world_from_camera.translation() -
+                                       start.odometry_world_from_camera.translation()).norm());
+  }
+  if (all_odometry && travel_mm < options_.min_span_baseline_mm) {
+    std::ostringstream m;
+    m << "initialization: the span " << frames_[first + first_considered].seq << ".."
+      << frames_[last + first_considered].seq << " travelled " << travel_mm << " mm by the odometry (< "
+      << options_.min_span_baseline_mm << " mm); waiting for travel";
+    last_message_ = m.str();
+    return false;
+  }
   const int64_t start_us = MonotonicMicros();
   const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
   if (ok) span_first_ = first + first_considered;
@@ -1243,15 +1279,23 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
 }
 
 bool PoseEstimator::OdometryStepScale(int first_frame, int last_frame, double* scale) const {
-  std::vector<double> ratios;
+  // Only the steps that travel (>= 30 % of the longest): the ratio of two near-zero steps (a turn in place, where
+  // only the camera's offset from the pan axis moves it) is noise, and a span that starts with a turn would be
+  // scaled by it (synthetic: scale 0.47 after 57 turning and 10 travelling frames).
+  std::vector<std::pair<double, double>> steps;  // (odometry, visual) step lengths
+  double longest = 0;
   for (int f = std::max(1, first_frame + 1); f <= last_frame; ++f) {
     const Frame& a = frames_[f - 1];
     const Frame& b = frames_[f];
     if (!a.posed || !b.posed || !a.has_odometry || !b.has_odometry) continue;
     const double odo = (b.odometry_world_from_camera.translation() - a.odometry_world_from_camera.translation()).norm();
     const double vis = (b.world_from_camera.translation() - a.world_from_camera.translation()).norm();
-    if (odo > 1e-3 && vis > 1e-9) ratios.push_back(odo / vis);
+    steps.push_back({odo, vis});
+    longest = std::max(longest, odo);
   }
+  std::vector<double> ratios;
+  for (const auto& [odo, vis] : steps)
+    if (odo > 1e-3 && odo >= 0.3 * longest && vis > 1e-9) ratios.push_back(odo / vis);
   if (ratios.empty()) return false;
   const size_t m = ratios.size() / 2;
   std::nth_element(ratios.begin(), ratios.begin() + m, ratios.end());

@@ -2,7 +2,9 @@
 //
 // Phases
 //  1. Preliminary (status INITIALIZING): frames are buffered until SelectStartSpan (factorization.h) finds a span
-//     with enough common tracks and rotation; Tomasi–Kanade weak-perspective factorization of the span gives the
+//     with enough common tracks and rotation (with odometry: only frames after the base last stood or turned in
+//     place, below kStillBaseSpeedMmS, and with at least min_span_baseline_mm of camera travel: a span turned in
+//     place has no depth, its factorization no parallax about the scene, its odometry scale is noise); Tomasi–Kanade weak-perspective factorization of the span gives the
 //     rotations and shape, both depth-reversal candidates are upgraded to perspective and bundle-adjusted, the better
 //     one is kept. Metric scale and world frame:
 //       kSixDof:  world_from_camera of the span's first frame = the odometry's WorldFromCamera at that frame; scale =
@@ -79,6 +81,7 @@ struct PoseEstimatorOptions {
   MotionModel model = MotionModel::kSixDof;    // camera model of all adjustments
   RobotGeometry robot;                         // mast height and offsets (4-DOF model, odometry poses)
   StartSpanOptions start_span;                 // choice of the preliminary span
+  double min_span_baseline_mm = 50;            // mm, camera travel (odometry) a span with odometry needs (>= 0)
   PnpOptions pnp;                              // per-frame PnP (model is overridden by `model`)
   TriangulationOptions triangulation;          // acceptance of new landmarks
   int min_triangulation_views = 3;             // posed views a track needs before it is triangulated
@@ -202,6 +205,7 @@ class PoseEstimator {
   const std::vector<std::pair<int64_t, int64_t>>& FusedTrackIds() const { return fused_tracks_; }
   int num_fused() const { return static_cast<int>(fused_tracks_.size()); }
   ScaleSource scale_source() const { return scale_source_; }
+  int span_first_frame() const { return span_first_; }  // index of the last preliminary span's first frame (-1: none)
   bool initialized() const { return map_initialized_; }
   int num_frames() const { return static_cast<int>(frames_.size()); }
   int num_keyframes() const;
@@ -225,6 +229,7 @@ class PoseEstimator {
     std::vector<uint8_t> outlier;         // PnP outlier flag per feature
     bool has_odometry = false;
     Eigen::Isometry3d odometry_world_from_camera = Eigen::Isometry3d::Identity();
+    Eigen::Vector2d odometry_base_mm = Eigen::Vector2d::Zero();  // mm, base position by the odometry
     bool posed = false;
     bool keyframe = false;
     bool compacted = false;  // observations dropped (see observations_kept_frames)

@@ -212,6 +212,40 @@ TEST(PoseEstimator, LostTrackingRecoversAndJoinsTheMaps) {
   EXPECT_LT(joined_no_floor, chained_no_floor);
 }
 
+// The robot turns in place before it drives (as after a loss, when the planner turns towards a new path): a span of
+// pure rotation has no depth, so the preliminary phase waits for the odometry to show travel instead of building a
+// map on it.
+TEST(PoseEstimator, WaitsForTravelBeforeInitializingOnATurnInPlace) {
+  SyntheticOrbitOptions so = SimLikeOdometryErrors();
+  so.turn_in_place_frames = 60;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  PoseEstimatorOptions o;
+  PoseEstimator estimator(s.camera, o);
+  int first_posed = -1;
+  for (size_t f = 0; f < s.frames.size(); ++f) {
+    const FrameResult r = estimator.AddFrame(s.frames[f], &s.odometry[f]);
+    if (first_posed < 0 && r.pose.status == PoseStatus::kTracking) {
+      first_posed = static_cast<int>(f);
+      std::printf("frame %zu: %s\n", f, estimator.last_message().c_str());
+    }
+  }
+  EXPECT_GE(first_posed, 60);
+  EXPECT_GE(estimator.span_first_frame(), 59);  // the span holds no frame of the turn (59 -> 60 is the first step)
+  const std::vector<CameraPoseEstimate> final_poses = estimator.Finish();
+  std::vector<Eigen::Isometry3d> e, t;
+  for (size_t f = 60; f < final_poses.size(); ++f) {
+    if (final_poses[f].status != PoseStatus::kTracking && final_poses[f].status != PoseStatus::kRelocalized) continue;
+    e.push_back(final_poses[f].world_from_camera);
+    t.push_back(s.world_from_camera[f]);
+  }
+  TrajectoryError err;
+  EXPECT_TRUE(EvaluateTrajectory(e, t, true, &err));
+  std::printf("orbit after the turn: %zu posed, ATE %.3f mm, scale %.4f\n", e.size(), err.ate_rmse, err.scale);
+  EXPECT_GE(e.size(), 190u);
+  EXPECT_LT(err.ate_rmse, 1.0);  // mm
+  EXPECT_LT(std::abs(err.scale - 1.0), 0.01);
+}
+
 // Old points come back into view (floor points behind the sphere, the start of the orbit on the second lap, tracks
 // broken by dropout) under new track ids: with fuse_landmarks their new landmarks are fused with the old ones, so
 // the map holds each point about once and the final BA closes the loop. (Here a re-detected track observes exactly

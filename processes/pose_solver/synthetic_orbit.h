@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <unordered_map>
@@ -34,6 +35,10 @@ struct SyntheticOrbitOptions {
   double odometry_heading_drift_rad_per_frame = 0.0;
   double pan_bias_rad = 0.0, tilt_bias_rad = 0.0;
   int lost_begin = -1, lost_end = -1;  // frames [begin, end) see no features (tracking loss test)
+  // Before the orbit, the robot turns in place at its start for this many frames, through turn_in_place_rad (ending
+  // at the orbit's start heading): a span of pure rotation (the camera's 40 mm offset aside).
+  int turn_in_place_frames = 0;
+  double turn_in_place_rad = 0.35;
   unsigned seed = 7;
 };
 
@@ -80,10 +85,13 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
   double odo_x = 0, odo_y = 0, odo_theta = 0;
   Eigen::Vector3d last_base(0, 0, 0);
   double last_theta = 0;
-  for (int f = 0; f < o.num_frames; ++f) {
-    const double a = start_angle + 2 * M_PI * o.orbit_fraction * f / o.num_frames;
+  const int num_turn = std::max(0, o.turn_in_place_frames);
+  for (int f = 0; f < num_turn + o.num_frames; ++f) {
+    const int orbit_frame = std::max(0, f - num_turn);
+    const double a = start_angle + 2 * M_PI * o.orbit_fraction * orbit_frame / o.num_frames;
     const double x = o.orbit_radius_mm * std::cos(a), y = o.orbit_radius_mm * std::sin(a);
-    const double theta = a + M_PI / 2;
+    const double turn_left = f < num_turn ? o.turn_in_place_rad * (1.0 - static_cast<double>(f) / num_turn) : 0.0;
+    const double theta = a + M_PI / 2 - turn_left;
     const double pan = M_PI / 2;
     const double tilt = std::atan2(s.robot.mast_height_mm - o.sphere_radius_mm, o.orbit_radius_mm);
     const Eigen::Isometry3d wc = WorldFromCamera(s.robot, x, y, theta, pan, tilt);
