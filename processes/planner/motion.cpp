@@ -144,7 +144,7 @@ bool SweepSafe(const OccupancyMap& map, const BasePose& base, const Velocity& v,
 Velocity SafeVelocity(const OccupancyMap& map, const BasePose& base, const Velocity& wanted, double horizon_s,
                       bool* limited) {
   *limited = false;
-  if (wanted.v_mm_s <= 0) return {0, wanted.omega_rad_s};
+  if (wanted.v_mm_s == 0) return {0, wanted.omega_rad_s};
   const bool start_safe = map.FootprintSafe(base.position());
   for (double scale : {1.0, 0.5, 0.25}) {
     const Velocity v{wanted.v_mm_s * scale, wanted.omega_rad_s};

@@ -1,7 +1,7 @@
 // Motion primitives of the planner, LCM-free: a path follower (pure pursuit), a circle follower (tangential driving
 // around a centre), the swept-footprint check, and the head's rate limits.
-// Units: mm, rad, s. Velocities: v_mm_s forward (>= 0: the camera looks ahead, the robot never backs up),
-// omega_rad_s counter-clockwise.
+// Units: mm, rad, s. Velocities: v_mm_s forward (negative: backing up, which only the planner's look-around shuttle
+// does, over floor it came from), omega_rad_s counter-clockwise.
 #pragma once
 
 #include <Eigen/Core>
@@ -53,7 +53,7 @@ bool LineOfSight(const OccupancyMap& map, const Eigen::Vector2d& a, const Eigen:
 // Integrates a unicycle for dt seconds.
 BasePose Integrate(const BasePose& base, const Velocity& velocity, double dt_s);
 
-// The swept-footprint check: the velocity if the round footprint stays FootprintSafe along the motion over
+// The swept-footprint check (forward or backing up): the velocity if the round footprint stays FootprintSafe along the motion over
 // horizon_s (checked every 20 mm / 0.05 s), else the same at half and quarter speed, else turning in place (always
 // safe for a round footprint). A robot already in an unsafe spot may move when the motion increases its distance to
 // obstacles and unknown cells. *limited tells whether the speed was cut.

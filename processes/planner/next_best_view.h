@@ -23,6 +23,7 @@ namespace objscan {
 // The joints' and the base's limits (the robot's, not preferences).
 struct RobotLimits {
   double max_speed_mm_s = 400;                 // mm/s
+  double max_reverse_mm_s = 100;               // mm/s, backing up (the look-around shuttle only)
   double max_omega_rad_s = M_PI / 2;           // rad/s
   double max_pan_rad = 170 * M_PI / 180;       // rad, |pan| limit
   double min_tilt_rad = 0;                     // rad (positive = down)

@@ -12,8 +12,9 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr int64_t kSecond = 1000000;  // µs
-constexpr double kNearSpinTiltRad = 50 * kDeg;  // head low: the floor from ~0.2 m to ~0.65 m around the robot
-constexpr double kFarSpinTiltRad = 18 * kDeg;
+constexpr double kLookAroundTiltRad = 25 * kDeg;  // the floor from ~0.45 m to beyond the view range
+constexpr double kShuttleLegMm = 400;             // mm, one leg of the look-around shuttle
+constexpr double kShuttleSpeed = 100;             // mm/s
 constexpr double kStartArcSpeed = 100;          // mm/s
 constexpr double kStartArcTurn = 8 * kDeg;      // rad/s: the start span needs rotation as well as translation
 constexpr double kFixationMm = 1800;            // mm ahead on the path: the floor point the head fixates
@@ -22,6 +23,8 @@ constexpr double kLookAheadMm = 1200;           // mm, where the head looks alon
 constexpr double kGoalToleranceMm = 60;         // mm, a view or orbit point counts as reached
 constexpr double kMaxDetourMm = 600;            // mm, largest local detour outward from the orbit circle
 constexpr int64_t kReplanUs = 3 * kSecond;      // µs between routine replans
+constexpr double kCameraTurnPerMm = 0.2 * kDeg;  // rad per mm of base travel (see Motion)
+constexpr double kStillCameraTurn = 2 * kDeg;    // rad/s the camera may turn without travel
 
 std::string Mm(const Eigen::Vector2d& p) {
   char buffer[64];
@@ -283,13 +286,13 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   const RobotLimits& l = options_.limits;
   const double turn = std::min(options_.tracking_turn_rad_s, l.max_omega_rad_s);
   Velocity v = motion.velocity;
-  v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, 0.0, l.max_speed_mm_s);
+  v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, -l.max_reverse_mm_s, l.max_speed_mm_s);
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
   bool limited = false;
-  const bool wants_to_move = v.v_mm_s > 1;
+  const bool wants_to_move = std::abs(v.v_mm_s) > 1;
   v = SafeVelocity(map_, base_, v, 0.5, &limited);
   if (limited) ++safety_stops_;
-  if (wants_to_move && v.v_mm_s <= 0) {
+  if (wants_to_move && v.v_mm_s == 0) {
     if (blocked_since_ < 0) blocked_since_ = now_;
   } else {
     blocked_since_ = -1;
@@ -303,8 +306,11 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
   // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
-  const double step = turn * dt, base_turn = v.omega_rad_s * dt;
-  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -step, step);
+  double camera_rate = turn;
+  if (motion.camera_turn_needs_translation)
+    camera_rate = std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s));
+  const double step = turn * dt, camera_step = camera_rate * dt, base_turn = v.omega_rad_s * dt;
+  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -camera_step, camera_step);
   pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
@@ -338,6 +344,7 @@ Planner::Motion Planner::FollowPathLookingAt(const Eigen::Vector3d& point, doubl
 Planner::Motion Planner::LookAhead(const Velocity& v) {
   Motion m;
   m.velocity = v;
+  m.camera_turn_needs_translation = true;
   const Eigen::Vector2d offset = fixation_ - base_.position();
   const double off_heading = std::abs(WrapAngle(std::atan2(offset.y(), offset.x()) - base_.theta_rad));
   if (!has_fixation_ || offset.norm() < kFixationRenewMm || off_heading > 60 * kDeg) {
@@ -369,8 +376,7 @@ Planner::Motion Planner::Explore() {
   }
   switch (explore_step_) {
     case ExploreStep::kStartArc: return StartArc();
-    case ExploreStep::kLookNear: return Spin(kNearSpinTiltRad);
-    case ExploreStep::kLookFar: return Spin(kFarSpinTiltRad);
+    case ExploreStep::kLookAround: return LookAround();
     case ExploreStep::kFrontier: return Frontier();
     case ExploreStep::kInvestigate: return Investigate();
   }
@@ -415,25 +421,51 @@ Planner::Motion Planner::StartArc() {
   return m;
 }
 
-Planner::Motion Planner::Spin(double tilt) {
-  activity_ = explore_step_ == ExploreStep::kLookNear ? "look around (near)" : "look around";
-  if (!spinning_) {
-    spinning_ = true;
-    spin_turned_ = 0;
-    last_theta_ = base_.theta_rad;
+// Looks around from where the robot stands without turning the camera faster than the base travels (a camera turned
+// in place onto unmapped floor loses the pose solver's track): the base shuttles straight back and forth, reversing
+// first over the floor it came from, in legs of kShuttleLegMm (a leg also ends when the swept-footprint check holds
+// it for a second), while the head sweeps the camera to one pan limit and then to the other at the rate the travel
+// allows. A base that can travel neither way (two legs in a row under 30 mm) sweeps with the head alone.
+Planner::Motion Planner::LookAround() {
+  activity_ = shuttle_stalled_ ? "look around (head only)" : "look around";
+  const RobotLimits& l = options_.limits;
+  if (!looking_around_) {
+    looking_around_ = true;
+    ++look_arounds_;
+    sweep_target_rad_ = pan_command_ >= 0 ? l.max_pan_rad : -l.max_pan_rad;
+    sweep_ends_reached_ = 0;
+    shuttle_direction_ = -1;
+    shuttle_leg_start_ = base_.position();
+    shuttle_leg_start_us_ = now_;
+    shuttle_short_legs_ = 0;
+    shuttle_stalled_ = false;
+    follower_.Clear();
   }
-  spin_turned_ += std::abs(WrapAngle(base_.theta_rad - last_theta_));
-  last_theta_ = base_.theta_rad;
-  if (spin_turned_ >= 2 * M_PI + 0.2) {
-    spinning_ = false;
-    explore_step_ = explore_step_ == ExploreStep::kLookNear ? ExploreStep::kLookFar : ExploreStep::kFrontier;
-    if (explore_step_ == ExploreStep::kFrontier) return Frontier();
+  if (std::abs(pan_command_ - sweep_target_rad_) < 2 * kDeg) {
+    sweep_target_rad_ = -sweep_target_rad_;
+    if (++sweep_ends_reached_ >= 2) {
+      looking_around_ = false;
+      explore_step_ = ExploreStep::kFrontier;
+      next_replan_ = now_;
+      return Frontier();
+    }
+  }
+  const double travelled = (base_.position() - shuttle_leg_start_).norm();
+  const bool held = blocked_since_ >= 0 && now_ - blocked_since_ > kSecond;
+  if (!shuttle_stalled_ && (travelled >= kShuttleLegMm || held)) {
+    shuttle_short_legs_ = travelled < 30 ? shuttle_short_legs_ + 1 : 0;
+    shuttle_stalled_ = shuttle_short_legs_ >= 2;
+    shuttle_direction_ = -shuttle_direction_;
+    shuttle_leg_start_ = base_.position();
+    shuttle_leg_start_us_ = now_;
+    blocked_since_ = -1;
   }
   Motion m;
-  m.velocity.omega_rad_s = 0.9 * options_.tracking_turn_rad_s;
+  if (!shuttle_stalled_) m.velocity.v_mm_s = shuttle_direction_ * std::min(kShuttleSpeed, l.max_reverse_mm_s);
+  m.camera_turn_needs_translation = !shuttle_stalled_;
   m.aim_at_point = false;
-  m.pan_rad = 0;
-  m.tilt_rad = tilt;
+  m.pan_rad = sweep_target_rad_;
+  m.tilt_rad = kLookAroundTiltRad;
   return m;
 }
 
@@ -476,6 +508,7 @@ Planner::Motion Planner::Frontier() {
   bool replan = follower_.empty() || now_ >= next_replan_ || !follower_.StillFree(map_, 1000);
   if (!follower_.empty() && (follower_.Reached(base_, 150) || now_ > goal_deadline_ || Stuck())) {
     blocked_since_ = -1;
+    if (follower_.Reached(base_, 150)) look_arounds_ = 0;
     visited_goals_.push_back(follower_.goal());
     follower_.Clear();
     replan = true;
@@ -485,13 +518,21 @@ Planner::Motion Planner::Frontier() {
     if (!ChooseFrontier()) {
       follower_.Clear();
       const double reachable_m2 = reachable_cells_ * options_.map.cell_mm * options_.map.cell_mm * 1e-6;
-      if (views_ == 0 || reachable_m2 < 1.0) {  // no map around the robot yet (no usable poses?): look around again
-        char text[96];
-        std::snprintf(text, sizeof(text), "nothing reachable to explore yet (%.2f m2 known): looking around again",
+      if (views_ == 0 || reachable_m2 < 1.0) {  // no map around the robot yet: look around (again)
+        char text[160];
+        if (look_arounds_ >= 3) {
+          std::snprintf(text, sizeof(text),
+                        "boxed in: %.2f m2 reachable after %d look-arounds, no target found; try a start with more "
+                        "free floor around the robot",
+                        reachable_m2, look_arounds_);
+          EnterPhase(Phase::kNoTarget, text);
+          return {};
+        }
+        std::snprintf(text, sizeof(text), "nothing reachable to explore yet (%.2f m2 known): looking around",
                       reachable_m2);
         Event(text);
-        explore_step_ = ExploreStep::kLookNear;
-        return Spin(kNearSpinTiltRad);
+        explore_step_ = ExploreStep::kLookAround;
+        return LookAround();
       }
       EnterPhase(Phase::kNoTarget, "room explored (no frontier left), no target found");
       return {};

@@ -171,6 +171,10 @@ class Planner {
     bool aim_at_point = true;
     Eigen::Vector3d aim_point = Eigen::Vector3d::Zero();  // world
     double pan_rad = 0, tilt_rad = 0;                      // when not aiming at a point
+    // The camera's yaw may turn only as fast as the base translates (kCameraTurnPerMm, plus kStillCameraTurn at a
+    // standstill): a camera that swings to unmapped floor while the base turns in place loses the pose solver's
+    // track (room_03: lost at the first U-turn, restarted on a pure rotation, map 1.3x off in scale).
+    bool camera_turn_needs_translation = false;
   };
 
   void EnterPhase(Phase phase, const std::string& why);
@@ -179,7 +183,7 @@ class Planner {
   // True when the swept-footprint check has held the robot still for > 2 s although the phase wants to move.
   bool Stuck() const;
   Motion Explore();
-  Motion Spin(double tilt_rad);
+  Motion LookAround();
   Motion StartArc();
   Motion Frontier();
   Motion Investigate();
@@ -244,10 +248,16 @@ class Planner {
   int64_t confirmed_seq_ = -1;
 
   // EXPLORE
-  enum class ExploreStep { kStartArc, kLookNear, kLookFar, kFrontier, kInvestigate } explore_step_ = ExploreStep::kStartArc;
-  bool spinning_ = false;
-  double spin_turned_ = 0;      // rad turned in the current look-around
-  double last_theta_ = 0;
+  enum class ExploreStep { kStartArc, kLookAround, kFrontier, kInvestigate } explore_step_ = ExploreStep::kStartArc;
+  bool looking_around_ = false;
+  int look_arounds_ = 0;             // look-arounds since the last frontier goal was reached
+  double sweep_target_rad_ = 0;      // pan the head sweeps to (+-max_pan)
+  int sweep_ends_reached_ = 0;
+  int shuttle_direction_ = -1;       // -1 reversing, +1 forward
+  Eigen::Vector2d shuttle_leg_start_ = Eigen::Vector2d::Zero();
+  int64_t shuttle_leg_start_us_ = 0;
+  int shuttle_short_legs_ = 0;       // consecutive legs that could not travel
+  bool shuttle_stalled_ = false;     // the base cannot move either way: the head sweeps alone
   int reachable_cells_ = 0;     // cells the last cost field reached
   int64_t goal_deadline_ = 0;
   int64_t next_replan_ = 0;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +37,11 @@ struct RunLog {
   int64_t first_seq[6] = {-1, -1, -1, -1, -1, -1};  // first frame of each phase
   PlanSummary summary;
   double true_disagreement_mm = 0;     // |odometry - true base| at the end
+  // Exploring (frontier paths and the look-around shuttle): the most the commanded camera yaw turned beyond what the
+  // base's travel allows it (2 deg/s + 0.2 deg per mm), deg/s; and the frames that looked around.
+  double explore_camera_turn_excess_deg_s = 0;
+  int64_t look_around_frames = 0;
+  bool backed_up = false;
 };
 
 PlannerOptions TestOptions() {
@@ -60,6 +66,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
   const Eigen::Vector3d target = world.TargetCentre();
   int64_t orbit_start = -1;
   int64_t last_looking_away = -1000;
+  double last_pan = 0;
   std::vector<MapLandmark> landmarks;
   VoxelCloud voxels;
   for (int64_t i = 0; i < max_frames; ++i) {
@@ -74,8 +81,19 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     if (log.first_seq[phase] < 0) log.first_seq[phase] = world.seq();
     for (const std::string& e : planner.TakeEvents())
       if (Verbose()) std::printf("[%7.2f s] %s\n", world.utime() * 1e-6, e.c_str());
+    if (!c.stop && planner.phase() == Phase::kExplore &&
+        (planner.activity() == "frontier" || planner.activity() == "look around")) {
+      const double dt = 1.0 / 30.0;
+      const double camera_turn = std::abs(c.omega_rad_s * dt + WrapAngle(c.pan_rad - last_pan));
+      const double allowed = (2 * kDeg + 0.2 * kDeg * std::abs(c.v_mm_s)) * dt;
+      log.explore_camera_turn_excess_deg_s =
+          std::max(log.explore_camera_turn_excess_deg_s, (camera_turn - allowed) / dt / kDeg);
+      if (planner.activity() == "look around") ++log.look_around_frames;
+      log.backed_up = log.backed_up || c.v_mm_s < -1;
+    }
+    if (!c.stop) last_pan = c.pan_rad;
     if (!c.stop) {
-      const bool ok = c.v_mm_s >= 0 && c.v_mm_s <= 400 && std::abs(c.omega_rad_s) <= 30 * kDeg + 1e-9 &&
+      const bool ok = c.v_mm_s >= -100 && c.v_mm_s <= 400 && std::abs(c.omega_rad_s) <= 30 * kDeg + 1e-9 &&
                       std::abs(c.pan_rad) <= 170 * kDeg + 1e-9 && c.tilt_rad >= -1e-9 &&
                       c.tilt_rad <= 60 * kDeg + 1e-9;
       if (!ok && log.commands_within_limits) {
@@ -101,7 +119,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
             std::max(log.orbit_max_off_axis_all_deg, AngleOffAxis(world.WorldFromCamera(), target) / kDeg);
       if (planner.activity() != "orbit") {
         if (planner.activity().find("paused") != std::string::npos) ++log.orbit_paused_frames;
-      } else if (world.seq() - orbit_start > 60) {
+      } else if (world.seq() - orbit_start > 60 && world.seq() - last_looking_away > 45) {
         ++log.orbit_frames_checked;
         log.orbit_max_radius_error_mm = std::max(log.orbit_max_radius_error_mm, std::abs(radius - 800));
         log.orbit_max_off_axis_deg =
@@ -167,6 +185,28 @@ TEST(PlannerClosedLoopTest, ExploresFindsOrbitsAddsViewsAndFinishes) {
   // equals the true odometry error within the pose estimate's error (head encoder bias 0.5 deg, 40 mm lever).
   EXPECT_GT(log.summary.max_disagreement.distance_mm, 100.0);
   EXPECT_GE(log.summary.max_disagreement.distance_mm, log.true_disagreement_mm - 2.0);
+}
+
+// Put down in a corner facing a wall (0.7 m ahead, 0.7 m to the right), the robot cannot reach anything it has seen:
+// it looks around by shuttling back and forth on the floor it came from while the head sweeps, never turning the
+// camera faster than it travels (a turn in place onto unmapped floor loses the pose solver's track), then explores
+// and finds the target as from an open start.
+TEST(PlannerClosedLoopTest, CornerStartLooksAroundWhileShuttlingAndFindsTheTarget) {
+  const PlannerOptions options = TestOptions();
+  toy::Room room = toy::MakeLivingRoom(true);
+  room.solids.erase(std::remove_if(room.solids.begin(), room.solids.end(),
+                                   [](const toy::Solid& s) { return s.name.rfind("wall", 0) == 0 || s.name == "crate"; }),
+                    room.solids.end());
+  toy::AddWalls(&room, {-5200, -700}, {700, 3200});
+  toy::ToyWorld world(room, options.robot);
+  const RunLog log = RunMission(world, options, 30 * 900);
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+  EXPECT_EQ(log.collisions, 0);
+  EXPECT_TRUE(log.commands_within_limits) << log.limit_violation;
+  EXPECT_GT(log.look_around_frames, 0);
+  EXPECT_TRUE(log.backed_up);
+  EXPECT_LE(log.explore_camera_turn_excess_deg_s, 0.01);
+  EXPECT_TRUE(log.summary.target_confirmed);
 }
 
 TEST(PlannerClosedLoopTest, NoUsablePoseForTheFirst30SecondsOnlyDelaysTheSearch) {
