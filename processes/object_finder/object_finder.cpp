@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
@@ -204,12 +205,89 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     if (c.rejection.empty() && CountNeighbours(floor_points, label, static_cast<int>(k), c.box) >
                                    std::max<double>(3, kNeighbourFraction * groups[k].size()))
       c.rejection = "not isolated";
+  }
+  std::vector<std::vector<int>> members = groups;
+  MergeFragments(floor_points, &label, &members, &clusters);
+  for (size_t k = 0; k < clusters.size(); ++k) {
+    Cluster& c = clusters[k];
     int fresh_members = 0;
-    for (int m : groups[k]) fresh_members += fresh[source[m]];
-    c.observed = fresh_members >= std::max<double>(3, kFreshFraction * groups[k].size());
+    for (int m : members[k]) fresh_members += fresh[source[m]];
+    c.observed = fresh_members >= std::max<double>(3, kFreshFraction * members[k].size());
     c.in_view = InView(c.box.centre_mm, input, std::numeric_limits<double>::infinity());
   }
   return clusters;
+}
+
+// A small object seen sparsely (the robot drove past it, looking ahead) falls apart at cluster_distance_mm into
+// pieces that reject each other as "not isolated" or are too small, too few or off the floor on their own
+// (room_01: a 268 mm sphere in pieces of 20, 13 and 3 landmarks, never a candidate). Pieces rejected for such
+// reasons are linked again at twice the distance; a group of pieces that passes the rule as a whole replaces them.
+// Pieces of walls and tables merge into something too large or too high and stay as they were.
+void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
+                                  std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const {
+  std::vector<int> fragment_points, fragment_of;  // indices into floor_points; the cluster each came from
+  for (size_t k = 0; k < clusters->size(); ++k) {
+    const std::string& why = (*clusters)[k].rejection;
+    if (why != "not isolated" && why != "too few points" && why != "too small" && why != "too low" &&
+        why != "not on the floor")
+      continue;
+    for (int m : (*members)[k]) {
+      fragment_points.push_back(m);
+      fragment_of.push_back(static_cast<int>(k));
+    }
+  }
+  if (fragment_points.empty()) return;
+  for (size_t m = 0; m < label->size(); ++m)  // stragglers: points in no cluster at all
+    if ((*label)[m] < 0) {
+      fragment_points.push_back(static_cast<int>(m));
+      fragment_of.push_back(-1);
+    }
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(fragment_points.size());
+  for (int m : fragment_points) points.push_back(floor_points[m]);
+  const std::vector<std::vector<int>> groups =
+      EuclideanClusters(points, 2 * options_.cluster_distance_mm, kMinClusterPoints);
+  std::vector<char> replaced(clusters->size(), 0);
+  for (const std::vector<int>& group : groups) {
+    std::set<int> pieces;
+    std::vector<int> merged;
+    for (int g : group) {
+      if (fragment_of[g] >= 0) pieces.insert(fragment_of[g]);
+      merged.push_back(fragment_points[g]);
+    }
+    if (pieces.size() < 2) continue;
+    std::sort(merged.begin(), merged.end());
+    Cluster c;
+    c.box = FitClusterBox(floor_points, merged, floor_);
+    c.rejection = CheckRule(c.box);
+    if (!c.rejection.empty()) continue;
+    const int new_label = static_cast<int>(clusters->size());
+    std::vector<int> saved;
+    for (int m : merged) {
+      saved.push_back((*label)[m]);
+      (*label)[m] = new_label;
+    }
+    if (CountNeighbours(floor_points, *label, new_label, c.box) >
+        std::max<double>(3, kNeighbourFraction * merged.size())) {
+      for (size_t i = 0; i < merged.size(); ++i) (*label)[merged[i]] = saved[i];
+      continue;
+    }
+    for (int piece : pieces) replaced[piece] = 1;
+    clusters->push_back(c);
+    members->push_back(merged);
+    replaced.push_back(0);
+  }
+  // Drop the replaced pieces (labels of the remaining clusters follow their new index).
+  std::vector<Cluster> kept_clusters;
+  std::vector<std::vector<int>> kept_members;
+  for (size_t k = 0; k < clusters->size(); ++k) {
+    if (replaced[k]) continue;
+    for (int m : (*members)[k]) (*label)[m] = static_cast<int>(kept_clusters.size());
+    kept_clusters.push_back((*clusters)[k]);
+    kept_members.push_back((*members)[k]);
+  }
+  *clusters = std::move(kept_clusters);
+  *members = std::move(kept_members);
 }
 
 std::string ObjectFinder::CheckRule(const ClusterBox& box) const {

@@ -18,7 +18,10 @@
 //     target_max_size_mm * (1 + size_tolerance)], lowest point <= floor_contact_mm above the floor, at least
 //     min_target_points members and min_texture_density members per 100 cm^2 of visible side area, and free space
 //     around it: at most max(3, 10 %) other clustered points within clearance_mm of its box (sparse walls and pillars
-//     break into target-sized pieces at cluster_distance_mm; their neighbours reject them).
+//     break into target-sized pieces at cluster_distance_mm; their neighbours reject them). Pieces rejected as not
+//     isolated, too few points, too small, too low or not on the floor are linked again at 2 * cluster_distance_mm
+//     (with the points of no cluster): a group of two or more pieces that passes the rule and is isolated replaces
+//     them (a sparsely seen target falls apart; walls' pieces merge into something too large and stay rejected).
 //  5. Tracks follow clusters over updates (greedy one-to-one by horizontal centre distance <= track_match_distance_mm).
 //     A cluster is "in view" when its centre projects into the image in front of the camera, "observed" when at
 //     least max(3, 10 %) of its members are fresh. A track records a view when its cluster passes the rule, is in
@@ -209,6 +212,8 @@ class ObjectFinder {
   void UpdateFloor(const FinderInput& input, const std::vector<int>& valid);
   std::vector<Cluster> FindClusters(const FinderInput& input, const std::vector<int>& valid,
                                     const std::vector<char>& fresh);
+  void MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
+                      std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const;
   std::string CheckRule(const ClusterBox& box) const;
   // Clustered points outside `members` within clearance_mm of the box (floor frame).
   int CountNeighbours(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& label, int cluster,

@@ -214,6 +214,29 @@ TEST(ObjectFinderTest, OneViewpointNeverConfirms) {
   }
 }
 
+// A target seen sparsely (landmarks ~70 mm apart: the robot drove past it looking ahead) falls apart at the 50 mm
+// linkage into pieces that reject each other; linked again at twice the distance, the pieces are one target. A wall
+// as sparse falls apart too, and its pieces merge into something too large, never a target.
+TEST(ObjectFinderTest, SparseTargetInPiecesIsStillFound) {
+  SyntheticRoom room;
+  room.AddFloor(3000, 2500, 2.0);
+  room.AddSphere("sphere", Eigen::Vector2d(0, 0), 260, 2.0);
+  room.AddWall("wall", Eigen::Vector2d(-1500, -1000), Eigen::Vector2d(-1500, 1000), 800, 2.0);
+  ObjectFinder finder;
+  for (int k = 0; k < 12; ++k)
+    ASSERT_TRUE(finder.Update(
+        room.Observe(room.OnCircle(Eigen::Vector2d(0, 0), 1300, k * 30 - 90, Eigen::Vector3d(0, 0, 130)), k)));
+  const FinderResult& r = finder.result();
+  ASSERT_EQ(r.state, TargetState::kConfirmed);
+  EXPECT_LT(Horizontal(r.box.centre_mm, Eigen::Vector3d(0, 0, 0)), 30.0);
+  EXPECT_NEAR(r.box.size_mm.z(), 260, 40);
+  EXPECT_TRUE(r.other_candidates.empty());
+  for (const auto& c : r.clusters)
+    if (std::abs(c.box.centre_mm.x() + 1500) < 100) {
+      EXPECT_FALSE(c.passes) << "wall piece at " << c.box.centre_mm.transpose();
+    }
+}
+
 TEST(ObjectFinderTest, PhantomsAndSingleViewClustersNeverConfirmed) {
   SyntheticRoom room;
   room.AddFloor(3000, 2500, 2.0);
