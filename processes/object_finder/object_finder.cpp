@@ -315,7 +315,8 @@ int ObjectFinder::CountNeighbours(const std::vector<Eigen::Vector3d>& floor_poin
   for (size_t i = 0; i < floor_points.size(); ++i) {
     if (label[i] == cluster) continue;
     const Eigen::Vector2d d = floor_points[i].head<2>() - centre.head<2>();
-    count += std::abs(d.dot(a)) <= half_a && std::abs(d.dot(b)) <= half_b && floor_points[i].z() <= top;
+    count += std::abs(d.dot(a)) <= half_a && std::abs(d.dot(b)) <= half_b && floor_points[i].z() <= top &&
+             floor_points[i].z() > options_.floor_contact_mm;
   }
   return count;
 }

@@ -17,7 +17,8 @@
 //  4. Target rule: largest horizontal extent and height within [target_min_size_mm * (1 - size_tolerance),
 //     target_max_size_mm * (1 + size_tolerance)], lowest point <= floor_contact_mm above the floor, at least
 //     min_target_points members and min_texture_density members per 100 cm^2 of visible side area, and free space
-//     around it: at most max(3, 10 %) other clustered points within clearance_mm of its box (sparse walls and pillars
+//     around it: at most max(3, 10 %) other points higher than floor_contact_mm within clearance_mm of its box (the
+//     noisy landmarks where an object meets the floor are no neighbours; sparse walls and pillars
 //     break into target-sized pieces at cluster_distance_mm; their neighbours reject them). Pieces rejected as not
 //     isolated, too few points, too small, too low or not on the floor are linked again at 2 * cluster_distance_mm
 //     (with the points of no cluster): a group of two or more pieces that passes the rule and is isolated replaces

@@ -121,6 +121,19 @@ class SyntheticRoom {
       }
     return id;
   }
+  // Low clutter on the floor in a ring around a point (the noisy landmarks where an object meets the floor, crumbs),
+  // heights uniform in [min_z, max_z], seen from anywhere.
+  int AddClutter(const Eigen::Vector2d& centre, double min_radius_mm, double max_radius_mm, int count, double min_z,
+                 double max_z) {
+    const int id = NewObject("clutter");
+    std::uniform_real_distribution<double> r(min_radius_mm, max_radius_mm), a(0, 2 * M_PI), z(min_z, max_z);
+    for (int i = 0; i < count; ++i) {
+      const double rr = r(rng_), aa = a(rng_);
+      Add(Eigen::Vector3d(centre.x() + rr * std::cos(aa), centre.y() + rr * std::sin(aa), z(rng_)),
+          Eigen::Vector3d::Zero(), id);
+    }
+    return id;
+  }
   // Isolated points (each at least min_separation_mm from every other landmark above the floor), seen from anywhere.
   int AddPhantoms(int count, double half_extent_mm, double min_z, double max_z, double min_separation_mm = 250) {
     const int id = NewObject("phantoms");
