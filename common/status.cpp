@@ -44,14 +44,31 @@ SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
     return SeqResult::kFirst;
   }
   SeqStream& st = it->second;
+  // Differences as unsigned 64-bit values (no signed overflow for extreme seqs).
+  const uint64_t ahead = seq > st.last ? static_cast<uint64_t>(seq) - static_cast<uint64_t>(st.last) : 0;
+  const uint64_t behind = seq <= st.last ? static_cast<uint64_t>(st.last) - static_cast<uint64_t>(seq) : 0;
+  if (ahead > static_cast<uint64_t>(kMaxSeqJump) || behind > static_cast<uint64_t>(kSeqReorderWindow)) {
+    st.jump_run = st.jump_run > 0 && st.jump_last != std::numeric_limits<int64_t>::max() && seq == st.jump_last + 1
+                      ? st.jump_run + 1
+                      : 1;
+    st.jump_last = seq;
+    if (st.jump_run < kNewRunInputs) return SeqResult::kImplausibleJump;
+    LogWarning(stream + ": sequence numbers jumped from " + std::to_string(st.last) + " to " +
+               std::to_string(seq - kNewRunInputs + 1) + " and went on for " + std::to_string(kNewRunInputs) +
+               " inputs: a new run (the source restarted?)");
+    st.last = seq;
+    st.jump_run = 0;
+    st.rejected_ahead.clear();
+    return SeqResult::kNewRun;
+  }
+  st.jump_run = 0;
   if (seq <= st.last) return SeqResult::kRepeatedOrOld;
-  // seq > last: the difference fits an unsigned 64-bit value (no signed overflow for extreme seqs). Rejected inputs
-  // in between were received, not dropped.
-  uint64_t missing = static_cast<uint64_t>(seq) - static_cast<uint64_t>(st.last) - 1;
-  auto& ahead = st.rejected_ahead;  // sorted, distinct, all > last: those < seq lie in the gap
-  const auto in_gap = std::lower_bound(ahead.begin(), ahead.end(), seq);
-  missing -= static_cast<uint64_t>(in_gap - ahead.begin());
-  ahead.erase(ahead.begin(), std::upper_bound(in_gap, ahead.end(), seq));
+  // Rejected inputs in between were received, not dropped.
+  uint64_t missing = ahead - 1;
+  auto& noted = st.rejected_ahead;  // sorted, distinct, all > last: those < seq lie in the gap
+  const auto in_gap = std::lower_bound(noted.begin(), noted.end(), seq);
+  missing -= static_cast<uint64_t>(in_gap - noted.begin());
+  noted.erase(noted.begin(), std::upper_bound(in_gap, noted.end(), seq));
   st.last = seq;
   if (missing > 0) {
     const uint64_t room = static_cast<uint64_t>(std::numeric_limits<int64_t>::max() - dropped_inputs_);
@@ -59,6 +76,19 @@ SeqResult StatusReporter::ObserveSeq(const std::string& stream, int64_t seq) {
     return SeqResult::kGap;
   }
   return SeqResult::kNext;
+}
+
+bool StatusReporter::AcceptSeq(const std::string& stream, int64_t seq, const std::string& what) {
+  const SeqResult r = ObserveSeq(stream, seq);
+  if (r == SeqResult::kRepeatedOrOld) {
+    Reject(what + ": out of order or repeated", "seq " + std::to_string(seq));
+    return false;
+  }
+  if (r == SeqResult::kImplausibleJump) {
+    Reject(what + ": implausible seq jump", "seq " + std::to_string(seq));
+    return false;
+  }
+  return true;
 }
 
 void StatusReporter::Reject(const std::string& reason, const std::string& detail, const std::string& stream,

@@ -16,8 +16,16 @@ namespace objscan {
 class Bus;
 struct RawMessage;
 
-// What a sequence number says about the stream it came from.
-enum class SeqResult { kFirst, kNext, kGap, kRepeatedOrOld };
+// What a sequence number says about the stream it came from:
+//   kFirst, kNext, kGap (seqs missing before it: counted as dropped), kRepeatedOrOld (at most kSeqReorderWindow
+//   behind the last one: a duplicate or late input), kImplausibleJump (more than kMaxSeqJump ahead or more than
+//   kSeqReorderWindow behind: one forged or corrupted seq; the stream keeps its reference, the input should be
+//   rejected), kNewRun (the kNewRunInputs-th consecutive input after such a jump: a restarted or replaced source;
+//   the stream continues from it, nothing counted as dropped).
+enum class SeqResult { kFirst, kNext, kGap, kRepeatedOrOld, kImplausibleJump, kNewRun };
+inline constexpr int64_t kMaxSeqJump = 100000;     // inputs (~55 min at 30 Hz)
+inline constexpr int64_t kSeqReorderWindow = 300;  // inputs (10 s at 30 Hz)
+inline constexpr int kNewRunInputs = 3;
 
 class StatusReporter {
  public:
@@ -31,10 +39,13 @@ class StatusReporter {
   // The on_malformed handler of Bus::SubscribeMessage for input `what`: rejects as "<what>: malformed" with the
   // size and channel as detail. The reporter must outlive the subscription.
   std::function<void(const RawMessage&)> MalformedHandler(const std::string& what);
-  // Tracks the sequence numbers of one input stream's usable inputs; a gap adds the seqs neither seen nor noted as
-  // rejected (NoteRejectedSeq) to dropped_inputs (saturating at INT64_MAX). Call it once an input is otherwise
-  // usable: a rejected one (perhaps with a wild seq) must not move the stream on.
+  // Tracks the sequence numbers of one input stream's usable inputs (SeqResult above); a gap adds the seqs neither
+  // seen nor noted as rejected (NoteRejectedSeq) to dropped_inputs (saturating at INT64_MAX). Call it once an input
+  // is otherwise usable: a rejected one (perhaps with a wild seq) must not move the stream on. A new run is logged.
   SeqResult ObserveSeq(const std::string& stream, int64_t seq);
+  // ObserveSeq for an otherwise usable input of `what` ("image"): false after rejecting it as "<what>: out of order
+  // or repeated" or "<what>: implausible seq jump".
+  bool AcceptSeq(const std::string& stream, int64_t seq, const std::string& what);
   // An input of the stream that was received but rejected: its seq is not counted as dropped by the next gap, and it
   // does not move the stream on. At most 64 such seqs ahead of the stream are remembered (the nearest).
   void NoteRejectedSeq(const std::string& stream, int64_t seq);
@@ -75,6 +86,8 @@ class StatusReporter {
   std::map<std::string, int64_t> rejections_;
   struct SeqStream {
     int64_t last = 0;                     // seq of the last usable input
+    int64_t jump_last = 0;                // seq of the last input after an implausible jump
+    int jump_run = 0;                     // consecutive inputs since that jump
     std::vector<int64_t> rejected_ahead;  // sorted seqs > last received but rejected (NoteRejectedSeq)
   };
   std::map<std::string, SeqStream> streams_;

@@ -28,14 +28,33 @@ TEST(StatusTest, RejectedSeqsAreNeitherDroppedNorMoveTheStreamOn) {
   EXPECT_EQ(status.dropped_inputs(), 2 + (299 - 6) - 64);
 }
 
-TEST(StatusTest, ExtremeSequenceJumpsSaturateTheDroppedCount) {
+// One forged or corrupted seq (INT64_MAX, a wild negative one) neither becomes the stream's reference (which would
+// reject every later real input as old) nor counts billions of drops; a source that really jumped (restarted,
+// replaced) is followed after kNewRunInputs consecutive inputs.
+TEST(StatusTest, ForgedSequenceNumbersDoNotPoisonTheStream) {
   StatusReporter status(nullptr, "unit");
-  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::min()), SeqResult::kFirst);
-  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::max()), SeqResult::kGap);  // no overflow
-  EXPECT_EQ(status.dropped_inputs(), std::numeric_limits<int64_t>::max());
+  EXPECT_EQ(status.ObserveSeq("img", 10), SeqResult::kFirst);
+  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::max()), SeqResult::kImplausibleJump);
+  EXPECT_EQ(status.ObserveSeq("img", std::numeric_limits<int64_t>::min()), SeqResult::kImplausibleJump);
+  EXPECT_EQ(status.ObserveSeq("img", 11), SeqResult::kNext);
+  EXPECT_EQ(status.ObserveSeq("img", 13), SeqResult::kGap);
+  EXPECT_EQ(status.dropped_inputs(), 1);
+  EXPECT_EQ(status.ObserveSeq("img", 13 - kSeqReorderWindow), SeqResult::kRepeatedOrOld);  // late, not forged
+  // A restarted source: 0, 1, 2 -> followed from the third on, nothing dropped.
+  EXPECT_EQ(status.ObserveSeq("img", -kSeqReorderWindow - 100), SeqResult::kImplausibleJump);
+  EXPECT_EQ(status.ObserveSeq("img", 14), SeqResult::kNext);  // the stream itself still goes on
+  EXPECT_EQ(status.ObserveSeq("img", 100000000), SeqResult::kImplausibleJump);
+  EXPECT_EQ(status.ObserveSeq("img", 100000001), SeqResult::kImplausibleJump);
+  EXPECT_EQ(status.ObserveSeq("img", 100000002), SeqResult::kNewRun);
+  EXPECT_EQ(status.ObserveSeq("img", 100000003), SeqResult::kNext);
+  EXPECT_EQ(status.ObserveSeq("img", 14), SeqResult::kImplausibleJump);  // the old run's seqs are now far behind
+  EXPECT_EQ(status.dropped_inputs(), 1);
+  // INT64_MAX three times in a row is no run (no successor).
   EXPECT_EQ(status.ObserveSeq("odo", -1), SeqResult::kFirst);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(status.ObserveSeq("odo", std::numeric_limits<int64_t>::max()), SeqResult::kImplausibleJump);
   EXPECT_EQ(status.ObserveSeq("odo", 1), SeqResult::kGap);
-  EXPECT_EQ(status.dropped_inputs(), std::numeric_limits<int64_t>::max());  // saturated, not wrapped
+  EXPECT_EQ(status.dropped_inputs(), 2);
 }
 
 TEST(StatusTest, CountsGapsRejectionsAndPublishesFullState) {

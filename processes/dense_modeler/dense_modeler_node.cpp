@@ -368,10 +368,7 @@ void DenseModelerNode::OnImage(const image_t& msg) {
     return;
   }
   // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).
-  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
-    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
-    return;
-  }
+  if (!status_.AcceptSeq("image", msg.seq, "image")) return;
   FrameSlot* slot = Slot(msg.seq);
   if (!slot) {
     status_.Reject("image: older than the ring buffer", "seq " + std::to_string(msg.seq));

@@ -29,8 +29,8 @@
 // tetrahedra mesh, files written to
 // output_dir (when set). COMMAND_SNAPSHOT writes the vote grid (after the final phase: the re-voted one) to
 // control_t.argument (or output_dir/votes_snapshot.bin); OnShutdown saves output_dir/votes_snapshot.bin when output_dir
-// is set. Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated" (only
-// usable images move the stream's sequence on), adapter reasons for images/camera info/tracks/poses, "image: no
+// is set. Rejections (counted, the node keeps running): "image: malformed", "image: out of order or repeated", "image:
+// implausible seq jump" (common/status.h; only usable images move the stream's sequence on), adapter reasons for images/camera info/tracks/poses, "image: no
 // camera_info yet", "image: wrong size" (differs from camera_info), "image: older than the ring buffer", "tracks:
 // malformed", "tracks: older than the ring buffer" (the buffer is full of newer frames), "pose: malformed",
 // "pose: unknown frame" (no image for that seq in the buffer), "pose: not tracking" (initializing or lost), the same

@@ -238,10 +238,7 @@ void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
     status_.Reject("tracks: out of order or repeated", "seq " + std::to_string(msg.seq));
     return;
   }
-  if (status_.ObserveSeq("tracks", msg.seq) == SeqResult::kRepeatedOrOld) {
-    status_.Reject("tracks: out of order or repeated", "seq " + std::to_string(msg.seq));
-    return;
-  }
+  if (!status_.AcceptSeq("tracks", msg.seq, "tracks")) return;
   if (!have_camera_) {
     if (static_cast<int>(pending_.size()) >= options_.pending_tracks_capacity) {
       status_.Reject("tracks: no camera_info (buffer full)", "seq " + std::to_string(msg.seq));

@@ -18,7 +18,7 @@
 // source is NONE unless the floor/camera height fixes it in 4-DOF mode).
 // Rejections (counted in PROCESS_STATUS, never fatal, never reach the map):
 //   "tracks: malformed", "tracks: array length mismatch", "tracks: non-finite coordinate", "tracks: duplicate id",
-//   "tracks: out of order or repeated", "tracks: coordinate outside the image", "tracks: image size differs from
+//   "tracks: out of order or repeated", "tracks: implausible seq jump" (common/status.h), "tracks: coordinate outside the image", "tracks: image size differs from
 //   camera_info", "tracks: no camera_info (buffer full)", "tracks: no camera_info at end of stream",
 //   "tracks: after end of stream", "tracks: estimator error", "camera_info: malformed" + CameraFromMessage reasons,
 //   "camera_info: changed" (a different calibration after the first: ignored), "odometry: malformed",

@@ -177,10 +177,7 @@ void TrackerNode::OnImage(const image_t& msg) {
     return;
   }
   // Only a usable image moves the stream's sequence on (a rejected one with a wild seq must not block the rest).
-  if (status_.ObserveSeq("image", msg.seq) == SeqResult::kRepeatedOrOld) {
-    status_.Reject("image: out of order or repeated", "seq " + std::to_string(msg.seq));
-    return;
-  }
+  if (!status_.AcceptSeq("image", msg.seq, "image")) return;
   status_.CountIn();
   status_.SetLastDataUtime(msg.utime);
   if (expected_width_ == 0) {

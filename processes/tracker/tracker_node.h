@@ -3,6 +3,8 @@
 // from the image). Bad input is rejected and counted in PROCESS_STATUS (the node never stops on it):
 //   "image: malformed"                 message on the image channel that does not decode as image_t
 //   "image: out of order or repeated"  seq <= the last seq seen (seq gaps count as dropped inputs instead)
+//   "image: implausible seq jump"      seq far from the stream's (common/status.h SeqResult): one forged seq never
+//                                      blocks the stream; three consecutive ones are a new run and followed
 //   "image: wrong size"                size differs from CAMERA_INFO (when received) or from the first good frame
 //   "image: unknown encoding" / "image: truncated data" / "image: bad stride" / "image: bad size" /
 //   "image: undecodable jpeg" / "image: jpeg size mismatch"   (from common/adapters.h ImageFromMessage)

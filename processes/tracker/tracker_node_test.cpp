@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -233,24 +235,30 @@ TEST_F(TrackerNodeTest, RejectsEachKindOfBadImageAndKeepsTracking) {
   ExpectTracked(15);  // 12, 13, 14 missing
   EXPECT_EQ(st.dropped_inputs(), 4);
 
-  EXPECT_EQ(st.rejected_total(), 7);
-  // Every input counted: 8 good frames tracked + 7 rejected.
-  EXPECT_EQ(st.messages_in(), 8 + 7);
-  EXPECT_EQ(st.messages_out(), 8);
+  Publish(Frame(std::numeric_limits<int64_t>::max()));  // one forged seq must not block the stream
+  Drain();
+  EXPECT_EQ(st.rejected("image: implausible seq jump"), 1);
+  EXPECT_EQ(st.dropped_inputs(), 4);
+  ExpectTracked(16);
+
+  EXPECT_EQ(st.rejected_total(), 8);
+  // Every input counted: 9 good frames tracked + 8 rejected.
+  EXPECT_EQ(st.messages_in(), 9 + 8);
+  EXPECT_EQ(st.messages_out(), 9);
   EXPECT_FALSE(node_->Finished());
 
-  EndOfStream(15);
+  EndOfStream(16);
   Drain();
   ASSERT_EQ(finished_.size(), 1u);
-  EXPECT_EQ(finished_[0].last_seq, 15);
+  EXPECT_EQ(finished_[0].last_seq, 16);
 
   node_->OnShutdown();  // forces a status publication
   Drain();
   ASSERT_FALSE(statuses_.empty());
   const process_status_t& s = statuses_.back();
-  EXPECT_EQ(s.messages_rejected, 7);
+  EXPECT_EQ(s.messages_rejected, 8);
   EXPECT_EQ(s.dropped_inputs, 4);
-  EXPECT_EQ(s.num_rejection_reasons, 6);
+  EXPECT_EQ(s.num_rejection_reasons, 7);
 }
 
 TEST_F(TrackerNodeTest, ImageSizeComesFromCameraInfo) {
