@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "common/message_size_check.h"
+
 namespace objscan {
 
 // Default live URL: multicast on this host only (ttl=0) with a receive buffer large enough for 640x480 frames
@@ -22,6 +24,7 @@ struct RawMessage {
   const void* data;
   int size;
   int64_t recv_utime;  // µs, when the bus received it (NOT the data time: use the message's own utime)
+  std::string why = "";  // for on_malformed (SubscribeMessage): why it did not decode
 };
 
 using RawHandler = std::function<void(const RawMessage&)>;
@@ -63,8 +66,10 @@ class Bus {
     return Publish(channel, buffer.data(), size);
   }
 
-  // Subscribes with decoding. on_message gets the decoded message; on_malformed (may be empty) gets messages
-  // that do not decode as Msg (wrong type, truncated), so the caller can count and report them.
+  // Subscribes with decoding (DecodeMessage, common/message_size_check.h: declared array sizes are checked against
+  // the bytes before anything is allocated). on_message gets the decoded message; on_malformed (may be empty) gets
+  // messages that do not decode as Msg (wrong type, truncated, forged sizes) with RawMessage::why set, so the caller
+  // can count and report them.
   template <class Msg>
   void SubscribeMessage(const std::string& channel, std::function<void(const Msg&, const RawMessage&)> on_message,
                         std::function<void(const RawMessage&)> on_malformed = {}, int queue_capacity = 0) {
@@ -72,16 +77,9 @@ class Bus {
         channel,
         [on_message, on_malformed](const RawMessage& raw) {
           Msg msg;
-          bool decoded = false;
-          try {
-            // LCM's generated decoders size arrays from the count fields before checking them against the
-            // message size: a corrupted count can throw (bad_alloc, length_error). That is malformed input.
-            decoded = msg.decode(raw.data, 0, raw.size) == raw.size;
-          } catch (const std::exception&) {
-            decoded = false;
-          }
-          if (!decoded) {
-            if (on_malformed) on_malformed(raw);
+          std::string why;
+          if (!DecodeMessage(raw.data, raw.size, &msg, &why)) {
+            if (on_malformed) on_malformed(RawMessage{raw.channel, raw.data, raw.size, raw.recv_utime, why});
             return;
           }
           on_message(msg, raw);

@@ -3,7 +3,10 @@
 #include <cstdint>
 
 #include "objscan/camera_info_t.hpp"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
 #include "objscan/landmarks_t.hpp"
+#include "objscan/process_status_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 
 namespace objscan {
@@ -52,6 +55,23 @@ bool Fail(std::string* why, const std::string& text) {
   return false;
 }
 
+// A count field that is >= 0 (for the strings and arrays that follow).
+bool Count(WireReader& r, const char* what, int32_t* count, std::string* why) {
+  if (!r.Int32(count)) return Fail(why, "truncated");
+  if (*count < 0) return Fail(why, "negative " + std::string(what) + " count " + std::to_string(*count));
+  return true;
+}
+
+// count strings (each at least its 4-byte length: a count beyond remaining / 4 cannot fit), then count * item bytes.
+bool Strings(WireReader& r, int32_t count, int64_t bytes_per_item, const char* what, int size, std::string* why) {
+  if (count > r.remaining() / 4)
+    return Fail(why, "declared " + std::to_string(count) + " " + what + " in " + std::to_string(size) + " bytes");
+  for (int32_t i = 0; i < count; ++i)
+    if (!r.String()) return Fail(why, "truncated");
+  if (!r.Skip(bytes_per_item * count)) return Fail(why, "truncated");
+  return true;
+}
+
 // The count field, then exactly bytes_per_item * count bytes.
 bool CheckArray(WireReader& r, int64_t bytes_per_item, const char* what, int size, std::string* why) {
   int32_t count = 0;
@@ -90,6 +110,44 @@ bool CheckVoxelMapMessageSize(const void* data, int size, std::string* why) {
   // utime, seq, frame, voxel_size_mm, origin_mm[3], vote_threshold, is_final, truncated
   if (!r.Skip(8 + 8) || !r.String() || !r.Skip(8 + 24 + 4 + 1 + 1)) return Fail(why, "truncated");
   return CheckArray(r, 12 + 4 + 3, "voxels", size, why);
+}
+
+bool CheckFeatureTracksMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != feature_tracks_t::getHash()) return Fail(why, "wrong type");
+  if (!r.Skip(8 + 8) || !r.String() || !r.Skip(4 + 4)) return Fail(why, "truncated");
+  return CheckArray(r, 8 + 4 + 4 + 4, "tracks", size, why);
+}
+
+bool CheckImageMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != image_t::getHash()) return Fail(why, "wrong type");
+  // utime, seq, camera_name, width, height, stride, encoding
+  if (!r.Skip(8 + 8) || !r.String() || !r.Skip(4 + 4 + 4 + 1)) return Fail(why, "truncated");
+  return CheckArray(r, 1, "data bytes", size, why);
+}
+
+bool CheckProcessStatusMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != process_status_t::getHash()) return Fail(why, "wrong type");
+  // utime, seq, name, host, pid, state, state_detail, last_data_utime, messages_in, messages_out, messages_rejected
+  if (!r.Skip(8 + 8) || !r.String() || !r.String() || !r.Skip(4 + 1) || !r.String() || !r.Skip(4 * 8))
+    return Fail(why, "truncated");
+  int32_t reasons = 0, values = 0;
+  if (!Count(r, "rejection reason", &reasons, why) ||
+      !Strings(r, reasons, 8, "rejection reasons", size, why))
+    return false;
+  // dropped_inputs, latency_p50_ms, latency_p99_ms
+  if (!r.Skip(3 * 8)) return Fail(why, "truncated");
+  if (!Count(r, "value", &values, why) || !Strings(r, values, 8, "values", size, why)) return false;
+  if (r.remaining() != 0) return Fail(why, std::to_string(r.remaining()) + " bytes after the message");
+  return true;
 }
 
 }  // namespace objscan

@@ -1,19 +1,24 @@
-// Checks of a received message's declared array sizes against its byte count, before decoding: LCM's generated C++
-// decoders resize each array from its count field before checking it against the buffer, so a corrupted count
-// allocates and zero-fills up to gigabytes before the decode fails. These walk the raw bytes (LCM encoding: 8-byte
-// type hash, big-endian fields, strings as int32 length incl. the NUL, then the bytes) without allocating.
-// They return false with *why ("wrong type", "truncated", "declared 1000000 landmarks in 120 bytes") and never throw.
-// SubscribeChecked subscribes with such a check in front of the decode (rejections counted as "<what>: malformed").
-// The checks cover the types the object finder and the planner take (issue 28 extends them to every input).
+// One guarded decode for every bus message, in every process and tool. LCM's generated C++ decoders resize each
+// array from its count field before checking it against the buffer, so a corrupted or forged count allocates and
+// zero-fills up to gigabytes before the decode fails (and a string length of 0 or less throws). The checks here walk
+// the raw bytes of the types with variable-length arrays (LCM encoding: 8-byte type hash, big-endian fields, strings
+// as int32 length incl. the NUL, then the bytes) without allocating; DecodeMessage runs the type's check, then the
+// decode inside a try, and wants the whole message consumed.
+// They return false with *why ("wrong type", "truncated", "declared 1000000 landmarks in 120 bytes",
+// "does not decode as pose_t (60 bytes)") and never throw. No bus dependency (common/bus.h uses this).
 #pragma once
 
 #include <exception>
 #include <string>
 
-#include "common/bus.h"
-#include "common/status.h"
-
 namespace objscan {
+
+class camera_info_t;
+class feature_tracks_t;
+class image_t;
+class landmarks_t;
+class process_status_t;
+class voxel_map_t;
 
 // landmarks_t: hash, utime, seq, frame, num_landmarks n >= 0, then exactly 31 * n bytes (id 8, position 12,
 // num_observations 4, reprojection_error_px 4, rgb 3 per landmark).
@@ -27,33 +32,59 @@ bool CheckCameraInfoMessageSize(const void* data, int size, std::string* why);
 // num_voxels n >= 0, then exactly 19 * n bytes (ijk 12, votes 4, rgb 3 per voxel).
 bool CheckVoxelMapMessageSize(const void* data, int size, std::string* why);
 
-// Subscribes handler(const Msg&) to channel; a message that fails check or does not decode to its whole size is
-// rejected on status as "<what>: malformed" (with the reason and channel) and never reaches the handler. status
-// must outlive the subscription. queue_capacity as in Bus::Subscribe (0 = the bus default).
-template <class Msg, class Handler>
-void SubscribeChecked(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& what,
-                      bool (*check)(const void*, int, std::string*), Handler handler, int queue_capacity = 0) {
-  bus.Subscribe(
-      channel,
-      [&status, what, check, handler](const RawMessage& raw) {
-        std::string why;
-        bool ok = check(raw.data, raw.size, &why);
-        Msg msg;
-        if (ok) {
-          try {
-            ok = msg.decode(raw.data, 0, raw.size) == raw.size;
-          } catch (const std::exception&) {
-            ok = false;
-          }
-          if (!ok) why = "does not decode (" + std::to_string(raw.size) + " bytes)";
-        }
-        if (!ok) {
-          status.Reject(what + ": malformed", why + " on " + raw.channel);
-          return;
-        }
-        handler(msg);
-      },
-      queue_capacity);
+// feature_tracks_t: hash, utime, seq, camera_name, image_width, image_height, num_tracks n >= 0, then exactly 20 * n
+// bytes (track_id 8, u 4, v 4, age 4 per track).
+bool CheckFeatureTracksMessageSize(const void* data, int size, std::string* why);
+
+// image_t: hash, utime, seq, camera_name, width, height, stride, encoding, size n >= 0, then exactly n bytes.
+bool CheckImageMessageSize(const void* data, int size, std::string* why);
+
+// process_status_t: the header fields, num_rejection_reasons n >= 0 with n strings and 8 * n bytes, four fixed
+// fields, num_values m >= 0 with m strings and 8 * m bytes, and nothing after.
+bool CheckProcessStatusMessageSize(const void* data, int size, std::string* why);
+
+// The check of a type: the ones above, none (true) for types without variable-length arrays.
+template <class Msg>
+bool CheckMessageSize(const Msg*, const void*, int, std::string*) {
+  return true;
+}
+inline bool CheckMessageSize(const landmarks_t*, const void* d, int n, std::string* w) {
+  return CheckLandmarksMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const camera_info_t*, const void* d, int n, std::string* w) {
+  return CheckCameraInfoMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const voxel_map_t*, const void* d, int n, std::string* w) {
+  return CheckVoxelMapMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const feature_tracks_t*, const void* d, int n, std::string* w) {
+  return CheckFeatureTracksMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const image_t*, const void* d, int n, std::string* w) {
+  return CheckImageMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const process_status_t*, const void* d, int n, std::string* w) {
+  return CheckProcessStatusMessageSize(d, n, w);
+}
+
+// Decodes a whole message of type Msg after its size check; false with *why (may be null) otherwise.
+template <class Msg>
+bool DecodeMessage(const void* data, int size, Msg* msg, std::string* why) {
+  std::string local;
+  std::string* reason = why ? why : &local;
+  if (data == nullptr || size <= 0) {
+    *reason = "empty";
+    return false;
+  }
+  if (!CheckMessageSize(static_cast<const Msg*>(nullptr), data, size, reason)) return false;
+  bool ok = false;
+  try {
+    ok = msg->decode(data, 0, size) == size;
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok) *reason = "does not decode as " + std::string(Msg::getTypeName()) + " (" + std::to_string(size) + " bytes)";
+  return ok;
 }
 
 }  // namespace objscan

@@ -2,9 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <vector>
 
+#include "common/bus.h"
+#include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
 #include "objscan/landmarks_t.hpp"
+#include "objscan/pose_t.hpp"
+#include "objscan/process_status_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 
 namespace objscan {
@@ -60,6 +66,89 @@ TEST(MessageSizeCheck, LandmarksCountMustMatchTheBytes) {
   EXPECT_TRUE(CheckLandmarksMessageSize(b.data(), static_cast<int>(b.size()), &why)) << why;
   b.pop_back();
   EXPECT_FALSE(CheckLandmarksMessageSize(b.data(), static_cast<int>(b.size()), &why));
+}
+
+// Issue 28's messages: a 60-byte FEATURE_TRACKS with num_tracks = -1 (crashed the session supervisor), 2^25 declared
+// tracks and a 63-byte image declaring 2^31-1 bytes (made every subscriber allocate first). DecodeMessage refuses
+// them from the bytes, without allocating or throwing.
+TEST(MessageSizeCheck, DecodeMessageRefusesForgedSizesWithoutAllocating) {
+  feature_tracks_t t{};
+  t.camera_name = "sim";
+  t.num_tracks = 2;
+  t.track_id = {1, 2};
+  t.u = {1, 2};
+  t.v = {1, 2};
+  t.age = {0, 0};
+  std::vector<uint8_t> b = Encode(t);
+  feature_tracks_t out;
+  std::string why;
+  EXPECT_TRUE(DecodeMessage(b.data(), static_cast<int>(b.size()), &out, &why)) << why;
+  EXPECT_EQ(out.num_tracks, 2);
+  const size_t count_at = b.size() - 2 * 20 - 4;
+  for (int32_t forged : {-1, 1 << 25, std::numeric_limits<int32_t>::max()}) {
+    Poke32(&b, count_at, forged);
+    EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &out, &why)) << forged;
+    EXPECT_FALSE(why.empty());
+  }
+  image_t image{};
+  image.camera_name = "sim";
+  image.size = 0;
+  std::vector<uint8_t> ib = Encode(image);
+  Poke32(&ib, ib.size() - 4, std::numeric_limits<int32_t>::max());
+  image_t image_out;
+  EXPECT_FALSE(DecodeMessage(ib.data(), static_cast<int>(ib.size()), &image_out, &why));
+  EXPECT_NE(why.find("declared 2147483647 data bytes"), std::string::npos) << why;
+  EXPECT_TRUE(image_out.data.empty());  // nothing was allocated
+  // Random bytes after a valid fingerprint, an empty message, another type's bytes.
+  std::vector<uint8_t> garbage = b;
+  for (size_t i = 8; i < garbage.size(); ++i) garbage[i] = static_cast<uint8_t>(i * 37 + 11);
+  EXPECT_FALSE(DecodeMessage(garbage.data(), static_cast<int>(garbage.size()), &out, &why));
+  EXPECT_FALSE(DecodeMessage(b.data(), 0, &out, &why));
+  pose_t pose;
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &pose, &why));  // wrong type
+}
+
+TEST(MessageSizeCheck, ProcessStatusStringArraysMustFit) {
+  process_status_t m{};
+  m.name = "tracker";
+  m.host = "robot";
+  m.state_detail = "ok";
+  m.num_rejection_reasons = 1;
+  m.rejection_reason = {"image: wrong size"};
+  m.rejection_count = {3};
+  m.num_values = 2;
+  m.value_name = {"a", "b"};
+  m.value = {1, 2};
+  std::vector<uint8_t> b = Encode(m);
+  std::string why;
+  EXPECT_TRUE(CheckProcessStatusMessageSize(b.data(), static_cast<int>(b.size()), &why)) << why;
+  const size_t values_at = b.size() - (4 + 2) - (4 + 2) - 2 * 8 - 4;  // two strings "a", "b" then 2 doubles
+  Poke32(&b, values_at, 1 << 28);
+  EXPECT_FALSE(CheckProcessStatusMessageSize(b.data(), static_cast<int>(b.size()), &why));
+  EXPECT_NE(why.find("declared 268435456 values"), std::string::npos) << why;
+  process_status_t out;
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &out, &why));
+}
+
+// Bus::SubscribeMessage decodes through DecodeMessage: a forged message reaches on_malformed with the reason.
+TEST(MessageSizeCheck, SubscribeMessageReportsWhy) {
+  auto bus = MakeLcmBus("memq://");
+  int good = 0;
+  std::vector<std::string> reasons;
+  bus->SubscribeMessage<feature_tracks_t>(
+      "FEATURE_TRACKS", [&](const feature_tracks_t&, const RawMessage&) { ++good; },
+      [&](const RawMessage& raw) { reasons.push_back(raw.why); });
+  feature_tracks_t t{};
+  t.camera_name = "sim";
+  std::vector<uint8_t> b = Encode(t);
+  ASSERT_TRUE(bus->Publish("FEATURE_TRACKS", b.data(), static_cast<int>(b.size())));
+  Poke32(&b, b.size() - 4, -1);
+  ASSERT_TRUE(bus->Publish("FEATURE_TRACKS", b.data(), static_cast<int>(b.size())));
+  while (bus->Handle(0) > 0) {
+  }
+  EXPECT_EQ(good, 1);
+  ASSERT_EQ(reasons.size(), 1u);
+  EXPECT_NE(reasons[0].find("negative tracks count -1"), std::string::npos) << reasons[0];
 }
 
 }  // namespace

@@ -175,7 +175,8 @@ void StatusReporter::PublishIfDue(int64_t wall_utime, bool force) {
 
 std::function<void(const RawMessage&)> StatusReporter::MalformedHandler(const std::string& what) {
   return [this, what](const RawMessage& raw) {
-    Reject(what + ": malformed", std::to_string(raw.size) + " bytes on " + raw.channel);
+    Reject(what + ": malformed",
+           (raw.why.empty() ? "" : raw.why + ", ") + std::to_string(raw.size) + " bytes on " + raw.channel);
   };
 }
 

@@ -16,10 +16,21 @@
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/node.h"
+#include "common/status.h"
 #include "common/time.h"
+#include "common/message_size_check.h"
+#include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
+#include "objscan/image_t.hpp"
+#include "objscan/landmarks_t.hpp"
+#include "objscan/model_t.hpp"
+#include "objscan/odometry_t.hpp"
+#include "objscan/pose_t.hpp"
 #include "objscan/process_status_t.hpp"
+#include "objscan/robot_command_t.hpp"
+#include "objscan/target_t.hpp"
+#include "objscan/voxel_map_t.hpp"
 #include "procman/child_process.h"
 #include "procman/json_writer.h"
 #include "procman/log_stats.h"
@@ -31,7 +42,24 @@ namespace {
 const std::set<std::string> kSequencedChannels = {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "ROBOT_ODOMETRY",
                                                   "GROUND_TRUTH_POSE"};
 
+// The session's channels (design.md) and their types: a message on one of them that does not decode as its type is
+// counted as malformed, never as data (frames, rates, sequence gaps).
+template <class Msg>
+bool Decodes(const RawMessage& raw) {
+  Msg msg;
+  return DecodeMessage(raw.data, raw.size, &msg, nullptr);
+}
+const std::map<std::string, bool (*)(const RawMessage&)> kChannelTypes = {
+    {"CAMERA_IMAGE", Decodes<image_t>},          {"CAMERA_INFO", Decodes<camera_info_t>},
+    {"FEATURE_TRACKS", Decodes<feature_tracks_t>}, {"CAMERA_POSE", Decodes<pose_t>},
+    {"GROUND_TRUTH_POSE", Decodes<pose_t>},       {"ROBOT_ODOMETRY", Decodes<odometry_t>},
+    {"ROBOT_COMMAND", Decodes<robot_command_t>},  {"LANDMARKS", Decodes<landmarks_t>},
+    {"VOXEL_MAP", Decodes<voxel_map_t>},          {"MODEL", Decodes<model_t>},
+    {"TARGET", Decodes<target_t>},                {"PROCESS_STATUS", Decodes<process_status_t>},
+    {"OBJSCAN_CONTROL", Decodes<control_t>}};
+
 struct ChannelCount {
+  int64_t malformed = 0;  // messages that do not decode as the channel's type (not counted below)
   int64_t messages = 0;
   int64_t bytes = 0;
   int64_t last_seq = -1;
@@ -49,6 +77,13 @@ class Monitor {
 
   void OnMessage(const RawMessage& raw) {
     ChannelCount& c = channels_[raw.channel];
+    const auto type = kChannelTypes.find(raw.channel);
+    if (type != kChannelTypes.end() && !type->second(raw)) {
+      if (c.malformed++ == 0)
+        LogWarning("malformed message on " + raw.channel + " (" + std::to_string(raw.size) +
+                   " bytes): not counted (further ones on this channel are only counted)");
+      return;
+    }
     ++c.messages;
     c.bytes += raw.size;
     int64_t utime = 0, seq = 0;
@@ -56,22 +91,25 @@ class Monitor {
       if (c.messages == 1) c.first_utime = utime;
       c.last_utime = utime;
     }
-    if (kSequencedChannels.count(raw.channel) && RawMessageSeq(raw.data, raw.size, &seq)) {
+    // A seq far ahead (> kMaxSeqJump, common/status.h) or negative is not believed: one forged message must not
+    // count 9e18 dropped messages nor hide the later real gaps.
+    if (kSequencedChannels.count(raw.channel) && RawMessageSeq(raw.data, raw.size, &seq) && seq >= 0 &&
+        (c.last_seq < 0 || seq - kMaxSeqJump <= c.last_seq)) {
       if (c.last_seq >= 0 && seq > c.last_seq + 1) c.seq_gaps += seq - c.last_seq - 1;
       c.last_seq = std::max(c.last_seq, seq);
     }
     if (raw.channel == "PROCESS_STATUS") {
       process_status_t m;
-      if (m.decode(raw.data, 0, raw.size) == raw.size) statuses_[m.name] = m;
+      if (DecodeMessage(raw.data, raw.size, &m, nullptr)) statuses_[m.name] = m;
     } else if (raw.channel == "OBJSCAN_CONTROL") {
       control_t m;
-      if (m.decode(raw.data, 0, raw.size) == raw.size) {
+      if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
         if (m.command == control_t::COMMAND_FINISHED) finished_.insert(m.sender);
         if (m.command == control_t::COMMAND_END_OF_STREAM) end_of_stream_ = true;
       }
     } else if (raw.channel == "FEATURE_TRACKS") {
       feature_tracks_t m;
-      if (m.decode(raw.data, 0, raw.size) == raw.size) {
+      if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
         ++track_frames_;
         live_tracks_sum_ += m.num_tracks;
         min_live_tracks_ = track_frames_ == 1 ? m.num_tracks : std::min<int64_t>(min_live_tracks_, m.num_tracks);
@@ -364,6 +402,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     const ChannelCount& c = kv.second;
     json.Key(kv.first).BeginObject();
     json.Key("messages").Int(c.messages);
+    if (c.malformed > 0) json.Key("malformed").Int(c.malformed);
     json.Key("logged").Int(logged.count(kv.first) ? logged[kv.first].count : 0);
     json.Key("bytes").Int(c.bytes);
     const double span_s = (c.last_utime - c.first_utime) * 1e-6;

@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "common/adapters.h"
+#include "common/message_size_check.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
 #include "objscan/image_t.hpp"
@@ -25,90 +26,11 @@ void TrimOldest(Map* map, size_t max_size) {
   while (map->size() > max_size) map->erase(map->begin());
 }
 
-// Layout of the array-carrying types, so that array counts can be checked against the payload size BEFORE the
-// generated decoder resizes vectors from them (a corrupted count of 2^31 would otherwise allocate gigabytes).
-// A field: element size in bytes (0 = string), index of the earlier int32 field holding its count (-1 = scalar),
-// fixed inner dimension.
-struct FieldLayout {
-  int element_size;
-  int count_field;
-  int inner;
-};
-constexpr int kString = 0;
-const std::vector<FieldLayout> kLandmarksLayout = {{8, -1, 1}, {8, -1, 1}, {kString, -1, 1}, {4, -1, 1}, {8, 3, 1},
-                                                   {4, 3, 3},  {4, 3, 1},  {4, 3, 1},        {1, 3, 3}};
-const std::vector<FieldLayout> kVoxelMapLayout = {{8, -1, 1}, {8, -1, 1}, {kString, -1, 1}, {8, -1, 1},
-                                                  {8, -1, 3}, {4, -1, 1}, {1, -1, 1},       {1, -1, 1},
-                                                  {4, -1, 1}, {4, 8, 3},  {4, 8, 1},        {1, 8, 3}};
-const std::vector<FieldLayout> kTracksLayout = {{8, -1, 1}, {8, -1, 1}, {kString, -1, 1}, {4, -1, 1}, {4, -1, 1},
-                                                {4, -1, 1}, {8, 5, 1},  {4, 5, 1},        {4, 5, 1},  {4, 5, 1}};
-const std::vector<FieldLayout> kImageLayout = {{8, -1, 1}, {8, -1, 1}, {kString, -1, 1}, {4, -1, 1}, {4, -1, 1},
-                                               {4, -1, 1}, {1, -1, 1}, {4, -1, 1},       {1, 7, 1}};
-const std::vector<FieldLayout> kCameraInfoLayout = {{8, -1, 1}, {kString, -1, 1}, {4, -1, 1}, {4, -1, 1},
-                                                    {8, -1, 5}, {kString, -1, 1}, {4, -1, 1}, {8, 6, 1}};
-const std::vector<FieldLayout> kStatusLayout = {
-    {8, -1, 1}, {8, -1, 1}, {kString, -1, 1}, {kString, -1, 1}, {4, -1, 1},       {1, -1, 1},       {kString, -1, 1},
-    {8, -1, 1}, {8, -1, 1}, {8, -1, 1},       {8, -1, 1},       {4, -1, 1},       {kString, 11, 1}, {8, 11, 1},
-    {8, -1, 1}, {8, -1, 1}, {8, -1, 1},       {4, -1, 1},       {kString, 17, 1}, {8, 17, 1}};
-
-int32_t ReadInt32(const uint8_t* p) {
-  return static_cast<int32_t>(static_cast<uint32_t>(p[0]) << 24 | static_cast<uint32_t>(p[1]) << 16 |
-                              static_cast<uint32_t>(p[2]) << 8 | static_cast<uint32_t>(p[3]));
-}
-
-// True when every count and string length fits in the payload (after the 8-byte fingerprint).
-bool CountsFit(const void* data, int size, const std::vector<FieldLayout>& layout) {
-  const auto* bytes = static_cast<const uint8_t*>(data);
-  int64_t pos = 8;
-  std::vector<int64_t> values(layout.size(), 0);
-  for (size_t f = 0; f < layout.size(); ++f) {
-    const FieldLayout& field = layout[f];
-    int64_t n = 1;
-    if (field.count_field >= 0) n = values[static_cast<size_t>(field.count_field)];
-    if (n < 0 || n > size) return false;
-    if (field.element_size == kString) {
-      for (int64_t i = 0; i < n; ++i) {
-        if (pos + 4 > size) return false;
-        const int32_t length = ReadInt32(bytes + pos);
-        pos += 4;
-        if (length < 1 || length > size - pos) return false;
-        pos += length;
-      }
-      continue;
-    }
-    const int64_t length = n * field.inner * field.element_size;
-    if (length > size - pos) return false;
-    if (field.count_field < 0 && field.inner == 1 && field.element_size == 4) values[f] = ReadInt32(bytes + pos);
-    pos += length;
-  }
-  return true;
-}
-
-template <class Msg>
-const std::vector<FieldLayout>* LayoutOf() {
-  if constexpr (std::is_same_v<Msg, landmarks_t>) return &kLandmarksLayout;
-  if constexpr (std::is_same_v<Msg, voxel_map_t>) return &kVoxelMapLayout;
-  if constexpr (std::is_same_v<Msg, feature_tracks_t>) return &kTracksLayout;
-  if constexpr (std::is_same_v<Msg, image_t>) return &kImageLayout;
-  if constexpr (std::is_same_v<Msg, camera_info_t>) return &kCameraInfoLayout;
-  if constexpr (std::is_same_v<Msg, process_status_t>) return &kStatusLayout;
-  return nullptr;
-}
-
-// Decodes msg from bytes; false on a wrong fingerprint, truncation, trailing bytes, counts that cannot fit the
-// payload, or an exception from the generated decoder.
+// Decodes msg from bytes through the one guarded decode (common/message_size_check.h): false on a wrong fingerprint,
+// truncation, trailing bytes, counts that cannot fit the payload, or an exception from the generated decoder.
 template <class Msg>
 bool Decode(const void* data, int size, Msg* msg) {
-  if (data == nullptr || size < 8) return false;
-  try {
-    int64_t hash = 0;
-    if (__int64_t_decode_array(data, 0, size, &hash, 1) != 8 || hash != static_cast<int64_t>(Msg::getHash()))
-      return false;
-    if (const auto* layout = LayoutOf<Msg>(); layout != nullptr && !CountsFit(data, size, *layout)) return false;
-    return msg->decode(data, 0, size) == size;
-  } catch (const std::exception&) {
-    return false;
-  }
+  return DecodeMessage(data, size, msg, nullptr);
 }
 
 }  // namespace

@@ -14,7 +14,6 @@
 #include "common/robot_model.h"
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
-#include "common/message_size_check.h"
 
 namespace objscan {
 
@@ -144,12 +143,12 @@ ObjectFinderNode::ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& opti
       finder_(options_.finder),
       status_(&bus, options_.name, options_.status_channel, options_.status_period_s) {
   status_.SetState(+process_status_t::STATE_STARTING, "waiting for landmarks on " + options_.landmarks_channel);
-  SubscribeChecked<landmarks_t>(
-      bus_, status_, options_.landmarks_channel, "landmarks", CheckLandmarksMessageSize,
-      [this](const landmarks_t& m) { OnLandmarks(m); }, 5);
-  SubscribeChecked<camera_info_t>(
-      bus_, status_, options_.info_channel, "camera_info", CheckCameraInfoMessageSize,
-      [this](const camera_info_t& m) { OnCameraInfo(m); }, 0);
+  bus_.SubscribeMessage<landmarks_t>(
+      options_.landmarks_channel, [this](const landmarks_t& m, const RawMessage&) { OnLandmarks(m); },
+      status_.MalformedHandler("landmarks"), 5);
+  bus_.SubscribeMessage<camera_info_t>(
+      options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
+      status_.MalformedHandler("camera_info"), 0);
   bus_.SubscribeMessage<pose_t>(
       options_.pose_channel, [this](const pose_t& m, const RawMessage&) { OnPose(m); },
       status_.MalformedHandler("pose"), 200);

@@ -13,7 +13,6 @@
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
 #include "objscan/robot_command_t.hpp"
-#include "common/message_size_check.h"
 #include "processes/planner/plan_report.h"
 
 namespace objscan {
@@ -167,12 +166,15 @@ PlannerNode::PlannerNode(Bus& bus, const PlannerNodeOptions& options)
   bus_.SubscribeMessage<target_t>(
       options_.target_channel, [this](const target_t& m, const RawMessage&) { OnTarget(m); },
       status_.MalformedHandler("target"), 100);
-  SubscribeChecked<landmarks_t>(bus_, status_, options_.landmarks_channel, "landmarks", CheckLandmarksMessageSize,
-                                [this](const landmarks_t& m) { OnLandmarks(m); });
-  SubscribeChecked<voxel_map_t>(bus_, status_, options_.voxel_channel, "voxel_map", CheckVoxelMapMessageSize,
-                                [this](const voxel_map_t& m) { OnVoxels(m); });
-  SubscribeChecked<camera_info_t>(bus_, status_, options_.info_channel, "camera_info", CheckCameraInfoMessageSize,
-                                  [this](const camera_info_t& m) { OnCameraInfo(m); });
+  bus_.SubscribeMessage<landmarks_t>(
+      options_.landmarks_channel, [this](const landmarks_t& m, const RawMessage&) { OnLandmarks(m); },
+      status_.MalformedHandler("landmarks"));
+  bus_.SubscribeMessage<voxel_map_t>(
+      options_.voxel_channel, [this](const voxel_map_t& m, const RawMessage&) { OnVoxels(m); },
+      status_.MalformedHandler("voxel_map"));
+  bus_.SubscribeMessage<camera_info_t>(
+      options_.info_channel, [this](const camera_info_t& m, const RawMessage&) { OnCameraInfo(m); },
+      status_.MalformedHandler("camera_info"));
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
       status_.MalformedHandler("control"));

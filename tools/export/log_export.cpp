@@ -4,6 +4,7 @@
 
 #include "common/adapters.h"
 #include "common/log.h"
+#include "common/message_size_check.h"
 #include "common/options.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/image_t.hpp"
@@ -19,7 +20,7 @@ bool Fail(std::string* error, const std::string& text) {
 
 template <class Msg>
 bool Decode(const lcm_eventlog_event_t& event, Msg* msg) {
-  return msg->decode(event.data, 0, event.datalen) == event.datalen;
+  return DecodeMessage(event.data, event.datalen, msg, nullptr);
 }
 }  // namespace
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/message_size_check.h"
 #include "objscan/feature_tracks_t.hpp"
 
 namespace objscan {
@@ -70,7 +71,7 @@ bool CompareLogTracks(const std::string& a, const std::string& b, const std::str
     for (const auto& m : in) {
       if (m.channel != channel) continue;
       feature_tracks_t t;
-      if (t.decode(m.data.data(), 0, static_cast<int>(m.data.size())) != static_cast<int>(m.data.size())) continue;
+      if (!DecodeMessage(m.data.data(), static_cast<int>(m.data.size()), &t, nullptr)) continue;
       (*frames)[t.seq] = std::move(t);
     }
   };

@@ -47,7 +47,7 @@ class RecordingBus final : public Bus {
 
 bool IsFeedableControl(const void* data, int size) {
   control_t msg;
-  if (msg.decode(data, 0, size) != size) return false;
+  if (!DecodeMessage(data, size, &msg, nullptr)) return false;
   return msg.command == control_t::COMMAND_END_OF_STREAM;
 }
 
