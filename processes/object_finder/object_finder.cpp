@@ -13,7 +13,9 @@ namespace objscan {
 namespace {
 
 constexpr int kMinClusterPoints = 3;        // smaller groups are noise, never tracked
-constexpr double kFreshFraction = 0.1;      // members seen again (at least 3) that make a cluster "observed"
+constexpr double kFreshFraction = 0.1;      // members seen again (at least 3) that make a cluster "observed" ...
+constexpr double kFreshEnough = 20;         // ... or this many (a large cluster seen again after the camera looked
+                                            // away: its old tracks ended, new landmarks come in tens per keyframe)
 constexpr double kNeighbourFraction = 0.1;  // other points (at least 3) within the clearance that reject a target
 constexpr int kForgetAfterUpdates = 20;     // a track no cluster continued for this many updates is forgotten
 
@@ -212,7 +214,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     Cluster& c = clusters[k];
     int fresh_members = 0;
     for (int m : members[k]) fresh_members += fresh[source[m]];
-    c.observed = fresh_members >= std::max<double>(3, kFreshFraction * members[k].size());
+    c.observed = fresh_members >= std::max<double>(3, std::min(kFreshEnough, kFreshFraction * members[k].size()));
     c.in_view = InView(c.box.centre_mm, input, std::numeric_limits<double>::infinity());
   }
   return clusters;

@@ -25,7 +25,8 @@
 //     them (a sparsely seen target falls apart; walls' pieces merge into something too large and stay rejected).
 //  5. Tracks follow clusters over updates (greedy one-to-one by horizontal centre distance <= track_match_distance_mm).
 //     A cluster is "in view" when its centre projects into the image in front of the camera, "observed" when at
-//     least max(3, 10 %) of its members are fresh. A track records a view when its cluster passes the rule, is in
+//     least max(3, min(20, 10 %)) of its members are fresh (a large cluster seen again after the camera looked
+//     away gets tens of new landmarks, its old tracks ended). A track records a view when its cluster passes the rule, is in
 //     view and observed, and the camera is >= min_view_baseline_mm away from every view recorded before or sees it
 //     from a direction >= min_view_bearing_deg apart. A track is "missed" in an update in which its box is in view
 //     within max_view_distance_mm but its cluster is not observed (or gone).

@@ -36,6 +36,9 @@ class SyntheticRoom {
   Eigen::Isometry3d world_from_floor = Eigen::Isometry3d::Identity();
   double max_range_mm = 4500;
   double noise_mm = 1.0;  // per-point position noise (sigma, each axis)
+  // Fraction of the already-mapped points in view that gain observations in Observe (the others' tracks ended: KLT
+  // ids never come back, so a surface seen again after the camera looked away is mostly new landmarks).
+  double refresh_fraction = 1.0;
 
   const FinderCamera& camera() const { return camera_; }
   Object& object(int index) { return objects_[index]; }
@@ -164,6 +167,7 @@ class SyntheticRoom {
       const double u = camera_.fx * c.x() / c.z() + camera_.cx, v = camera_.fy * c.y() / c.z() + camera_.cy;
       if (u < -0.5 || v < -0.5 || u > camera_.width - 0.5 || v > camera_.height - 0.5) continue;
       if (!pt.normal.isZero() && (world_from_floor.linear() * pt.normal).dot(eye - w) <= 0) continue;
+      if (counts_[i] > 0 && static_cast<double>(i % 100) >= 100 * refresh_fraction) continue;
       counts_[i] += 3;
     }
     ++updates_;
