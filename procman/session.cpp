@@ -61,6 +61,7 @@ const std::map<std::string, bool (*)(const RawMessage&)> kChannelTypes = {
 struct ChannelCount {
   int64_t malformed = 0;  // messages that do not decode as the channel's type (not counted below)
   int64_t messages = 0;
+  int64_t frames = 0;     // sequenced channels: messages that moved the seq on (repeated, old, forged ones not)
   int64_t bytes = 0;
   int64_t last_seq = -1;
   int64_t seq_gaps = 0;
@@ -87,16 +88,25 @@ class Monitor {
     ++c.messages;
     c.bytes += raw.size;
     int64_t utime = 0, seq = 0;
-    if (RawMessageUtime(raw.data, raw.size, &utime)) {
+    const bool have_utime = RawMessageUtime(raw.data, raw.size, &utime);
+    if (kSequencedChannels.count(raw.channel)) {
+      // Only a message that moves its stream on counts as a frame and dates the channel: a repeated, old, negative
+      // or far-ahead seq (> kMaxSeqJump, common/status.h: forged) must neither count as a frame, nor add 9e18
+      // dropped messages, nor stretch the data rate.
+      // (Streams start at seq 0: a first seq beyond kMaxSeqJump is forged too.)
+      if (!RawMessageSeq(raw.data, raw.size, &seq) || seq < 0 || seq <= c.last_seq ||
+          seq - kMaxSeqJump > std::max<int64_t>(c.last_seq, 0))
+        return;
+      if (c.last_seq >= 0 && seq > c.last_seq + 1) c.seq_gaps += seq - c.last_seq - 1;
+      c.last_seq = seq;
+      ++c.frames;
+      if (have_utime) {
+        if (c.frames == 1) c.first_utime = utime;
+        c.last_utime = utime;
+      }
+    } else if (have_utime) {
       if (c.messages == 1) c.first_utime = utime;
       c.last_utime = utime;
-    }
-    // A seq far ahead (> kMaxSeqJump, common/status.h) or negative is not believed: one forged message must not
-    // count 9e18 dropped messages nor hide the later real gaps.
-    if (kSequencedChannels.count(raw.channel) && RawMessageSeq(raw.data, raw.size, &seq) && seq >= 0 &&
-        (c.last_seq < 0 || seq - kMaxSeqJump <= c.last_seq)) {
-      if (c.last_seq >= 0 && seq > c.last_seq + 1) c.seq_gaps += seq - c.last_seq - 1;
-      c.last_seq = std::max(c.last_seq, seq);
     }
     if (raw.channel == "PROCESS_STATUS") {
       process_status_t m;
@@ -381,7 +391,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   if (!failure.empty()) json.Key("error").String(failure);
   json.Key("label").String(options.label);
   json.Key("wall_time_s").Number(elapsed_s());
-  json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].messages);
+  json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].frames);
   json.Key("expected_frames").Int(options.expected_frames);
   json.Key("end_of_stream").Bool(monitor->end_of_stream_);
   json.Key("tracks").BeginObject();
@@ -406,8 +416,12 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     json.Key("logged").Int(logged.count(kv.first) ? logged[kv.first].count : 0);
     json.Key("bytes").Int(c.bytes);
     const double span_s = (c.last_utime - c.first_utime) * 1e-6;
-    json.Key("data_rate_hz").Number(c.messages > 1 && span_s > 0 ? (c.messages - 1) / span_s : 0.0);
-    if (kSequencedChannels.count(kv.first)) json.Key("sequence_gaps").Int(c.seq_gaps);
+    const int64_t dated = kSequencedChannels.count(kv.first) ? c.frames : c.messages;
+    json.Key("data_rate_hz").Number(dated > 1 && span_s > 0 ? (dated - 1) / span_s : 0.0);
+    if (kSequencedChannels.count(kv.first)) {
+      json.Key("frames").Int(c.frames);
+      json.Key("sequence_gaps").Int(c.seq_gaps);
+    }
     json.EndObject();
   }
   json.EndObject();
@@ -471,7 +485,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
                interrupted       ? "interrupted"
                : failure.empty() ? "done"
                                  : "FAILED",
-               static_cast<long long>(monitor->channels_["CAMERA_IMAGE"].messages),
+               static_cast<long long>(monitor->channels_["CAMERA_IMAGE"].frames),
                static_cast<long long>(monitor->track_frames_),
                monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0,
                static_cast<long long>(bus_gaps + dropped_inputs), log_complete ? "complete" : "INCOMPLETE",
