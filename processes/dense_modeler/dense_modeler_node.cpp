@@ -948,7 +948,17 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_refinement_samples", static_cast<double>(model.refinement.samples_scored));
   status_.SetValue("final_refined_vertices", static_cast<double>(model.refinement.vertices_moved));
   status_.SetValue("final_refinement_s", model.times.refinement_s);
-  status_.SetState(+process_status_t::STATE_FINISHED, "model written");
+  if (model.voxels.empty()) {
+    // Loud: a run that ends without a model is a failure, not a success with empty files (the session fails on it).
+    std::string why = "the final model is empty: " + std::to_string(pairs_done_) + " dense pairs";
+    if (options_.require_target) why += " after the target was confirmed (" + std::to_string(pairs_before_target_) + " before)";
+    why += " voted nothing inside the region; try more frames or more views of the object (objscan run --frames), "
+           "and check the region of interest in logs/dense_modeler.log";
+    LogError(why);
+    status_.SetState(+process_status_t::STATE_ERROR, why);
+  } else {
+    status_.SetState(+process_status_t::STATE_FINISHED, "model written");
+  }
   status_.PublishIfDue(WallTimeMicros(), true);
 }
 

@@ -395,6 +395,23 @@ TEST_F(NodeFixture, RequireTargetModelsNothingBeforeTheTarget) {
   EXPECT_GE(StatusValue(out_.statuses.back(), "carving_views"), 5);
 }
 
+// A run that ends without a model fails loudly: STATE_ERROR with what happened and what to try (room_03: the target
+// confirmed 8 frames before the end, "modeled" with empty files and status ok).
+TEST_F(NodeFixture, EmptyFinalModelIsAnError) {
+  options_.output_dir.clear();
+  options_.require_target = true;
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  const auto features = scene_.SurfacePoints(2000);
+  for (int i = 0; i < 8; ++i) PublishFrame(i, 16, features);  // no TARGET ever: every pair is dropped
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  ASSERT_FALSE(out_.statuses.empty());
+  const process_status_t& last = out_.statuses.back();
+  EXPECT_EQ(last.state, +process_status_t::STATE_ERROR);
+  EXPECT_NE(last.state_detail.find("the final model is empty"), std::string::npos) << last.state_detail;
+  EXPECT_NE(last.state_detail.find("try"), std::string::npos) << last.state_detail;
+}
+
 TEST(DenseModelerNodeOptions, RequireTargetNeedsTheTargetChannel) {
   DenseModelerNodeOptions o;
   o.require_target = true;
