@@ -23,6 +23,8 @@ constexpr double kLookAheadMm = 1200;           // mm, where the head looks alon
 constexpr double kGoalToleranceMm = 60;         // mm, a view or orbit point counts as reached
 constexpr double kMaxDetourMm = 600;            // mm, largest local detour outward from the orbit circle
 constexpr int64_t kReplanUs = 3 * kSecond;      // µs between routine replans
+constexpr double kOrbitMappingMm = 1600;         // mm from the target: unknown floor the orbit maps first
+constexpr int kMaxOrbitMappings = 6;             // such trips per orbit at most
 constexpr double kCameraTurnPerMm = 0.2 * kDeg;  // rad per mm of base travel (see Motion)
 constexpr double kStillCameraTurn = 2 * kDeg;    // rad/s the camera may turn without travel
 
@@ -469,7 +471,7 @@ Planner::Motion Planner::LookAround() {
   return m;
 }
 
-bool Planner::ChooseFrontier() {
+bool Planner::ChooseFrontier(const Eigen::Vector2d* near, double within_mm) {
   cost_field_.Compute(map_, base_.position());
   const double frontier_distance = options_.map.footprint_radius_mm + 2 * options_.map.cell_mm;
   const Eigen::Vector2d current_goal = follower_.empty() ? Eigen::Vector2d(1e12, 1e12) : follower_.goal();
@@ -482,6 +484,7 @@ bool Planner::ChooseFrontier() {
     if (!map_.Traversable(i) || map_.UnknownDistanceMm(i) > frontier_distance) continue;
     if (map_.UnknownCellsNear(i, 500) < 10) continue;  // a sliver of unknown is not worth the trip
     const Eigen::Vector2d c = map_.CentreOf(i);
+    if (near != nullptr && (c - *near).norm() > within_mm) continue;
     const double cost = cost_field_.CostMm(i);
     if (cost < 250) continue;
     bool visited = false;
@@ -746,6 +749,21 @@ Planner::Motion Planner::Orbit() {
     orbit_reported_quarter_ = quarter;
     Event("orbit " + std::to_string(25 * quarter) + " %");
   }
+  if (orbit_mapping_) {  // driving to unmapped floor near the target, the camera ahead (see below)
+    if (follower_.empty() || follower_.Reached(base_, 150) || now_ > goal_deadline_ || Stuck()) {
+      blocked_since_ = -1;
+      if (!follower_.empty()) visited_goals_.push_back(follower_.goal());
+      follower_.Clear();
+      orbit_mapping_ = false;
+      if (PlanToOrbit()) {
+        orbit_bypass_ = true;
+        Event("orbit: back to the circle");
+      }
+    } else {
+      activity_ = "orbit: mapping the floor around the target";
+      return LookAhead(follower_.Follow(map_, base_, options_.explore_speed_mm_s, options_.tracking_turn_rad_s));
+    }
+  }
   if (orbit_bypass_) {
     if (follower_.empty() || follower_.Reached(base_, 80) || Stuck()) {
       blocked_since_ = -1;
@@ -787,6 +805,19 @@ Planner::Motion Planner::Orbit() {
     }
     glancing_ = false;
     if (!StartBypass(azimuth)) {
+      // The circle runs into floor the map does not know (the camera looked at the target, not at the floor
+      // around it; room_03 gave up 3 s into the orbit): map the nearest unknown floor within kOrbitMappingMm of
+      // the target first, looking where the robot drives, then go back to the circle.
+      const Eigen::Vector2d near = c;
+      if (orbit_mappings_ < kMaxOrbitMappings && ChooseFrontier(&near, kOrbitMappingMm)) {
+        ++orbit_mappings_;
+        orbit_mapping_ = true;
+        has_fixation_ = false;
+        Event("orbit: the circle runs into unmapped floor: mapping it first (" + std::to_string(orbit_mappings_) +
+              " of " + std::to_string(kMaxOrbitMappings) + ")");
+        activity_ = "orbit: mapping the floor around the target";
+        return LookAhead(follower_.Follow(map_, base_, options_.explore_speed_mm_s, options_.tracking_turn_rad_s));
+      }
       EnterPhase(Phase::kNextViews, "the rest of the orbit circle is not reachable");
       return NextViews();
     }

@@ -193,7 +193,9 @@ class Planner {
   Motion FollowPathLookingAt(const Eigen::Vector3d& point, double speed);
   Motion LookAhead(const Velocity& v);
   Motion Hold(const Eigen::Vector3d& point);
-  bool ChooseFrontier();
+  // A frontier goal (known free floor next to unknown, reachable, not visited), the cheapest by path cost and
+  // turn; with `near`, only goals within within_mm of it. False when there is none.
+  bool ChooseFrontier(const Eigen::Vector2d* near = nullptr, double within_mm = 0);
   bool PlanToOrbit();
   bool StartBypass(double azimuth);
   // Orbit radius (circle first, then up to kMaxDetourMm outward) whose next 0.9 m of arc is Traversable; -1 when
@@ -272,6 +274,8 @@ class Planner {
   std::vector<uint8_t> orbit_bins_ = std::vector<uint8_t>(360, 0);
   double orbit_radius_set_ = 0;
   bool orbit_bypass_ = false;
+  bool orbit_mapping_ = false;     // driving to unknown floor near the target (the circle ran into it)
+  int orbit_mappings_ = 0;
   bool glancing_ = false;          // looking at the blocked arc ahead
   int64_t glance_start_ = 0;
   double glanced_azimuth_ = 0;     // rad, blocked point looked at last (when glances_ > 0)
