@@ -110,7 +110,12 @@ class Monitor {
     }
     if (raw.channel == "PROCESS_STATUS") {
       process_status_t m;
-      if (DecodeMessage(raw.data, raw.size, &m, nullptr)) statuses_[m.name] = m;
+      if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
+        if (m.state == process_status_t::STATE_ERROR &&
+            std::find(error_order_.begin(), error_order_.end(), m.name) == error_order_.end())
+          error_order_.push_back(m.name);
+        statuses_[m.name] = m;
+      }
     } else if (raw.channel == "OBJSCAN_CONTROL") {
       control_t m;
       if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
@@ -130,6 +135,7 @@ class Monitor {
 
   std::map<std::string, ChannelCount> channels_;
   std::map<std::string, process_status_t> statuses_;
+  std::vector<std::string> error_order_;  // processes in the order they first reported STATE_ERROR
   std::set<std::string> finished_;
   bool end_of_stream_ = false;
   int64_t track_frames_ = 0, live_tracks_sum_ = 0, min_live_tracks_ = 0;
@@ -376,10 +382,14 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     if (!logged.count(kv.first) || logged[kv.first].count < kv.second.messages) log_complete = false;
   }
 
-  // A process that ended in its error state says why the session failed (the planner: no target found).
-  for (const auto& kv : monitor->statuses_) {
-    if (failure.empty() && !interrupted && kv.second.state == process_status_t::STATE_ERROR)
-      failure = kv.first + ": " + kv.second.state_detail;
+  // Processes that ended in their error state say why the session failed, the first to fail first: it is usually
+  // the cause (the planner found no target, so the dense modeler had nothing to model).
+  if (failure.empty() && !interrupted) {
+    for (const std::string& name : monitor->error_order_) {
+      const process_status_t& s = monitor->statuses_[name];
+      if (s.state != process_status_t::STATE_ERROR) continue;
+      failure += (failure.empty() ? "" : " | then ") + name + ": " + s.state_detail;
+    }
   }
 
   // Summary.

@@ -26,19 +26,36 @@ in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames $FRAMES --out "$WOR
 check_summary "$WORK/sim" $FRAMES
 [ -s "$WORK/sim/ground_truth/poses_gt.txt" ] || fail "no ground truth written"
 
-DATA="${OBJSCAN_DATA_DIR:-$SRC/../shared/data}/middlebury_templeSparseRing"
-if [ -d "$DATA" ]; then
-  in_ns "$NS" "$SRC/objscan" run --dataset "$DATA" --out "$WORK/temple" --lcm-url "$URL" \
-    || { tail -n 30 "$WORK"/temple/logs/*.log; fail "objscan run --dataset failed"; }
+DATA="${OBJSCAN_DATA_DIR:-$SRC/../shared/data}"
+if [ -d "$DATA/middlebury_templeSparseRing" ]; then
+  # No flags: the probe finds the views too far apart for KLT (descriptor tracking) and their file order scattered
+  # around the ring (it chains them by verified matches); every view posed and a model written.
+  in_ns "$NS" "$SRC/objscan" run --dataset "$DATA/middlebury_templeSparseRing" --out "$WORK/temple" --lcm-url "$URL" \
+    > "$WORK/temple.out" 2>&1 || { cat "$WORK/temple.out"; tail -n 30 "$WORK"/temple/logs/*.log; fail "objscan run --dataset failed"; }
   check_summary "$WORK/temple" 16
-  # Wide-baseline profile (descriptor tracks, two-view fallback) in ring order: most views get a pose, which the KLT
-  # chain above cannot give (measured 11 of 15; views before the start span stay unposed).
-  in_ns "$NS" "$SRC/objscan" run --dataset "$DATA" --out "$WORK/temple_wide" --lcm-url "$URL" --wide-baseline \
-    --order "9,8,7,6,15,16,12,13,5,4,3,14,2,1,10" \
-    || { tail -n 30 "$WORK"/temple_wide/logs/*.log; fail "objscan run --dataset --wide-baseline failed"; }
-  check_summary "$WORK/temple_wide" 15
-  posed=$(grep -vc '^#' "$WORK/temple_wide/trajectory.txt" || true)
-  [ "${posed:-0}" -ge 10 ] || fail "wide baseline: only ${posed:-0} of 15 views posed"
-  echo "wide baseline: $posed of 15 temple views posed"
+  grep -q "tracking: descriptors" "$WORK/temple.out" || { cat "$WORK/temple.out"; fail "temple: wide baseline not detected"; }
+  posed=$(grep -vc '^#' "$WORK/temple/trajectory.txt" || true)
+  [ "${posed:-0}" -ge 15 ] || fail "temple: only ${posed:-0} of 16 views posed"
+  [ "$(grep -a -m1 -o 'element vertex [0-9]*' "$WORK/temple/model_mesh.ply" | cut -d' ' -f3)" -gt 1000 ] \
+    || fail "temple: model mesh has (almost) no vertices"
+  echo "temple, no flags: $posed of 16 views posed, $(grep -a -m1 -o 'element vertex [0-9]*' "$WORK/temple/model_mesh.ply")"
+fi
+if [ -d "$DATA/middlebury_dinoSparseRing" ]; then
+  # The dino ring: neighbouring views share too few matches for every view to be posed (6 of 16 today). That must be
+  # a loud failure (exit code, status, what to try), never a quiet partial model.
+  rc=0
+  in_ns "$NS" "$SRC/objscan" run --dataset "$DATA/middlebury_dinoSparseRing" --out "$WORK/dino" --lcm-url "$URL" \
+    > "$WORK/dino.out" 2>&1 || rc=$?
+  posed=$(grep -vc '^#' "$WORK/dino/trajectory.txt" || true)
+  if [ "${posed:-0}" -lt 15 ]; then
+    [ "$rc" != 0 ] || { cat "$WORK/dino.out"; fail "dino: $posed of 16 views posed, yet exit code 0"; }
+    grep -q '"status": "failed"' "$WORK/dino/summary.json" || fail "dino: $posed of 16 posed, yet status not failed"
+    grep -q '"error": "[^"]*pose_solver: only [0-9]* of 16 frames got a pose[^"]*Try' "$WORK/dino/summary.json" \
+      || { grep '"error"' "$WORK/dino/summary.json"; fail "dino: the error does not say what was posed and what to try"; }
+    echo "dino: $posed of 16 views posed -> exit $rc, status failed"
+  else
+    [ "$rc" = 0 ] || { cat "$WORK/dino.out"; fail "dino: $posed of 16 posed, yet the run failed"; }
+    echo "dino: $posed of 16 views posed, status ok"
+  fi
 fi
 echo "PASS: objscan run --sim and --dataset ran to the end, logged every message and wrote summaries"

@@ -950,10 +950,19 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_refinement_s", model.times.refinement_s);
   if (model.voxels.empty()) {
     // Loud: a run that ends without a model is a failure, not a success with empty files (the session fails on it).
-    std::string why = "the final model is empty: " + std::to_string(pairs_done_) + " dense pairs";
-    if (options_.require_target) why += " after the target was confirmed (" + std::to_string(pairs_before_target_) + " before)";
-    why += " voted nothing inside the region; try more frames or more views of the object (objscan run --frames), "
-           "and check the region of interest in logs/dense_modeler.log";
+    std::string why;
+    if (options_.require_target && !have_box_) {
+      why = "the final model is empty: no target was ever confirmed on " + options_.target_channel + " (" +
+            std::to_string(pairs_before_target_) +
+            " dense pairs waited for it); see the planner's and the object finder's status for why, and try more "
+            "frames (objscan run --frames)";
+    } else {
+      why = "the final model is empty: " + std::to_string(pairs_done_) + " dense pairs";
+      if (options_.require_target)
+        why += " after the target was confirmed (" + std::to_string(pairs_before_target_) + " before)";
+      why += " voted nothing inside the region; try more frames or more views of the object (objscan run --frames), "
+             "and check the region of interest in logs/dense_modeler.log";
+    }
     LogError(why);
     status_.SetState(+process_status_t::STATE_ERROR, why);
   } else {

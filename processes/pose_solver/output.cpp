@@ -15,8 +15,9 @@ bool Fail(std::string* error, const std::string& reason) {
   if (error) *error = reason;
   return false;
 }
-bool Good(PoseStatus s) { return s == PoseStatus::kTracking || s == PoseStatus::kRelocalized; }
 }  // namespace
+
+bool IsWrittenPose(PoseStatus s) { return s == PoseStatus::kTracking || s == PoseStatus::kRelocalized; }
 
 bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
                         bool include_all_statuses) {
@@ -25,7 +26,7 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEst
   out << "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions in mm\n";
   out << std::fixed;
   for (const auto& p : poses) {
-    if (!include_all_statuses && !Good(p.status)) continue;
+    if (!include_all_statuses && !IsWrittenPose(p.status)) continue;
     const Eigen::Quaterniond q(p.world_from_camera.linear());
     const Eigen::Vector3d t = p.world_from_camera.translation();
     out << std::setprecision(6) << p.utime / 1e6 << ' ' << std::setprecision(4) << t.x() << ' ' << t.y() << ' ' << t.z()
@@ -119,7 +120,7 @@ bool WriteColmapText(const std::string& dir, const PinholeCamera& camera,
     int image_id = 0;
     ColmapImage im;
     while (next_image(&im)) {
-      if (!Good(im.pose.status)) continue;
+      if (!IsWrittenPose(im.pose.status)) continue;
       ++image_id;
       const Eigen::Isometry3d cw = im.pose.world_from_camera.inverse();
       const Eigen::Quaterniond q(cw.linear());

@@ -19,6 +19,9 @@
 
 namespace objscan {
 
+// True for the pose statuses the writers keep (tracking, relocalized): the frames that count as posed.
+bool IsWrittenPose(PoseStatus status);
+
 // Writes poses whose status is in `statuses` (default: tracking and relocalized).
 bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
                         bool include_all_statuses = false);

@@ -1,5 +1,6 @@
 #include "processes/pose_solver/pose_solver_node.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -27,6 +28,8 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("final-pose-channel", &o->final_pose_channel, "output pose_t channel for the final poses after global BA");
   p.Add("landmarks-channel", &o->landmarks_channel, "output landmarks_t channel");
   p.Add("control-channel", &o->control_channel, "control_t channel (finished in and out)");
+  p.Add("min-posed-fraction", &o->min_posed_fraction,
+        "the run fails (status error) when fewer than this fraction of the frames get a final pose (0 = never)");
   p.Add("status-channel", &o->status_channel, "process_status_t channel");
   p.Add("finish-on-sender", &o->finish_on_sender, "COMMAND_FINISHED from this sender starts the final phase");
   p.Add("model", &o->model, "camera motion model: 6dof or 4dof (robot on the floor: x, y, yaw, tilt)");
@@ -106,6 +109,7 @@ bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* 
   if (o.landmarks_channel.empty()) e << "landmarks-channel must not be empty; ";
   if (o.control_channel.empty()) e << "control-channel must not be empty; ";
   if (o.status_channel.empty()) e << "status-channel must not be empty; ";
+  if (!(o.min_posed_fraction >= 0 && o.min_posed_fraction <= 1)) e << "min-posed-fraction must be in [0, 1]; ";
   if (o.finish_on_sender.empty()) e << "finish-on-sender must not be empty; ";
   if (o.model != "6dof" && o.model != "4dof") e << "model must be 6dof or 4dof; ";
   if (o.pending_tracks_capacity < 0) e << "pending-tracks-capacity must be >= 0; ";
@@ -338,11 +342,13 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
     status_.Reject("tracks: no camera_info at end of stream", "seq " + std::to_string(f.seq));
   pending_.clear();
   std::vector<CameraPoseEstimate> final_poses;
+  std::string failure;  // why the run failed (empty: it did not)
   if (estimator_) {
     try {
       final_poses = estimator_->Finish();
     } catch (const std::exception& e) {
-      LogError(std::string("final phase failed: ") + e.what());
+      failure = std::string("final phase failed: ") + e.what();
+      LogError(failure);
     }
     status_.SetValue("final_ba_ms", estimator_->final_ba_ms());
     LogInfo(estimator_->last_message());
@@ -410,10 +416,26 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
         LogInfo("results written to " + options_.output_dir);
     }
   }
+  // Loud: a run that poses too few of its frames is a failure (the model, if any, covers part of the object).
+  const int64_t frames = estimator_ ? estimator_->num_frames() : 0;
+  const int64_t posed = std::count_if(final_poses.begin(), final_poses.end(),
+                                      [](const CameraPoseEstimate& p) { return IsWrittenPose(p.status); });
+  status_.SetValue("final_posed", static_cast<double>(posed));
+  if (failure.empty() && frames > 0 &&
+      static_cast<double>(posed) < options_.min_posed_fraction * static_cast<double>(frames)) {
+    failure = "only " + std::to_string(posed) + " of " + std::to_string(frames) +
+              " frames got a pose (min-posed-fraction " + std::to_string(options_.min_posed_fraction).substr(0, 4) +
+              "): neighbouring views share too few tracks. Try views closer together or in order around the object "
+              "(--order), the other tracking mode (--klt / --wide-baseline), or more texture";
+    LogError(failure);
+  }
   PublishFinished(bus_, status_, options_.control_channel, options_.name, last_seq_ >= 0 ? last_utime_ : msg.utime,
                   last_seq_, options_.output_dir);
   finished_ = true;
-  status_.SetState(+process_status_t::STATE_FINISHED, "final phase done");
+  if (failure.empty())
+    status_.SetState(+process_status_t::STATE_FINISHED, "final phase done");
+  else
+    status_.SetState(+process_status_t::STATE_ERROR, failure);
   status_.PublishIfDue(WallTimeMicros(), true);
 }
 

@@ -65,6 +65,9 @@ struct PoseSolverNodeOptions {
   double status_period_s = 1.0;                          // s, status publication period (> 0)
   bool exit_when_finished = true;                        // Finished() turns true after the final phase
   std::string output_dir;                                // write trajectory/landmarks/COLMAP files here ("" = none)
+  double min_posed_fraction = 0.9;                       // the final phase is STATE_ERROR (the session fails) when
+                                                         // fewer than this fraction of the frames got a final pose,
+                                                         // [0, 1]; 0 = never
   PoseEstimatorOptions estimator;                        // the estimator's options (model set from `model`)
 };
 

@@ -1,0 +1,83 @@
+// objscan_probe: looks at the first frames of an image source and says how to track it (KLT or descriptor
+// tracking, see processes/tracker/tracking_mode.h). `objscan run --dataset` calls it before it starts the processes.
+// Output (stdout), one item per line: "tracking klt" or "tracking wide"; for a wide-baseline set without --order
+// whose views are better chained in another order (OrderViewsByOverlap: up to 200 frames), "order LIST" (1-based
+// positions in the natural order, for the camera driver's --order); then "# " lines with the figures. Exit 0 on a
+// verdict; 1 when the source cannot be opened or holds fewer than 2 readable frames (the message says which).
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/options.h"
+#include "drivers/camera/frame_source.h"
+#include "processes/tracker/tracking_mode.h"
+
+int main(int argc, char** argv) {
+  using namespace objscan;
+  FrameSourceOptions source;
+  int frames = 6;
+  OptionParser parser("objscan_probe",
+                      "Measures how far apart the first frames of an image source are and prints the tracking mode "
+                      "to use: 'tracking klt' (video rate) or 'tracking wide' (descriptor tracking).");
+  parser.Add("source", &source.path, "image folder, Middlebury folder or video file (as the camera driver takes it)");
+  parser.Add("calib", &source.calib_path, "calibration file overriding the source's own (as the camera driver)");
+  parser.Add("order", &source.order, "frame order (as the camera driver's --order)");
+  parser.Add("rotate-180", &source.rotate_180, "frames to rotate by 180 deg (as the camera driver)");
+  parser.Add("frames", &frames, "frames to look at from the start (>= 2)");
+  int exit_code = 0;
+  if (!ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
+  if (frames < 2) {
+    std::fprintf(stderr, "objscan_probe: --frames must be at least 2 (got %d)\n", frames);
+    return 2;
+  }
+  std::string error;
+  std::unique_ptr<FrameSource> src = OpenFrameSource(source, &error);
+  if (!src) {
+    std::fprintf(stderr, "objscan_probe: %s\n", error.c_str());
+    return 1;
+  }
+  // The first frames decide the mode; a wide-baseline set without a given order is read whole to order it.
+  constexpr int kMaxOrderedFrames = 200;
+  std::vector<cv::Mat> images;
+  std::vector<int> natural_index;  // 0-based position of each image in the natural order
+  SourceFrame frame;
+  std::string reason, detail;
+  bool whole = false;
+  TrackingModeProbe probe;
+  for (int attempts = 0;; ++attempts) {
+    if (!whole && static_cast<int>(images.size()) == frames) {
+      probe = ProbeTrackingMode(images);
+      if (!probe.wide_baseline || !source.order.empty() || src->NumFrames() < 0 ||
+          src->NumFrames() > kMaxOrderedFrames)
+        break;
+      whole = true;
+    }
+    if (attempts > 4 * kMaxOrderedFrames) break;
+    ReadResult r = src->Next(&frame, &reason, &detail);
+    if (r == ReadResult::kEnd) break;
+    if (r != ReadResult::kFrame) continue;
+    images.push_back(frame.image.clone());
+    natural_index.push_back(frame.source_index);
+  }
+  if (images.size() < 2) {
+    std::fprintf(stderr, "objscan_probe: %s holds fewer than 2 readable frames\n", source.path.c_str());
+    return 1;
+  }
+  if (!whole && static_cast<int>(images.size()) < frames) probe = ProbeTrackingMode(images);  // short source
+  std::string order_detail;
+  if (!whole && probe.wide_baseline && source.order.empty() && static_cast<int>(images.size()) < frames) whole = true;
+  std::printf("tracking %s\n", probe.wide_baseline ? "wide" : "klt");
+  if (whole) {
+    ViewOrder order = OrderViewsByOverlap(images);
+    if (order.reordered) {
+      std::string list;
+      for (int i : order.order) list += (list.empty() ? "" : ",") + std::to_string(natural_index[i] + 1);
+      std::printf("order %s\n", list.c_str());
+    }
+    order_detail = order.detail;
+  }
+  std::printf("# %s\n", probe.detail.c_str());
+  if (!order_detail.empty()) std::printf("# %s\n", order_detail.c_str());
+  return 0;
+}
