@@ -192,38 +192,81 @@ void DescriptorTracker::Describe(const cv::Mat& gray, std::vector<cv::KeyPoint>*
   feature_->compute(gray, *keypoints, *descriptors);  // may drop keypoints it cannot describe
 }
 
-TrackFrame DescriptorTracker::Track(const ImageFrame& frame) {
-  if (frame.image.empty()) throw std::invalid_argument("descriptor tracker: empty image");
-  if (frame.image.type() != CV_8UC1 && frame.image.type() != CV_8UC3)
+cv::Mat DescriptorTracker::PrepareGray(const cv::Mat& image) const {
+  if (image.empty()) throw std::invalid_argument("descriptor tracker: empty image");
+  if (image.type() != CV_8UC1 && image.type() != CV_8UC3)
     throw std::invalid_argument("descriptor tracker: image must be CV_8UC1 or CV_8UC3");
-  cv::setNumThreads(options_.threads);
-  stats_ = DescriptorTrackStats();
   cv::Mat gray;
-  if (frame.image.type() == CV_8UC3)
-    cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
+  if (image.type() == CV_8UC3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
   else
-    gray = frame.image;
+    gray = image;
   if (options_.clahe_clip_limit > 0) {
     cv::Mat equalized;
     cv::createCLAHE(options_.clahe_clip_limit, cv::Size(8, 8))->apply(gray, equalized);
     gray = equalized;
   }
-  if (gray.size() != size_) history_.clear();
-  size_ = gray.size();
+  return gray;
+}
 
-  auto t0 = std::chrono::steady_clock::now();
+DescriptorTracker::DescribedImage DescriptorTracker::DescribeImage(const cv::Mat& image) {
+  const cv::Mat gray = PrepareGray(image);
+  cv::setNumThreads(options_.threads);
+  return DescribeGray(gray);
+}
+
+DescriptorTracker::DescribedImage DescriptorTracker::DescribeGray(const cv::Mat& gray) {
   std::vector<cv::KeyPoint> keypoints;
-  StoredFrame cur;
-  Describe(gray, &keypoints, &cur.descriptors);
-  stats_.keypoints = static_cast<int>(keypoints.size());
-  stats_.detect_ms = MillisSince(t0);
-  const int n = static_cast<int>(keypoints.size());
-  cur.points.resize(n);
+  DescribedImage out;
+  Describe(gray, &keypoints, &out.descriptors);
   // OpenCV's SIFT detects on a 2x upsampled base image (cv::resize, pixel-centre convention: x2 = 2x + 0.5) and
   // halves the coordinates without removing the half-pixel shift: its keypoints sit +0.25 px off in u and v (measured
   // in descriptor_seeding_test through a 180 deg turn, where the bias doubles). Removed here.
   const float shift = options_.kind == DescriptorKind::kSift ? -0.25f : 0.0f;
-  for (int i = 0; i < n; ++i) cur.points[i] = keypoints[i].pt + cv::Point2f(shift, shift);
+  out.points.reserve(keypoints.size());
+  for (const cv::KeyPoint& k : keypoints) out.points.push_back(k.pt + cv::Point2f(shift, shift));
+  return out;
+}
+
+std::vector<std::pair<int, int>> DescriptorTracker::VerifiedMatches(const std::vector<cv::Point2f>& query_points,
+                                                                    const cv::Mat& query_descriptors,
+                                                                    const std::vector<cv::Point2f>& train_points,
+                                                                    const cv::Mat& train_descriptors,
+                                                                    std::vector<uchar>* inlier) const {
+  std::vector<std::pair<int, int>> matches =
+      MatchDescriptors(query_descriptors, train_descriptors, norm_, options_.ratio, options_.mutual_check);
+  std::vector<uchar> mask(matches.size(), 0);
+  if (static_cast<int>(matches.size()) >= options_.min_inliers) {
+    std::vector<cv::Point2f> a, b;
+    for (const auto& [q, t] : matches) {
+      a.push_back(query_points[q]);
+      b.push_back(train_points[t]);
+    }
+    std::vector<uchar> ransac;
+    const cv::Mat f = cv::findFundamentalMat(a, b, cv::FM_RANSAC, options_.ransac_threshold_px,
+                                             options_.ransac_confidence, 5000, ransac);
+    if (!f.empty() && ransac.size() == matches.size() && cv::countNonZero(ransac) >= options_.min_inliers)
+      mask = std::move(ransac);
+  }
+  if (inlier) *inlier = std::move(mask);
+  return matches;
+}
+
+TrackFrame DescriptorTracker::Track(const ImageFrame& frame) {
+  const cv::Mat gray = PrepareGray(frame.image);
+  cv::setNumThreads(options_.threads);
+  stats_ = DescriptorTrackStats();
+  if (gray.size() != size_) history_.clear();
+  size_ = gray.size();
+
+  auto t0 = std::chrono::steady_clock::now();
+  StoredFrame cur;
+  DescribedImage described = DescribeGray(gray);
+  cur.points = std::move(described.points);
+  cur.descriptors = described.descriptors;
+  const int n = static_cast<int>(cur.points.size());
+  stats_.keypoints = n;
+  stats_.detect_ms = MillisSince(t0);
   cur.ids.assign(n, -1);
   cur.birth.assign(n, frames_);
 
@@ -231,23 +274,13 @@ TrackFrame DescriptorTracker::Track(const ImageFrame& frame) {
   std::unordered_set<int64_t> used;  // ids already given to a keypoint of this frame
   for (size_t h = 0; h < history_.size(); ++h) {
     const StoredFrame& old = history_[h];
-    const std::vector<std::pair<int, int>> matches =
-        MatchDescriptors(cur.descriptors, old.descriptors, norm_, options_.ratio, options_.mutual_check);
-    stats_.raw_matches.push_back(static_cast<int>(matches.size()));
-    stats_.inliers.push_back(0);
-    if (static_cast<int>(matches.size()) < options_.min_inliers) continue;
-    std::vector<cv::Point2f> a, b;
-    for (const auto& [q, t] : matches) {
-      a.push_back(cur.points[q]);
-      b.push_back(old.points[t]);
-    }
     std::vector<uchar> mask;
-    const cv::Mat f = cv::findFundamentalMat(a, b, cv::FM_RANSAC, options_.ransac_threshold_px,
-                                             options_.ransac_confidence, 5000, mask);
-    if (f.empty() || mask.size() != matches.size()) continue;
-    const int inliers = cv::countNonZero(mask);
-    if (inliers < options_.min_inliers) continue;
-    stats_.inliers.back() = inliers;
+    const std::vector<std::pair<int, int>> matches =
+        VerifiedMatches(cur.points, cur.descriptors, old.points, old.descriptors, &mask);
+    stats_.raw_matches.push_back(static_cast<int>(matches.size()));
+    const int inliers = mask.empty() ? 0 : cv::countNonZero(mask);
+    stats_.inliers.push_back(inliers);
+    if (inliers == 0) continue;
     for (size_t k = 0; k < matches.size(); ++k) {
       if (!mask[k]) continue;
       const auto [q, t] = matches[k];

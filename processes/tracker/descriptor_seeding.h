@@ -82,6 +82,21 @@ class DescriptorTracker {
   // Forgets the stored frames (ids keep counting up; they are never reused).
   void Reset();
 
+  // One image's keypoints (px, bias-corrected) and descriptors exactly as Track() computes them; no tracker state is
+  // touched. Throws std::invalid_argument on an empty image or another pixel type.
+  struct DescribedImage {
+    std::vector<cv::Point2f> points;
+    cv::Mat descriptors;  // one row per point
+  };
+  DescribedImage DescribeImage(const cv::Mat& image);
+  // Matches of query against train that pass Track()'s checks (ratio test, mutual check, fundamental-matrix RANSAC
+  // of ransac_threshold_px); *inlier (optional) gets one flag per returned raw match. Returns the raw matches
+  // (query index, train index); the verified ones are those flagged, none when fewer than min_inliers pass.
+  std::vector<std::pair<int, int>> VerifiedMatches(const std::vector<cv::Point2f>& query_points,
+                                                   const cv::Mat& query_descriptors,
+                                                   const std::vector<cv::Point2f>& train_points,
+                                                   const cv::Mat& train_descriptors, std::vector<uchar>* inlier) const;
+
   // Ids start at first_id (call before the first Track; lets a second tracker use a disjoint id range).
   void set_first_id(int64_t first_id) { next_id_ = first_id; }
 
@@ -97,6 +112,9 @@ class DescriptorTracker {
     cv::Mat descriptors;              // one row per keypoint
   };
   void Describe(const cv::Mat& gray, std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors);
+  // Gray (and CLAHE-equalized when configured) copy of a CV_8UC1 / CV_8UC3 image; throws on others.
+  cv::Mat PrepareGray(const cv::Mat& image) const;
+  DescribedImage DescribeGray(const cv::Mat& gray);
 
   DescriptorTrackerOptions options_;
   cv::Ptr<cv::Feature2D> feature_;

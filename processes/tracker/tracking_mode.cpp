@@ -1,17 +1,16 @@
 #include "processes/tracker/tracking_mode.h"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <limits>
-#include <cmath>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
+#include <thread>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/features2d.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "processes/tracker/descriptor_seeding.h"
 
@@ -53,7 +52,7 @@ TrackingModeProbe ProbeTrackingMode(const std::vector<cv::Mat>& frames, const Kl
         if (it != previous.end()) { from.push_back(it->second); to.push_back(kv.second); }
       }
       double fraction = 0, pair_flow = 0;
-      if (from.size() >= 8 && !previous.empty()) {
+      if (from.size() >= 8) {
         cv::setRNGSeed(1);
         std::vector<uchar> inlier;
         cv::Mat F = cv::findFundamentalMat(from, to, cv::FM_RANSAC, 1.5, 0.999, inlier);
@@ -85,29 +84,24 @@ TrackingModeProbe ProbeTrackingMode(const std::vector<cv::Mat>& frames, const Kl
 ViewOrder OrderViewsByOverlap(const std::vector<cv::Mat>& frames) {
   ViewOrder result;
   const int n = static_cast<int>(frames.size());
-  DescriptorTrackerOptions defaults;
-  cv::Ptr<cv::SIFT> sift = cv::SIFT::create(defaults.max_features, 3, defaults.sift_contrast_threshold);
-  std::vector<std::vector<cv::KeyPoint>> keypoints(n);
-  std::vector<cv::Mat> descriptors(n);
+  DescriptorTrackerOptions options;  // the tracker's own detection, matching and verification (default options),
+  options.threads = std::max(1u, std::thread::hardware_concurrency());  // on every core: nothing else runs yet
+  DescriptorTracker describer(options);
+  std::vector<DescriptorTracker::DescribedImage> views(n);
   for (int i = 0; i < n; ++i) {
-    if (frames[i].empty() || (frames[i].type() != CV_8UC1 && frames[i].type() != CV_8UC3)) continue;
-    cv::Mat gray = frames[i];
-    if (gray.channels() == 3) cv::cvtColor(frames[i], gray, cv::COLOR_BGR2GRAY);
-    sift->detectAndCompute(gray, cv::noArray(), keypoints[i], descriptors[i]);
+    try {
+      views[i] = describer.DescribeImage(frames[i]);
+    } catch (const std::invalid_argument&) {
+      // unusable frame: no keypoints, it matches nothing
+    }
   }
-  std::vector<std::vector<int>> w(n, std::vector<int>(n, 0));
+  std::vector<std::vector<int>> w(n, std::vector<int>(n, 0));  // verified matches between views i and j
+  std::vector<uchar> inlier;
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
-      if (descriptors[i].rows < 8 || descriptors[j].rows < 8) continue;
-      auto matches = MatchDescriptors(descriptors[i], descriptors[j], cv::NORM_L2, defaults.ratio, true);
-      if (matches.size() < 8) continue;
-      std::vector<cv::Point2f> a, b;
-      for (const auto& m : matches) { a.push_back(keypoints[i][m.first].pt); b.push_back(keypoints[j][m.second].pt); }
       cv::setRNGSeed(1);
-      std::vector<uchar> inlier;
-      cv::Mat F = cv::findFundamentalMat(a, b, cv::FM_RANSAC, 1.5, 0.999, inlier);
-      if (F.empty()) continue;
-      w[i][j] = w[j][i] = static_cast<int>(std::count(inlier.begin(), inlier.end(), uchar(1)));
+      describer.VerifiedMatches(views[i].points, views[i].descriptors, views[j].points, views[j].descriptors, &inlier);
+      w[i][j] = w[j][i] = inlier.empty() ? 0 : cv::countNonZero(inlier);
     }
   }
   auto weakest = [&](const std::vector<int>& order, std::vector<int>* links) {

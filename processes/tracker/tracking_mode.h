@@ -35,10 +35,10 @@ TrackingModeProbe ProbeTrackingMode(const std::vector<cv::Mat>& frames, const Kl
                                     double min_kept = 0.5);
 
 // View order of a wide-baseline image set whose file order need not be the order around the object (the Middlebury
-// sparse rings: files in capture order, views scattered around the ring). Every pair of views is matched (SIFT, the
-// descriptor tracker's settings: 1500 keypoints, contrast 0.005, ratio 0.8, mutual check) and verified (RANSAC
-// fundamental matrix, 1.5 px); the chain is grown greedily from the strongest pair, each step adding the unused view
-// with the most verified matches to either end. Views that match nothing come last.
+// sparse rings: files in capture order, views scattered around the ring). Every pair of views is matched and verified
+// as the descriptor tracker does it (DescriptorTracker::DescribeImage / VerifiedMatches, default options); the chain
+// is grown greedily from the strongest pair, each step adding the unused view with the most verified matches to
+// either end. Views that match nothing come last.
 struct ViewOrder {
   std::vector<int> order;          // 0-based indices into frames, in chain order
   std::vector<int> links;          // verified matches between consecutive views of order (order.size() - 1)

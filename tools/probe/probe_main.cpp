@@ -2,7 +2,7 @@
 // tracking, see processes/tracker/tracking_mode.h). `objscan run --dataset` calls it before it starts the processes.
 // Output (stdout), one item per line: "tracking klt" or "tracking wide"; for a wide-baseline set without --order
 // whose views are better chained in another order (OrderViewsByOverlap: up to 200 frames), "order LIST" (1-based
-// positions in the natural order, for the camera driver's --order); then "# " lines with the figures. Exit 0 on a
+// positions in the natural order, for the camera driver's --order); "# " lines carry the figures. Exit 0 on a
 // verdict; 1 when the source cannot be opened or holds fewer than 2 readable frames (the message says which).
 #include <cstdio>
 #include <memory>
@@ -37,47 +37,38 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "objscan_probe: %s\n", error.c_str());
     return 1;
   }
-  // The first frames decide the mode; a wide-baseline set without a given order is read whole to order it.
+  // The first frames decide the mode; a wide-baseline set without a given order is then read whole to order it.
   constexpr int kMaxOrderedFrames = 200;
   std::vector<cv::Mat> images;
   std::vector<int> natural_index;  // 0-based position of each image in the natural order
-  SourceFrame frame;
-  std::string reason, detail;
-  bool whole = false;
-  TrackingModeProbe probe;
-  for (int attempts = 0;; ++attempts) {
-    if (!whole && static_cast<int>(images.size()) == frames) {
-      probe = ProbeTrackingMode(images);
-      if (!probe.wide_baseline || !source.order.empty() || src->NumFrames() < 0 ||
-          src->NumFrames() > kMaxOrderedFrames)
-        break;
-      whole = true;
+  auto read = [&](int count) {     // appends up to count readable frames (unreadable ones are skipped)
+    SourceFrame frame;
+    std::string reason, detail;
+    for (int wanted = static_cast<int>(images.size()) + count; static_cast<int>(images.size()) < wanted;) {
+      const ReadResult r = src->Next(&frame, &reason, &detail);
+      if (r == ReadResult::kEnd) return;
+      if (r != ReadResult::kFrame) continue;
+      images.push_back(frame.image.clone());
+      natural_index.push_back(frame.source_index);
     }
-    if (attempts > 4 * kMaxOrderedFrames) break;
-    ReadResult r = src->Next(&frame, &reason, &detail);
-    if (r == ReadResult::kEnd) break;
-    if (r != ReadResult::kFrame) continue;
-    images.push_back(frame.image.clone());
-    natural_index.push_back(frame.source_index);
-  }
+  };
+  read(frames);
   if (images.size() < 2) {
     std::fprintf(stderr, "objscan_probe: %s holds fewer than 2 readable frames\n", source.path.c_str());
     return 1;
   }
-  if (!whole && static_cast<int>(images.size()) < frames) probe = ProbeTrackingMode(images);  // short source
-  std::string order_detail;
-  if (!whole && probe.wide_baseline && source.order.empty() && static_cast<int>(images.size()) < frames) whole = true;
+  const TrackingModeProbe probe = ProbeTrackingMode(images);
   std::printf("tracking %s\n", probe.wide_baseline ? "wide" : "klt");
-  if (whole) {
-    ViewOrder order = OrderViewsByOverlap(images);
+  std::printf("# %s\n", probe.detail.c_str());
+  if (probe.wide_baseline && source.order.empty() && src->NumFrames() >= 0 && src->NumFrames() <= kMaxOrderedFrames) {
+    read(kMaxOrderedFrames);
+    const ViewOrder order = OrderViewsByOverlap(images);
     if (order.reordered) {
       std::string list;
       for (int i : order.order) list += (list.empty() ? "" : ",") + std::to_string(natural_index[i] + 1);
       std::printf("order %s\n", list.c_str());
     }
-    order_detail = order.detail;
+    std::printf("# %s\n", order.detail.c_str());
   }
-  std::printf("# %s\n", probe.detail.c_str());
-  if (!order_detail.empty()) std::printf("# %s\n", order_detail.c_str());
   return 0;
 }
