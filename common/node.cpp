@@ -8,8 +8,12 @@
 
 namespace objscan {
 namespace {
-volatile std::sig_atomic_t g_stop = 0;
-void OnSignal(int) { g_stop = 1; }
+volatile std::sig_atomic_t g_stop_count = 0;
+volatile std::sig_atomic_t g_stop_signal = 0;
+void OnSignal(int signal) {
+  g_stop_signal = signal;
+  if (g_stop_count < 100) g_stop_count = g_stop_count + 1;
+}
 }  // namespace
 
 void InstallStopSignalHandlers() {
@@ -18,9 +22,12 @@ void InstallStopSignalHandlers() {
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGHUP, &action, nullptr);
 }
 
-bool StopRequested() { return g_stop != 0; }
+bool StopRequested() { return g_stop_count != 0; }
+int StopRequestCount() { return g_stop_count; }
+int StopSignal() { return g_stop_signal; }
 
 int RunNode(Bus& bus, Node& node, const RunOptions& options) {
   InstallStopSignalHandlers();
@@ -30,6 +37,7 @@ int RunNode(Bus& bus, Node& node, const RunOptions& options) {
     const int status = bus.Handle(options.tick_ms);
     const int64_t now = WallTimeMicros();
     if (status < 0) {
+      if (StopRequested()) break;  // the signal interrupted the wait: a normal stop, not a bus error
       if (options.stop_at_end_of_log) {
         LogInfo("input ended");
         break;

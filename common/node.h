@@ -1,5 +1,5 @@
 // The run loop shared by every process: dispatches bus messages to the node's handlers, calls Tick() about every
-// tick_ms of wall time (status publication, timers), and stops on SIGINT/SIGTERM, when the node says it has
+// tick_ms of wall time (status publication, timers), and stops on SIGINT/SIGTERM/SIGHUP, when the node says it has
 // finished, or when a file:// input log reaches its end.
 #pragma once
 
@@ -29,8 +29,11 @@ struct RunOptions {
 // normal stop, 1 on a bus error.
 int RunNode(Bus& bus, Node& node, const RunOptions& options = {});
 
-// True once SIGINT or SIGTERM was received (after InstallStopSignalHandlers or RunNode).
+// True once SIGINT, SIGTERM or SIGHUP was received (after InstallStopSignalHandlers or RunNode).
 bool StopRequested();
+// How many of those signals were received (a second Ctrl-C can mean "stop now"), and the last one's number.
+int StopRequestCount();
+int StopSignal();
 void InstallStopSignalHandlers();
 
 }  // namespace objscan

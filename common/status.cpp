@@ -195,4 +195,8 @@ void PublishFinished(Bus& bus, StatusReporter& status, const std::string& channe
     LogWarning("publishing on " + channel + " failed");
 }
 
+bool IsFinalizeRequest(const control_t& msg, const std::string& name) {
+  return msg.command == control_t::COMMAND_FINALIZE && msg.target == name;
+}
+
 }  // namespace objscan

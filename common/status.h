@@ -14,6 +14,7 @@
 namespace objscan {
 
 class Bus;
+class control_t;
 struct RawMessage;
 
 // What a sequence number says about the stream it came from:
@@ -100,5 +101,10 @@ class StatusReporter {
 // publication logged.
 void PublishFinished(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& sender,
                      int64_t utime, int64_t last_seq, const std::string& argument = "");
+
+// True for control_t COMMAND_FINALIZE addressed to `name`: the session asks a process to run its final phase on what
+// it has now, as on its usual trigger (end of stream, an upstream FINISHED), e.g. because a process upstream died or
+// the run was interrupted. argument says why. A process that has finished already ignores it.
+bool IsFinalizeRequest(const control_t& msg, const std::string& name);
 
 }  // namespace objscan

@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <string.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -62,6 +64,7 @@ bool ChildProcess::Start(std::string* error) {
   std::vector<char*> args;
   for (auto& a : argv_) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     close(log_fd);
@@ -70,6 +73,9 @@ bool ChildProcess::Start(std::string* error) {
   }
   if (pid == 0) {
     setpgid(0, 0);
+    // The child stops (SIGTERM: its ordered stop) when the session dies, even by SIGKILL; no orphan keeps running.
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) _exit(126);  // the session died before prctl took effect
     dup2(log_fd, STDOUT_FILENO);
     dup2(log_fd, STDERR_FILENO);
     const int devnull = open("/dev/null", O_RDONLY);
@@ -94,8 +100,17 @@ bool ChildProcess::Running() {
   exited_ = true;
   if (r == pid_) {
     exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    term_signal_ = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
   }
   return false;
+}
+
+std::string ChildProcess::DescribeExit() const {
+  if (term_signal_ != 0) {
+    const char* name = sigabbrev_np(term_signal_);
+    return "was killed by signal " + std::to_string(term_signal_) + (name ? std::string(" (SIG") + name + ")" : "");
+  }
+  return "exited with code " + std::to_string(exit_code_);
 }
 
 bool ChildProcess::StopWith(int sig, int timeout_ms) {

@@ -1,5 +1,6 @@
 // One child OS process of a session: started with fork/exec in its own process group, stdout and stderr appended to
-// a log file, polled without blocking, stopped with SIGINT then SIGTERM then SIGKILL.
+// a log file, polled without blocking, stopped with SIGINT then SIGTERM then SIGKILL. A child gets SIGTERM when
+// the process that started it dies (PR_SET_PDEATHSIG), so none outlives its session.
 #pragma once
 
 #include <sys/types.h>
@@ -31,6 +32,8 @@ class ChildProcess {
   pid_t pid() const { return pid_; }
   bool started() const { return pid_ > 0; }
   int exit_code() const { return exit_code_; }
+  // After exit: "exited with code N" or "was killed by signal 9 (SIGKILL)".
+  std::string DescribeExit() const;
   std::string CommandLine() const;
   // The last lines of the log file (for error messages).
   std::string LogTail(int lines) const;
@@ -42,6 +45,7 @@ class ChildProcess {
   pid_t pid_ = -1;
   bool exited_ = false;
   int exit_code_ = -1;
+  int term_signal_ = 0;  // the signal that ended it, 0 when it exited
 };
 
 }  // namespace objscan

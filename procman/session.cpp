@@ -1,5 +1,7 @@
 #include "procman/session.h"
 
+#include <string.h>
+
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -37,6 +39,7 @@
 
 namespace objscan {
 namespace {
+constexpr char kControlChannel[] = "OBJSCAN_CONTROL";
 
 // Channels whose seq field counts frames: a gap there is a dropped message.
 const std::set<std::string> kSequencedChannels = {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "ROBOT_ODOMETRY",
@@ -56,7 +59,7 @@ const std::map<std::string, bool (*)(const RawMessage&)> kChannelTypes = {
     {"ROBOT_COMMAND", Decodes<robot_command_t>},  {"LANDMARKS", Decodes<landmarks_t>},
     {"VOXEL_MAP", Decodes<voxel_map_t>},          {"MODEL", Decodes<model_t>},
     {"TARGET", Decodes<target_t>},                {"PROCESS_STATUS", Decodes<process_status_t>},
-    {"OBJSCAN_CONTROL", Decodes<control_t>}};
+    {kControlChannel, Decodes<control_t>}};
 
 struct ChannelCount {
   int64_t malformed = 0;  // messages that do not decode as the channel's type (not counted below)
@@ -116,7 +119,7 @@ class Monitor {
           error_order_.push_back(m.name);
         statuses_[m.name] = m;
       }
-    } else if (raw.channel == "OBJSCAN_CONTROL") {
+    } else if (raw.channel == kControlChannel) {
       control_t m;
       if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
         if (m.command == control_t::COMMAND_FINISHED) finished_.insert(m.sender);
@@ -261,8 +264,8 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
       for (int tries = 0; c.exit_code() == 0 && !finished_ok_now() && tries < 20; ++tries) pump(50);
       const bool finished_ok = finished_ok_now();
       if (!finished_ok) {
-        failure = "process '" + c.name() + "' exited with code " + std::to_string(c.exit_code()) +
-                  " before the session ended; last lines of " + c.log_path() + ":\n" + c.LogTail(15);
+        failure = "process '" + c.name() + "' " + c.DescribeExit() + " before the session ended; last lines of " +
+                  c.log_path() + ":\n" + c.LogTail(15);
         return false;
       }
     }
@@ -361,11 +364,45 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
          std::any_of(children.begin(), children.end(), [](auto& c) { return c->Running(); })) {
     bus->Handle(20);
   }
-  for (int pass = 0; pass < 2; ++pass) {
+  for (size_t i = 0; i < children.size(); ++i)
+    if (processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
+  // A run that was interrupted or lost a process: the survivors still finish what they have (trajectory, model), in
+  // list order, so each can take what the one before it wrote. Each gets its usual trigger (the drivers' end of
+  // stream, the FINISHED of the one before it) and, when that does not come, FINALIZE addressed to it.
+  std::string partial;
+  if (!failure.empty() || interrupted) {
+    const char* signal_name = sigabbrev_np(StopSignal());
+    partial = interrupted ? "interrupted by SIG" + std::string(signal_name ? signal_name : "?") : "a process failed";
+    const int stop_count = StopRequestCount();
     for (size_t i = 0; i < children.size(); ++i) {
-      if (processes[i].is_driver == (pass == 0) && children[i]->Running()) children[i]->Stop(3000);
+      ChildProcess& c = *children[i];
+      if (processes[i].is_driver || !c.Running() || monitor->finished_.count(c.name())) continue;
+      pump(500);  // the trigger from upstream, if any, arrives
+      if (monitor->finished_.count(c.name()) || !c.Running()) continue;
+      control_t request;
+      request.utime = 0;
+      request.sender = "objscan_session";
+      request.target = c.name();
+      request.command = control_t::COMMAND_FINALIZE;
+      request.last_seq = -1;
+      request.argument = partial;
+      bus->PublishMessage(kControlChannel, request);
+      std::fprintf(stderr, "[objscan] %s: waiting for %s to write what it has\n", partial.c_str(), c.name().c_str());
+      const int64_t until = MonotonicMicros() + static_cast<int64_t>(options.finalize_timeout_s * 1e6);
+      while (c.Running() && !monitor->finished_.count(c.name()) && MonotonicMicros() < until &&
+             StopRequestCount() == stop_count)
+        bus->Handle(50);
+      if (StopRequestCount() != stop_count) {
+        std::fprintf(stderr, "[objscan] second stop signal: stopping without waiting for the results\n");
+        break;
+      }
+      if (c.Running() && !monitor->finished_.count(c.name()))
+        std::fprintf(stderr, "[objscan] %s did not finish within %.0f s\n", c.name().c_str(),
+                     options.finalize_timeout_s);
     }
   }
+  for (size_t i = 0; i < children.size(); ++i)
+    if (!processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
   pump(options.flush_wait_ms);  // the logger writes what is still buffered
   logger.Stop(5000);
 
@@ -399,6 +436,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   json.BeginObject();
   json.Key("status").String(interrupted ? "interrupted" : failure.empty() ? "ok" : "failed");
   if (!failure.empty()) json.Key("error").String(failure);
+  if (!partial.empty()) json.Key("partial_results").String(partial + ": the result files hold what the processes had");
   json.Key("label").String(options.label);
   json.Key("wall_time_s").Number(elapsed_s());
   json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].frames);

@@ -27,6 +27,8 @@ struct SessionOptions {
   int64_t expected_frames = 0;          // frames the driver will publish (progress display; 0 = unknown)
   double timeout_s = 1800;              // s, whole-session limit (wall clock)
   double start_timeout_s = 20;          // s, a processor must publish PROCESS_STATUS within this after start
+  double finalize_timeout_s = 300;       // s, after a failure or a stop signal: time each surviving processor
+                                        // has to write its results (a second signal stops at once)
   int flush_wait_ms = 1500;             // ms, wait after publishers stop before stopping lcm-logger
   int progress_period_ms = 1000;        // ms between progress lines
   std::string label;                    // free text copied into summary.json (e.g. "sim sphere")

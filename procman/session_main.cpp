@@ -1,4 +1,8 @@
 // objscan_session: runs one session from a process list (see session.h). Used by the `objscan run` launcher.
+#include <signal.h>
+#include <sys/prctl.h>
+#include <unistd.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -25,6 +29,11 @@ int main(int argc, char** argv) {
   parser.Add("label", &options.label, "text copied into summary.json");
   parser.Add("progress-detail", &options.progress_detail,
              "process whose status detail (e.g. the planner's phase) ends each progress line");
+  parser.Add("finalize-timeout", &options.finalize_timeout_s,
+             "s, after a failure or a stop signal: time each surviving processor has to write its results");
+  bool stop_with_parent = false;
+  parser.Add("stop-with-parent", &stop_with_parent,
+             "end the session in order (as on SIGTERM) when the process that started it dies, even by SIGKILL");
   std::string results;
   parser.Add("results", &results,
              "name=path,... result files (JSON, relative to --out) copied into summary.json under \"results\"");
@@ -55,6 +64,14 @@ int main(int argc, char** argv) {
   if (processes.empty()) {
     objscan::LogError(process_list + ": no processes");
     return 2;
+  }
+  if (stop_with_parent) {
+    const pid_t parent = getppid();
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) {
+      objscan::LogError("the process that started the session is gone; not starting");
+      return 1;
+    }
   }
   return objscan::RunSession(options, processes);
 }

@@ -999,10 +999,11 @@ void DenseModelerNode::OnControl(const control_t& msg) {
     return;
   }
   const bool finish = (msg.command == control_t::COMMAND_FINISHED && msg.sender == options_.finish_sender) ||
-                      (msg.command == control_t::COMMAND_FINALIZE && msg.target == options_.name);
+                      IsFinalizeRequest(msg, options_.name);
   if (!finish) return;
   status_.CountIn();
-  LogInfo("final phase requested by " + msg.sender);
+  if (finished_) return;  // answered already
+  LogInfo("final phase requested by " + msg.sender + (msg.argument.empty() ? "" : " (" + msg.argument + ")"));
   RunFinalPhase(msg.utime);
 }
 

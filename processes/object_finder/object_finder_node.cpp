@@ -377,8 +377,10 @@ void ObjectFinderNode::PublishTarget(int64_t wall_utime) {
 }
 
 void ObjectFinderNode::OnControl(const control_t& msg) {
-  if (msg.command != control_t::COMMAND_END_OF_STREAM) return;
-  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  if (!IsFinalizeRequest(msg, options_.name)) {
+    if (msg.command != control_t::COMMAND_END_OF_STREAM) return;
+    if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  }
   status_.CountIn();
   if (finished_) return;
   const FinderResult& r = finder_.result();

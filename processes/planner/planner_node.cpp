@@ -344,8 +344,10 @@ void PlannerNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void PlannerNode::OnControl(const control_t& msg) {
-  if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // our own SHUTDOWN, others' FINISHED, ...
-  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  if (!IsFinalizeRequest(msg, options_.name)) {
+    if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // our own SHUTDOWN, others' FINISHED, ...
+    if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  }
   status_.CountIn();
   if (finished_) return;
   const PlanSummary summary = planner_.Summary();

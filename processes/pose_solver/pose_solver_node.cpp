@@ -330,8 +330,10 @@ void PoseSolverNode::PublishLandmarks(int64_t utime, int64_t seq) {
 }
 
 void PoseSolverNode::OnControl(const control_t& msg) {
-  if (msg.command != control_t::COMMAND_FINISHED || msg.sender != options_.finish_on_sender) return;
-  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  if (!IsFinalizeRequest(msg, options_.name)) {
+    if (msg.command != control_t::COMMAND_FINISHED || msg.sender != options_.finish_on_sender) return;
+    if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  }
   status_.CountIn();
   if (finished_) return;
   RunFinalPhase(msg);

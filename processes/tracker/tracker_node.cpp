@@ -257,8 +257,10 @@ void TrackerNode::OnImage(const image_t& msg) {
 }
 
 void TrackerNode::OnControl(const control_t& msg) {
-  if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // other commands are not for the tracker
-  if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  if (!IsFinalizeRequest(msg, options_.name)) {
+    if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // other commands are not for the tracker
+    if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
+  }
   status_.CountIn();
   if (finished_) return;  // answered already
   LogInfo("end of stream from " + msg.sender + " (last_seq " + std::to_string(msg.last_seq) + "), tracked " +
