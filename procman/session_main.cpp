@@ -3,12 +3,14 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/output_folder.h"
 #include "procman/session.h"
 
 int main(int argc, char** argv) {
@@ -65,6 +67,17 @@ int main(int argc, char** argv) {
     objscan::LogError(process_list + ": no processes");
     return 2;
   }
+  // A new session never destroys an earlier one: its folder is moved aside (DIR.N); the process list is kept in it.
+  std::string moved_to;
+  if (!objscan::PrepareOutputFolder(options.out_dir, &moved_to, &error)) {
+    objscan::LogError(error);
+    return 2;
+  }
+  if (!moved_to.empty())
+    std::fprintf(stderr, "[objscan] %s held an earlier run: moved it to %s\n", options.out_dir.c_str(),
+                 moved_to.c_str());
+  const std::string kept_list = options.out_dir + "/processes.txt";
+  std::ofstream(kept_list) << text.str();
   if (stop_with_parent) {
     const pid_t parent = getppid();
     prctl(PR_SET_PDEATHSIG, SIGTERM);

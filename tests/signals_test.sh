@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Signals and dying processes (issue 28): the launcher `objscan run` ends the session in order with results written
 # on SIGTERM; when a process is killed the survivors still write what they have and the summary names the signal;
-# when the launcher itself is killed with -9 the session notices, ends in order, and no process outlives it.
+# when the launcher itself is killed with -9 the session notices, ends in order, and no process outlives it. A new
+# run into the folder of an earlier one moves the earlier one aside; a folder of other files is refused untouched.
 set -euo pipefail
 BIN="$1"; SRC="$2"
 source "$SRC/tests/netns_lib.sh"
@@ -20,7 +21,7 @@ start() {
   JOB=$!
   local i
   for i in $(seq 100); do
-    LAUNCHER=$(pgrep -f "objscan run --sim .* --out $WORK/$1 " || true)
+    LAUNCHER=$(pgrep -o -f "objscan run --sim .* --out $WORK/$1 " || true)
     [ -n "$LAUNCHER" ] && return 0
     sleep 0.1
   done
@@ -88,4 +89,20 @@ done
 no_survivors 7693
 summary_has orphan '"status": "interrupted"'
 results_written orphan
-echo "PASS: signals"
+
+# 4. Output folders: the interrupted run of 1 is moved aside whole; a folder that is not an objscan output is refused.
+size_before=$(stat -c %s "$WORK/term/session.lcmlog")
+in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames 40 --out "$WORK/term" \
+  --lcm-url "udpm://239.255.76.67:7694?ttl=0&recv_buf_size=4194304" > "$WORK/again.out" 2>&1 \
+  || { cat "$WORK/again.out"; fail "run into an earlier run's folder failed"; }
+grep -q "held an earlier run: moved it to $WORK/term.1" "$WORK/again.out" || { cat "$WORK/again.out"; fail "no move message"; }
+[ "$(stat -c %s "$WORK/term.1/session.lcmlog")" = "$size_before" ] || fail "the earlier log was not kept whole"
+grep -q '"status": "interrupted"' "$WORK/term.1/summary.json" || fail "the earlier summary was not kept"
+grep -q '"status": "ok"' "$WORK/term/summary.json" || fail "the new run's summary is not in the folder"
+mkdir -p "$WORK/mine"; echo keep > "$WORK/mine/notes.txt"
+rc=0; in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames 20 --out "$WORK/mine" \
+  --lcm-url "udpm://239.255.76.67:7695?ttl=0&recv_buf_size=4194304" > "$WORK/mine.out" 2>&1 || rc=$?
+[ "$rc" != 0 ] || fail "a folder of other files was used as output"
+grep -q "not an objscan output" "$WORK/mine.out" || { cat "$WORK/mine.out"; fail "no clear message for a foreign folder"; }
+[ "$(ls "$WORK/mine")" = notes.txt ] && [ "$(cat "$WORK/mine/notes.txt")" = keep ] || fail "the foreign folder was touched"
+echo "PASS: signals and output folders"

@@ -3,6 +3,7 @@
 
 #include "common/log.h"
 #include "common/options.h"
+#include "common/output_folder.h"
 #include "tools/replay/pipeline_replay.h"
 
 int main(int argc, char** argv) {
@@ -27,10 +28,16 @@ int main(int argc, char** argv) {
     objscan::LogError("--log and --out are required");
     return 2;
   }
+  std::string moved_to, error;
+  if (!objscan::PrepareOutputFolder(options.out_dir, &moved_to, &error)) {  // never over an earlier output
+    objscan::LogError(error);
+    return 2;
+  }
+  if (!moved_to.empty())
+    objscan::LogInfo(options.out_dir + " held an earlier output: moved it to " + moved_to);
   options.run_pose_solver = !tracker_only;
   options.run_dense_modeler = !tracker_only && !no_dense;
   objscan::PipelineReplayResult result;
-  std::string error;
   if (!objscan::RunPipelineReplay(options, &result, &error)) {
     objscan::LogError(error);
     return 1;
