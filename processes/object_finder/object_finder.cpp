@@ -130,6 +130,7 @@ bool ObjectFinder::Update(const FinderInput& input, std::string* error) {
   if (floor_valid_) clusters = FindClusters(input, valid, fresh);
   MatchTracks(clusters);
   UpdateTracks(input, clusters);
+  drop_reason_.clear();
   UpdateTarget(input);
   FillResult(input, clusters);
   ++updates_;
@@ -390,6 +391,7 @@ void ObjectFinder::UpdateTracks(const FinderInput& input, const std::vector<Clus
         }
       } else if (t.seen && c.in_view) {
         ++t.rejected_run;
+        t.last_rejection = c.rejection;
       }
     }
     if (t.seen)
@@ -450,6 +452,11 @@ ObjectFinder::Track* ObjectFinder::FindTrack(int id) {
 void ObjectFinder::UpdateTarget(const FinderInput& input) {
   if (Track* t = target_id_ >= 0 ? FindTrack(target_id_) : nullptr) {
     if (t->rejected_run >= options_.drop_after_rejections) {  // the views say it is not a target after all
+      std::ostringstream why;
+      why << (t->last_rejection.empty() ? "failed the rule" : t->last_rejection) << " in " << t->rejected_run
+          << " views in a row (box " << std::lround(t->box.size_mm.x()) << "x" << std::lround(t->box.size_mm.y())
+          << "x" << std::lround(t->box.size_mm.z()) << " mm, " << t->box.points << " points)";
+      drop_reason_ = why.str();
       t->views.clear();
       t->recent_centres.clear();
       target_id_ = -1;
@@ -512,6 +519,7 @@ void ObjectFinder::FillResult(const FinderInput& input, const std::vector<Cluste
   r.points = target ? target->box.points : 0;
   if (!target) r.box = TargetBox{};
   r.roi = target ? ProjectBox(r.box, input.world_from_camera, input.camera) : ImageRegion{};
+  r.drop_reason = drop_reason_;
   r.confirmed_seq = confirmed_seq_;
   r.confirmed_utime = confirmed_utime_;
 

@@ -170,6 +170,9 @@ struct FinderResult {
   int floor_points = 0;        // inliers of the floor in force
   int points_used = 0;         // well-observed landmarks above the floor that were clustered
   int rejected_landmarks = 0;  // dropped in this update (non-finite, negative counts)
+  // Set only in the update that dropped a confirmed target: why (the rule's reason, in how many views in a row, the
+  // box it had then), e.g. "too large in 5 views in a row (box 310x250x220 mm)".
+  std::string drop_reason;
 };
 
 class ObjectFinder {
@@ -200,6 +203,7 @@ class ObjectFinder {
     int unmatched_updates = 0;
     int missed_run = 0;    // in-view updates in a row without an observation
     int rejected_run = 0;  // observed in-view updates in a row failing the rule
+    std::string last_rejection;  // the rule's reason in the latest of those updates ("too large", ...)
     std::vector<View> views;
     std::vector<Eigen::Vector3d> recent_centres;  // centres of the last min_views passing views
   };
@@ -244,6 +248,7 @@ class ObjectFinder {
   int target_id_ = -1;  // confirmed (latched) target's track, -1 when none
   bool target_lost_ = false;
   int64_t confirmed_seq_ = -1, confirmed_utime_ = 0;
+  std::string drop_reason_;  // set by UpdateTarget when it drops the confirmed target (this update only)
   int updates_ = 0;
 };
 

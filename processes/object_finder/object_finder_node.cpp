@@ -335,12 +335,14 @@ void ObjectFinderNode::LogChanges(const FinderResult& r) {
     const std::string box = Describe(r.box);
     switch (r.state) {
       case TargetState::kSearching:
-        LogInfo(std::string(was_confirmed ? "confirmed target dropped (rejected by the later views)"
+        LogInfo(std::string(was_confirmed ? "confirmed target dropped: " +
+                                                (r.drop_reason.empty() ? "rejected by the later views" : r.drop_reason)
                                           : "searching: no candidate") +
                 at);
         break;
       case TargetState::kCandidate:
-        LogInfo((was_confirmed ? "confirmed target dropped; " : "") + std::string("candidate ") + box + ", " +
+        LogInfo((was_confirmed ? "confirmed target dropped (" + r.drop_reason + "); " : "") + std::string("candidate ") +
+                box + ", " +
                 std::to_string(r.points) + " points, " + Views(r.views) + at);
         break;
       case TargetState::kConfirmed:

@@ -356,6 +356,11 @@ TEST(ObjectFinderTest, ConfirmedTargetDroppedWhenManyViewsRejectIt) {
     ASSERT_NE(c, nullptr);
     EXPECT_EQ(c->rejection, "too high");
     EXPECT_EQ(r.state, k < 8 ? TargetState::kConfirmed : TargetState::kSearching) << k;
+    // The update that drops it says why (logged by the node); the others say nothing.
+    if (k == 8)
+      EXPECT_EQ(r.drop_reason.rfind("too high in 5 views in a row (box ", 0), 0u) << r.drop_reason;
+    else
+      EXPECT_TRUE(r.drop_reason.empty()) << k << ": " << r.drop_reason;
   }
   EXPECT_EQ(r.confirmed_seq, -1);
 }
