@@ -478,8 +478,13 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   }
   // kSixDof: the camera height above a floor plane seen in the span fixes the scale far better than the odometry
   // over a short span (about the first camera: the anchor is kept).
-  if (options_.model == MotionModel::kSixDof && options_.use_floor_for_scale)
-    RescaleToFloorHeight(first, last, new_points, first);
+  segment_floor_first_ = -1;
+  segment_floor_points_.clear();
+  if (options_.model == MotionModel::kSixDof && options_.use_floor_for_scale &&
+      !RescaleToFloorHeight(first, last, new_points, first) && recovering_) {
+    segment_floor_first_ = first;  // AddKeyframe looks for the floor again
+    segment_floor_points_ = new_points;
+  }
   if (options_.model == MotionModel::kFourDof) {
     std::vector<int64_t> floor_ids;
     Eigen::Vector4d plane;
@@ -552,6 +557,8 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     int pairs = 0;
     if (JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
       scale_source_ = scale_source_before;
+      segment_floor_first_ = -1;  // joined: the old map's scale
+      segment_floor_points_.clear();
       join_first_frame_ = first;
       const int fused = FuseLandmarks(last, new_points);
       join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
@@ -614,6 +621,9 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
   return true;
 }
 
+// Share of the points that may lie more than 3 floor tolerances under a plane taken for the floor (noise, outliers).
+constexpr double kMaxBelowFloorFraction = 0.05;
+
 bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
                                 Eigen::Vector4d* plane) const {
   std::vector<int64_t> ids;
@@ -637,9 +647,17 @@ bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vec
     if (nrm.norm() < 1e-9) continue;
     nrm.normalize();
     if (std::abs(nrm.z()) < cos_max) continue;
+    if (nrm.z() < 0) nrm = -nrm;  // up (the world's z is up wherever a floor is looked for)
     const double d = -nrm.dot(xs[i]);
-    int count = 0;
-    for (const auto& x : xs) count += std::abs(nrm.dot(x) + d) < options_.floor_tolerance_mm ? 1 : 0;
+    int count = 0, below = 0;
+    for (const auto& x : xs) {
+      const double h = nrm.dot(x) + d;
+      count += std::abs(h) < options_.floor_tolerance_mm ? 1 : 0;
+      below += h < -3 * options_.floor_tolerance_mm ? 1 : 0;
+    }
+    // The floor has (almost) nothing beneath it: a flat patch higher up (the top of an object, a table) has the
+    // floor and the object's sides below it (a restart's span on a sphere took its top cap for the floor).
+    if (below > kMaxBelowFloorFraction * n) continue;
     if (count > best_count) {
       best_count = count;
       best << nrm, d;
@@ -722,6 +740,21 @@ void PoseEstimator::AddKeyframe(int f) {
   int64_t t0 = MonotonicMicros();
   std::vector<int64_t> added;
   TriangulateNew(f, &added);
+  if (segment_floor_first_ >= 0) {
+    segment_floor_points_.insert(segment_floor_points_.end(), added.begin(), added.end());
+    double s = 1;
+    if (f - segment_floor_first_ > options_.online_scale_frames) {
+      segment_floor_first_ = -1;  // no floor seen in time: the odometry's scale stays
+      segment_floor_points_.clear();
+    } else if (RescaleToFloorHeight(segment_floor_first_, f, segment_floor_points_, segment_floor_first_, &s)) {
+      std::ostringstream m;
+      m << "map restarted at frame " << frames_[segment_floor_first_].seq << " scaled by " << s
+        << " from the camera height above its floor, seen by frame " << frames_[f].seq;
+      notice_ = m.str();
+      segment_floor_first_ = -1;
+      segment_floor_points_.clear();
+    }
+  }
   // Tracks waiting for parallax (from a map join or fuse_landmarks), and with fuse_landmarks the new landmarks.
   std::vector<int64_t> candidates;
   candidates.swap(fuse_pending_);
@@ -1245,7 +1278,7 @@ void PoseEstimator::RescaleSixDof(int first_frame) {
 }
 
 bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids,
-                                         int pivot_frame) {
+                                         int pivot_frame, double* applied_scale) {
   if (pivot_frame < 0 || !frames_[pivot_frame].posed) return false;
   std::vector<int64_t> floor_ids;
   Eigen::Vector4d plane;
@@ -1271,6 +1304,7 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
   }
   if (!(measured > 1e-6 && expected > 1e-6)) return false;
   const double s = expected / measured;
+  if (applied_scale) *applied_scale = s;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = c0 - s * c0;
   ApplySimilarity(s, t, first_frame, last_frame, point_ids);

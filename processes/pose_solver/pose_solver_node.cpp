@@ -271,6 +271,7 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   }
   const double frame_ms = (MonotonicMicros() - t0) * 1e-3;
   if (r.initialized_now) LogInfo(estimator_->last_message());
+  if (std::string notice = estimator_->TakeNotice(); !notice.empty()) LogInfo(notice);
   // Earlier frames of the preliminary window, posed by the new map: published now (same seq, late) and recorded
   // in place of their first (INITIALIZING / LOST) publication.
   BurstPacer pacer(bus_);  // the window can be longer than a subscriber's queue

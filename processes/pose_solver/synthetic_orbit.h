@@ -35,6 +35,7 @@ struct SyntheticOrbitOptions {
   double odometry_heading_drift_rad_per_frame = 0.0;
   double pan_bias_rad = 0.0, tilt_bias_rad = 0.0;
   int lost_begin = -1, lost_end = -1;  // frames [begin, end) see no features (tracking loss test)
+  int floor_hidden_begin = -1, floor_hidden_end = -1;  // frames [begin, end) see no floor point
   // Before the orbit, the robot turns in place at its start for this many frames, through turn_in_place_rad (ending
   // at the orbit's start heading): a span of pure rotation (the camera's 40 mm offset aside).
   int turn_in_place_frames = 0;
@@ -136,6 +137,7 @@ inline SyntheticOrbit MakeSyntheticOrbit(const SyntheticOrbitOptions& o) {
       const Eigen::Vector3d& p = s.points[i];
       if (visible && i < o.num_sphere_points)
         visible = (p - centre).dot(c - p) > 0.05 * (c - p).norm() * o.sphere_radius_mm;
+      if (visible && i >= o.num_sphere_points && f >= o.floor_hidden_begin && f < o.floor_hidden_end) visible = false;
       if (visible && i >= o.num_sphere_points) {  // floor point hidden behind the sphere?
         const Eigen::Vector3d d = (p - c).normalized();
         const double b = d.dot(c - centre);
