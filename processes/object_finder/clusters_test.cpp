@@ -76,5 +76,42 @@ TEST(ClustersTest, BoxOnTiltedFloor) {
   EXPECT_NEAR(floor.Height(box.centre_mm), 60.0, 1e-6);
 }
 
+// A 258 x 218 x 262 mm box (yaw 30 deg) seen from all sides, with 2 % stray landmarks up to 50 mm off its sides
+// (what a 50 mm linkage collects from noisy floor and drift): the footprint is the box's, not the strays' (room_05:
+// measured 361 x 276 mm with all points and dropped as too large).
+TEST(ClustersTest, StrayMembersDoNotInflateTheFootprint) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(0, 1);
+  const double yaw = 30 * M_PI / 180, sx = 258, sy = 218, sz = 262;
+  const Eigen::Rotation2Dd r(yaw);
+  std::vector<Eigen::Vector3d> floor_points;
+  for (int i = 0; i < 2000; ++i) {  // on the four sides, uniform by perimeter
+    double u = uni(rng) * 2 * (sx + sy), x, y;
+    if (u < sx) { x = u - sx / 2; y = -sy / 2; }
+    else if ((u -= sx) < sy) { x = sx / 2; y = u - sy / 2; }
+    else if ((u -= sy) < sx) { x = sx / 2 - u; y = sy / 2; }
+    else { u -= sx; x = -sx / 2; y = sy / 2 - u; }
+    const Eigen::Vector2d p = r * Eigen::Vector2d(x, y);
+    floor_points.emplace_back(p.x(), p.y(), 12 + uni(rng) * (sz - 12));
+  }
+  for (int i = 0; i < 40; ++i) {  // strays just outside, low
+    const double a = uni(rng) * 2 * M_PI, d = 0.5 * std::hypot(sx, sy) + 10 + 40 * uni(rng);
+    floor_points.emplace_back(d * std::cos(a), d * std::sin(a), 12 + 20 * uni(rng));
+  }
+  std::vector<int> members(floor_points.size());
+  for (size_t i = 0; i < members.size(); ++i) members[i] = static_cast<int>(i);
+  FloorPlane floor;
+  const ClusterBox box = FitClusterBox(floor_points, members, floor);
+  const double major = std::max(box.size_mm.x(), box.size_mm.y()), minor = std::min(box.size_mm.x(), box.size_mm.y());
+  EXPECT_NEAR(major, sx, 0.03 * sx);
+  EXPECT_NEAR(minor, sy, 0.03 * sy);
+  EXPECT_NEAR(box.centre_mm.head<2>().norm(), 0.0, 5.0);
+  // The plain minimum-area rectangle takes the strays in.
+  std::vector<Eigen::Vector2d> xy;
+  for (const auto& p : floor_points) xy.emplace_back(p.x(), p.y());
+  const Rectangle2d all = MinAreaRectangle(xy);
+  EXPECT_GT(std::max(all.extents.x(), all.extents.y()), 1.1 * sx);
+}
+
 }  // namespace
 }  // namespace objscan
