@@ -14,6 +14,8 @@ constexpr double kDeg = M_PI / 180.0;
 constexpr int64_t kSecond = 1000000;  // µs
 constexpr double kLookAroundTiltRad = 25 * kDeg;  // the floor from ~0.45 m to beyond the view range
 constexpr double kShuttleLegMm = 400;             // mm, one leg of the look-around shuttle
+constexpr int kMaxBypassRepeats = 2;               // bypasses to the same goal without orbit progress ...
+constexpr double kBypassProgressRad = 10 * kDeg;   // ... (less than this much azimuth) before the arc is given up
 constexpr double kShuttleSpeed = 100;             // mm/s
 constexpr double kStartArcSpeed = 100;          // mm/s
 constexpr double kStartArcTurn = 8 * kDeg;      // rad/s: the start span needs rotation as well as translation
@@ -660,9 +662,22 @@ bool Planner::StartBypass(double azimuth) {
       continue;
     }
     if (!passed_block || !cost_field_.Reachable(index)) continue;
+    const Eigen::Vector2d goal = map_.CentreOf(index);
+    const bool same = (goal - last_bypass_goal_).norm() < 150 &&
+                      std::abs(orbit_progress_ - last_bypass_progress_) < kBypassProgressRad;
+    bypass_repeats_ = same ? bypass_repeats_ + 1 : 0;
+    if (!same) {
+      last_bypass_goal_ = goal;
+      last_bypass_progress_ = orbit_progress_;
+    }
+    if (bypass_repeats_ >= kMaxBypassRepeats) {
+      Event("orbit: the bypass to " + Mm(goal) + " was tried " + std::to_string(bypass_repeats_ + 1) +
+            " times without orbit progress: that arc counts as blocked");
+      return false;
+    }
     follower_.SetPath(cost_field_.PathTo(map_, index));
     orbit_bypass_ = true;
-    Event("orbit: circle blocked ahead, bypass to " + Mm(map_.CentreOf(index)));
+    Event("orbit: circle blocked ahead, bypass to " + Mm(goal));
     return true;
   }
   return false;
@@ -812,6 +827,7 @@ Planner::Motion Planner::Orbit() {
       if (orbit_mappings_ < kMaxOrbitMappings && ChooseFrontier(&near, kOrbitMappingMm)) {
         ++orbit_mappings_;
         orbit_mapping_ = true;
+        bypass_repeats_ = 0;  // the map will know more: bypasses may lead somewhere after the trip
         has_fixation_ = false;
         Event("orbit: the circle runs into unmapped floor: mapping it first (" + std::to_string(orbit_mappings_) +
               " of " + std::to_string(kMaxOrbitMappings) + ")");

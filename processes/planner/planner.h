@@ -274,6 +274,11 @@ class Planner {
   std::vector<uint8_t> orbit_bins_ = std::vector<uint8_t>(360, 0);
   double orbit_radius_set_ = 0;
   bool orbit_bypass_ = false;
+  // Bypasses that lead back to where the last one went without orbit progress (room_09: the same bypass goal every
+  // 5.6 s for 255 s, until the frame budget ended the mission): after kMaxBypassRepeats the arc counts as blocked.
+  Eigen::Vector2d last_bypass_goal_ = Eigen::Vector2d::Constant(1e12);
+  double last_bypass_progress_ = 0;  // rad, orbit_progress_ when it was chosen
+  int bypass_repeats_ = 0;
   bool orbit_mapping_ = false;     // driving to unknown floor near the target (the circle ran into it)
   int orbit_mappings_ = 0;
   bool glancing_ = false;          // looking at the blocked arc ahead
