@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 
 #include "common/geometry.h"
@@ -138,9 +139,13 @@ std::vector<int64_t> CommonIds(const std::vector<TrackList>& frames, int first, 
 }
 
 bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOptions& options, int* first, int* last,
-                     std::vector<int64_t>* common_ids) {
+                     std::vector<int64_t>* common_ids, std::string* why) {
   const int n = static_cast<int>(frames.size());
-  if (n < std::max(3, options.min_frames)) return false;
+  const int min_frames = std::max(3, options.min_frames);
+  if (n < min_frames) {
+    if (why) *why = std::to_string(n) + " frames since the base last stood still (need " + std::to_string(min_frames) + ")";
+    return false;
+  }
   const int end = n - 1;
   // The earliest start whose window still shares enough tracks (longest baseline ending at the newest frame).
   int best_first = -1;
@@ -155,7 +160,13 @@ bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOption
     best_first = f;
     best_common = common;
   }
-  if (best_first < 0 || end - best_first + 1 < std::max(3, options.min_frames)) return false;
+  if (best_first < 0 || end - best_first + 1 < min_frames) {
+    if (why)
+      *why = std::to_string(best_first < 0 ? 1 : end - best_first + 1) + " newest frames share >= " +
+             std::to_string(options.min_common_tracks) + " tracks (need " + std::to_string(min_frames) +
+             " frames): tracks do not last";
+    return false;
+  }
   // Parallax test on the factorization of the window.
   std::vector<std::vector<Eigen::Vector2d>> w(end - best_first + 1);
   for (int f = best_first; f <= end; ++f) {
@@ -169,8 +180,20 @@ bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOption
     }
   }
   FactorizationResult fr;
-  if (!FactorizeWeakPerspective(w, &fr)) return false;
-  if (MaxRotationAngle(fr) < options.min_rotation_deg * M_PI / 180.0) return false;
+  if (!FactorizeWeakPerspective(w, &fr)) {
+    if (why) *why = "the factorization of the newest " + std::to_string(end - best_first + 1) + " frames failed";
+    return false;
+  }
+  if (MaxRotationAngle(fr) < options.min_rotation_deg * M_PI / 180.0) {
+    if (why) {
+      char text[160];
+      std::snprintf(text, sizeof(text), "rotation %.1f deg < %.1f deg over the newest %d frames (%zu common tracks)",
+                    MaxRotationAngle(fr) * 180 / M_PI, options.min_rotation_deg, end - best_first + 1,
+                    best_common.size());
+      *why = text;
+    }
+    return false;
+  }
   *first = best_first;
   *last = end;
   if (common_ids) *common_ids = best_common;

@@ -48,8 +48,9 @@ struct TrackList {
   std::vector<int64_t> ids;             // sorted ascending
   std::vector<Eigen::Vector2d> pixels;  // same order
 };
+// why (optional): on false, what was missing ("3 frames share >= 30 tracks (need 4)", "rotation 2.1 deg < 8 deg ...").
 bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOptions& options, int* first, int* last,
-                     std::vector<int64_t>* common_ids);
+                     std::vector<int64_t>* common_ids, std::string* why = nullptr);
 
 // Ids present in every frame of [first, last] (sorted).
 std::vector<int64_t> CommonIds(const std::vector<TrackList>& frames, int first, int last);

@@ -105,7 +105,12 @@ TEST(Factorization, StartSpanNeedsRotationAndCommonTracks) {
     t.ids.resize(20);
     t.pixels.resize(20);
   }
-  EXPECT_FALSE(SelectStartSpan(frames, o, &first, &last, nullptr));
+  std::string why;
+  EXPECT_FALSE(SelectStartSpan(frames, o, &first, &last, nullptr, &why));
+  EXPECT_NE(why.find("tracks do not last"), std::string::npos) << why;  // said in the pose solver's log
+  std::vector<TrackList> two(frames.begin(), frames.begin() + 2);
+  EXPECT_FALSE(SelectStartSpan(two, o, &first, &last, nullptr, &why));
+  EXPECT_NE(why.find("2 frames since the base last stood still"), std::string::npos) << why;
 }
 
 }  // namespace

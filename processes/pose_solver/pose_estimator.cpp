@@ -369,7 +369,10 @@ bool PoseEstimator::TryInitialize(int newest) {
       break;
     }
   }
-  if (newest - first_considered + 1 < options_.start_span.min_frames) return false;
+  if (newest - first_considered + 1 < options_.start_span.min_frames) {
+    init_wait_reason_ = std::to_string(newest - first_considered + 1) + " frames since the base last stood still";
+    return false;
+  }
   std::vector<TrackList> lists(newest - first_considered + 1);
   for (int f = first_considered; f <= newest; ++f) {
     lists[f - first_considered].ids = frames_[f].ids;
@@ -377,7 +380,7 @@ bool PoseEstimator::TryInitialize(int newest) {
   }
   int first = 0, last = 0;
   std::vector<int64_t> common;
-  if (!SelectStartSpan(lists, options_.start_span, &first, &last, &common)) return false;
+  if (!SelectStartSpan(lists, options_.start_span, &first, &last, &common, &init_wait_reason_)) return false;
   // A span turned in place (the robot turning on the spot after a loss) has rotation but no depth: its structure and
   // odometry scale are noise (room_03: a restart on 8 frames of turning gave a map 1.3x off). Wait for travel.
   double travel_mm = 0;
@@ -395,6 +398,7 @@ bool PoseEstimator::TryInitialize(int newest) {
       << frames_[last + first_considered].seq << " travelled " << travel_mm << " mm by the odometry (< "
       << options_.min_span_baseline_mm << " mm); waiting for travel";
     last_message_ = m.str();
+    init_wait_reason_ = m.str();
     return false;
   }
   const int64_t start_us = MonotonicMicros();

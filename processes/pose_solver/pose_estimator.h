@@ -217,6 +217,9 @@ class PoseEstimator {
   double init_ms() const { return init_ms_; }
   double final_ba_ms() const { return final_ba_ms_; }
   const std::string& last_message() const { return last_message_; }
+  // While there is no map (start, or after a loss): why the latest attempt did not start one; "" once tracking.
+  const std::string& init_wait_reason() const { return init_wait_reason_; }
+  bool has_map() const { return phase_ != Phase::kInitializing; }
   // A message about an event after initialization (e.g. a restarted map scaled by the floor later), once; else "".
   std::string TakeNotice() { return std::exchange(notice_, std::string()); }
   // Accumulated thread CPU ms of the sequential steps (benchmarks): PnP, triangulation, windowed BA.
@@ -354,6 +357,7 @@ class PoseEstimator {
   double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;
   std::string last_message_;
   std::string notice_;  // a later event worth a log line (TakeNotice)
+  std::string init_wait_reason_;  // why the latest preliminary-phase attempt did not start a map
   // kSixDof: a map restarted through odometry whose span showed no floor keeps the odometry's scale over a few
   // frames (room_05's closed loop: ~20 % off, the new floor 75 mm above the old one, the planner's map full of
   // phantom obstacles). Its first frame and landmarks, while the floor is looked for again at its keyframes.

@@ -272,6 +272,13 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   const double frame_ms = (MonotonicMicros() - t0) * 1e-3;
   if (r.initialized_now) LogInfo(estimator_->last_message());
   if (std::string notice = estimator_->TakeNotice(); !notice.empty()) LogInfo(notice);
+  // Without a map (start, or lost): say why no map starts, on the first such frame and every 150 frames after.
+  if (estimator_->has_map()) {
+    frames_without_map_ = 0;
+  } else if (frames_without_map_++ % 150 == 0 && !estimator_->init_wait_reason().empty()) {
+    LogInfo("no map yet at frame " + std::to_string(frame.seq) + " (" + std::to_string(frames_without_map_) +
+            " frames without one): " + estimator_->init_wait_reason());
+  }
   // Earlier frames of the preliminary window, posed by the new map: published now (same seq, late) and recorded
   // in place of their first (INITIALIZING / LOST) publication.
   BurstPacer pacer(bus_);  // the window can be longer than a subscriber's queue
