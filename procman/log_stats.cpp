@@ -1,28 +1,28 @@
 #include "procman/log_stats.h"
 
-#include <lcm/eventlog.h>
+#include "common/lcm_log.h"
 
 namespace objscan {
 
 bool ReadLogStats(const std::string& path, std::map<std::string, ChannelStats>* stats, std::string* error) {
-  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");
-  if (log == nullptr) {
-    *error = "cannot open LCM log " + path;
-    return false;
-  }
+  LcmLogReader log;
+  if (!log.Open(path, error)) return false;
   stats->clear();
-  while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log)) {
-    ChannelStats& s = (*stats)[std::string(event->channel, event->channellen)];
+  LcmLogEvent event;
+  while (log.Next(&event)) {
+    ChannelStats& s = (*stats)[event.channel];
     int64_t utime = 0;
-    if (RawMessageUtime(event->data, event->datalen, &utime)) {
+    if (RawMessageUtime(event.data.data(), static_cast<int>(event.data.size()), &utime)) {
       if (s.count == 0) s.first_utime = utime;
       s.last_utime = utime;
     }
     ++s.count;
-    s.bytes += event->datalen;
-    lcm_eventlog_free_event(event);
+    s.bytes += static_cast<int64_t>(event.data.size());
   }
-  lcm_eventlog_destroy(log);
+  if (log.damage().Any()) {
+    *error = path + ": " + log.damage().Describe();
+    return false;
+  }
   return true;
 }
 

@@ -20,7 +20,8 @@ struct ChannelStats {
 
 // RawMessageUtime / RawMessageSeq (common/bus.h) read a raw message's utime and seq.
 
-// Counts every event of the log. Returns false with *error when the file cannot be opened.
+// Counts every event of the log (common/lcm_log.h). Returns false with *error when the file cannot be opened, is no
+// log, or is damaged (the stats then hold the events that could be read).
 bool ReadLogStats(const std::string& path, std::map<std::string, ChannelStats>* stats, std::string* error);
 
 }  // namespace objscan

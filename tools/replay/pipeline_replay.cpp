@@ -1,6 +1,5 @@
 #include "tools/replay/pipeline_replay.h"
 
-#include <lcm/eventlog.h>
 #include <sys/stat.h>
 
 #include <memory>
@@ -8,6 +7,7 @@
 #include <vector>
 
 #include "common/bus.h"
+#include "common/lcm_log.h"
 #include "common/log.h"
 #include "common/options.h"
 #include "objscan/control_t.hpp"
@@ -74,12 +74,8 @@ bool ApplyNodeArgs(const std::string& node, const std::string& args, AddOptions 
 
 bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResult* result, std::string* error) {
   mkdir(options.out_dir.c_str(), 0755);
-  std::unique_ptr<lcm_eventlog_t, void (*)(lcm_eventlog_t*)> log(lcm_eventlog_create(options.log_path.c_str(), "r"),
-                                                                 lcm_eventlog_destroy);
-  if (log == nullptr) {
-    *error = "cannot read log " + options.log_path;
-    return false;
-  }
+  LcmLogReader log;
+  if (!log.Open(options.log_path, error)) return false;
   try {
     auto memq = MakeLcmBus("memq://");
     auto recorder = MakeLcmBus("datalog://" + options.out_dir + "/replay.lcmlog");
@@ -120,19 +116,20 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
       result->nodes += ",dense_modeler";
     }
 #endif
-    while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log.get())) {
+    LcmLogEvent event;
+    while (log.Next(&event)) {
       ++result->events_read;
-      const std::string channel(event->channel, event->channellen);
+      const std::string& channel = event.channel;
       const bool feed = options.input_channels.count(channel) &&
-                        (channel != "OBJSCAN_CONTROL" || IsFeedableControl(event->data, event->datalen));
+                        (channel != "OBJSCAN_CONTROL" || IsFeedableControl(event.data.data(), static_cast<int>(event.data.size())));
       if (feed) {
         ++result->events_fed;
-        memq->Publish(channel, event->data, event->datalen);
+        memq->Publish(channel, event.data.data(), static_cast<int>(event.data.size()));
         while (memq->Handle(0) > 0) {
         }
       }
-      lcm_eventlog_free_event(event);
     }
+    result->log_damage = log.damage().Describe();
     for (auto& node : nodes) node->OnShutdown();
     while (memq->Handle(0) > 0) {
     }

@@ -34,6 +34,7 @@ struct PipelineReplayResult {
   int64_t events_fed = 0;    // events published to the nodes
   int64_t messages_out = 0;  // messages the nodes published (all channels)
   std::string nodes;         // names of the nodes that ran
+  std::string log_damage;    // what of the log was skipped as damaged ("" when it was whole)
 };
 
 // Runs the replay. Blocks until the log is consumed. Returns false with *error when the log cannot be read or the

@@ -46,5 +46,10 @@ int main(int argc, char** argv) {
                result.nodes.c_str(), static_cast<long long>(result.events_read),
                static_cast<long long>(result.events_fed), static_cast<long long>(result.messages_out),
                options.out_dir.c_str());
+  if (!result.log_damage.empty()) {
+    objscan::LogError("the log is damaged: " + result.log_damage +
+                      "; the results cover the events that could be read (exit 3)");
+    return 3;
+  }
   return 0;
 }
