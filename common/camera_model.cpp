@@ -171,4 +171,9 @@ bool WriteCalibrationFile(const std::string& path, const PinholeCamera& camera, 
   return true;
 }
 
+bool SameCalibration(const PinholeCamera& a, const PinholeCamera& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+         a.skew == b.skew && a.k1 == b.k1 && a.k2 == b.k2 && a.p1 == b.p1 && a.p2 == b.p2 && a.k3 == b.k3;
+}
+
 }  // namespace objscan

@@ -47,6 +47,11 @@ struct PinholeCamera {
   }
 };
 
+// True when b has a's size, intrinsics and distortion exactly (the name aside). Every process keeps the first
+// camera_info it accepts and rejects a different later one (a second camera or session on the bus, or a forged
+// message: the fuzz test's fx = 500 had replaced the dense modeler's calibration).
+bool SameCalibration(const PinholeCamera& a, const PinholeCamera& b);
+
 // IsValid plus the principal point inside the image (a metric calibration). False with *why.
 bool CheckMetricCamera(const PinholeCamera& camera, std::string* why);
 

@@ -4,6 +4,8 @@
 #include <signal.h>
 #include <string.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/time.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -95,12 +97,14 @@ bool ChildProcess::Start(std::string* error) {
 bool ChildProcess::Running() {
   if (pid_ <= 0 || exited_) return false;
   int status = 0;
-  const pid_t r = waitpid(pid_, &status, WNOHANG);
+  struct rusage usage {};
+  const pid_t r = wait4(pid_, &status, WNOHANG, &usage);
   if (r == 0) return true;
   exited_ = true;
   if (r == pid_) {
     exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
     term_signal_ = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+    peak_rss_kb_ = usage.ru_maxrss;  // Linux: kB, the largest of the process and its waited-for children
   }
   return false;
 }

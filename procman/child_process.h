@@ -5,6 +5,7 @@
 
 #include <sys/types.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,8 @@ class ChildProcess {
   pid_t pid() const { return pid_; }
   bool started() const { return pid_ > 0; }
   int exit_code() const { return exit_code_; }
+  // After exit: the process's peak resident memory (kB; 0 before it exited).
+  int64_t peak_rss_kb() const { return peak_rss_kb_; }
   // After exit: "exited with code N" or "was killed by signal 9 (SIGKILL)".
   std::string DescribeExit() const;
   std::string CommandLine() const;
@@ -46,6 +49,7 @@ class ChildProcess {
   bool exited_ = false;
   int exit_code_ = -1;
   int term_signal_ = 0;  // the signal that ended it, 0 when it exited
+  int64_t peak_rss_kb_ = 0;
 };
 
 }  // namespace objscan

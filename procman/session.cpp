@@ -479,6 +479,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     json.Key(c.name()).BeginObject();
     json.Key("command").String(c.CommandLine());
     json.Key("exit_code").Int(c.exit_code());
+    json.Key("peak_rss_mb").Number(c.peak_rss_kb() / 1024.0);
     json.Key("log").String(c.log_path());
     auto it = monitor->statuses_.find(c.name());
     if (it != monitor->statuses_.end()) {

@@ -5,7 +5,8 @@
 # fields, forged sequence numbers, duplicate ids; 150 per second for the whole run). Checks: the fuzzed session ends
 # by itself with status ok and exit 0 (no crash, no stall: CTest's timeout), the processes counted rejections, the
 # supervisor counted malformed messages and no more frames than were sent, and the model is within 2x the clean
-# run's mesh p90 and completeness. Peak memory is not checked yet.
+# run's mesh p90 and completeness, and each process's peak resident memory (summary.json, from wait4) is under 2x the
+# clean run's (+ 20 MB for the small ones).
 set -euo pipefail
 BIN="$1"; SRC="$2"
 source "$SRC/tests/netns_lib.sh"
@@ -48,4 +49,13 @@ echo "mesh p90 clean $p90_clean mm, fuzzed $p90_fuzzed mm; completeness clean $c
 [ -n "$p90_clean" ] && [ -n "$p90_fuzzed" ] || fail "no mesh figures"
 awk -v a="$p90_fuzzed" -v b="$p90_clean" 'BEGIN {exit !(a <= 2 * b + 0.05)}' || fail "fuzzed mesh p90 more than 2x clean"
 awk -v a="$comp_fuzzed" -v b="$comp_clean" 'BEGIN {exit !(2 * a >= b)}' || fail "fuzzed completeness under half of clean"
-echo "PASS: $FRAMES frames under fire: no crash, no stall, hostile messages counted, the model within 2x"
+peaks() {  # NAME: "process peak_rss_mb" lines from summary.json
+  awk '/^    "[a-z_]+": \{/ {name = $1; gsub(/[":{ ]/, "", name)} /"peak_rss_mb":/ {v = $2; gsub(/,/, "", v); print name, v}' \
+    "$WORK/$1/summary.json" | sort
+}
+peaks clean > "$WORK/clean.rss"; peaks fuzzed > "$WORK/fuzzed.rss"
+[ -s "$WORK/clean.rss" ] || fail "no peak_rss_mb in the clean summary"
+join "$WORK/clean.rss" "$WORK/fuzzed.rss" | awk '{printf "peak RSS %-14s clean %7.1f MB, fuzzed %7.1f MB\n", $1, $2, $3;
+  if ($3 > 2 * $2 + 20) bad = bad " " $1} END {if (bad != "") {print "over 2x the clean run:" bad; exit 1}}' \
+  || fail "a process's peak memory under fire is more than 2x the clean run's"
+echo "PASS: $FRAMES frames under fire: no crash, no stall, hostile messages counted, the model and memory within 2x"

@@ -281,6 +281,11 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
 }
 
 namespace {
+// The same pose within what a re-publication could change (a float round trip): 0.01 mm, 1e-6 rad.
+bool SamePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm() < 0.01 &&
+         Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() < 1e-6;
+}
 const DenseModelerNodeOptions& ValidatedOrThrow(const DenseModelerNodeOptions& o) {
   std::string why;
   if (!ValidateDenseModelerNodeOptions(o, &why)) throw std::invalid_argument("dense_modeler node: " + why);
@@ -352,6 +357,10 @@ void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
     status_.Reject(error, "camera " + msg.camera_name);
     return;
   }
+  if (camera_ && !SameCalibration(*camera_, camera)) {
+    status_.Reject("camera_info: changed", "calibration of '" + msg.camera_name + "' differs from the first; ignored");
+    return;
+  }
   status_.CountIn();
   camera_ = camera;
 }
@@ -411,18 +420,48 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
                    "seq " + std::to_string(msg.seq) + " status " + std::to_string(static_cast<int>(pose.status)));
     return;
   }
+  // One frame has one pose: the pose solver never sends a second, different usable pose for a frame (its late poses
+  // replace only unusable first ones). A second one is forged or from a second session on the bus; which of the two
+  // is true cannot be told, so the frame is used no more (the fuzz test's forged seq-1 poses had made the model's
+  // p90 230 mm when one arrived before the true pose).
+  const std::string at = "seq " + std::to_string(msg.seq);
   if (final_pose) {
+    if (conflicting_final_.count(msg.seq)) {
+      status_.Reject("final pose: frame with conflicting poses", at);
+      return;
+    }
+    auto f = final_poses_.find(msg.seq);
+    if (f != final_poses_.end() && !SamePose(f->second, pose.world_from_camera)) {
+      status_.Reject("final pose: a second, different pose for the frame (forged, or a second session)", at);
+      final_poses_.erase(f);
+      conflicting_final_.insert(msg.seq);
+      return;
+    }
     status_.CountIn();
     final_poses_[msg.seq] = pose.world_from_camera;
     return;
   }
   auto it = frames_.find(msg.seq);
   if (it == frames_.end() || it->second.image.empty()) {
-    status_.Reject("pose: unknown frame", "seq " + std::to_string(msg.seq));
+    status_.Reject("pose: unknown frame", at);
+    return;
+  }
+  FrameSlot& slot = it->second;
+  if (slot.conflicting_poses) {
+    status_.Reject("pose: frame with conflicting poses", at);
+    return;
+  }
+  if (slot.pose && !SamePose(slot.pose->world_from_camera, pose.world_from_camera)) {
+    status_.Reject("pose: a second, different pose for the frame (forged, or a second session)", at);
+    slot.conflicting_poses = true;
+    carving_views_.erase(std::remove_if(carving_views_.begin(), carving_views_.end(),
+                                        [&](const StoredView& v) { return v.seq == msg.seq; }),
+                         carving_views_.end());
     return;
   }
   status_.CountIn();
-  it->second.pose = pose;
+  if (slot.pose) return;  // the same pose again
+  slot.pose = pose;
   TryProcess(msg.seq);
 }
 
@@ -572,6 +611,7 @@ void DenseModelerNode::QueuePair(int64_t seq_a, int64_t seq_b) {
   if (ia == frames_.end() || ib == frames_.end()) return;
   FrameSlot& pa = ia->second;
   FrameSlot& pb = ib->second;
+  if (pa.conflicting_poses || pb.conflicting_poses) return;
   if (!pa.processed || !pb.processed || pa.image.empty() || pb.image.empty()) return;
   if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
     int na = 0, nb = 0;
@@ -630,6 +670,7 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   if (ia == frames_.end() || ib == frames_.end() || ia->second.image.empty() || ib->second.image.empty()) return false;
   FrameSlot& pa = ia->second;
   FrameSlot& slot = ib->second;
+  if (pa.conflicting_poses || slot.conflicting_poses) return true;  // counted where the conflict was found
   const int64_t seq = seq_b;
   const int64_t start_us = MonotonicMicros();
   // Each frame's grays are made once for its two pairs (the pair matcher's and the dense pair's).

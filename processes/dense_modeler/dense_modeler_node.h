@@ -55,6 +55,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <set>
 #include <memory>
 #include <optional>
 #include <string>
@@ -168,6 +169,7 @@ class DenseModelerNode : public Node {
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only
     bool processed = false;                  // pairing / carving copy done
+    bool conflicting_poses = false;          // two different poses arrived for it: used no more
   };
   struct StoredView {
     int64_t seq = 0;
@@ -232,6 +234,7 @@ class DenseModelerNode : public Node {
   int64_t stored_matches_ = 0;
   bool stored_complete_ = true;  // false once max_stored_matches was exceeded (stored_pairs_ freed)
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
+  std::set<int64_t> conflicting_final_;  // frames with two different final poses: no final pose
   bool have_box_ = false;  // confirmed TARGET box
   Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();
   RegionOfInterest config_region_;                               // from roi_box

@@ -188,7 +188,12 @@ void ObjectFinderNode::OnCameraInfo(const camera_info_t& msg) {
     status_.Reject(error, "camera " + msg.camera_name);
     return;
   }
+  if (have_camera_ && !SameCalibration(first_camera_, camera)) {
+    status_.Reject("camera_info: changed", "calibration of '" + msg.camera_name + "' differs from the first; ignored");
+    return;
+  }
   status_.CountIn();
+  first_camera_ = camera;
   camera_.width = camera.width;
   camera_.height = camera.height;
   camera_.fx = camera.fx;

@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "common/camera_model.h"
 #include "common/node.h"
 #include "common/status.h"
 #include "objscan/camera_info_t.hpp"
@@ -109,6 +110,7 @@ class ObjectFinderNode : public Node {
   StatusReporter status_;
   std::map<int64_t, Eigen::Isometry3d> poses_;  // world_from_camera by seq, the last kPoseHistory
   bool have_camera_ = false;
+  PinholeCamera first_camera_;  // the accepted camera_info (a different later one is rejected)
   FinderCamera camera_;
   bool have_odometry_ = false;
   double odometry_x_mm_ = 0, odometry_y_mm_ = 0, odometry_pan_rad_ = 0;

@@ -332,7 +332,12 @@ void PlannerNode::OnCameraInfo(const camera_info_t& msg) {
     status_.Reject(error, "camera " + msg.camera_name);
     return;
   }
+  if (first_camera_ && !SameCalibration(*first_camera_, camera)) {
+    status_.Reject("camera_info: changed", "calibration of '" + msg.camera_name + "' differs from the first; ignored");
+    return;
+  }
   status_.CountIn();
+  first_camera_ = camera;
   CameraIntrinsics intrinsics;
   intrinsics.width = camera.width;
   intrinsics.height = camera.height;

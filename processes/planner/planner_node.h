@@ -34,8 +34,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
+#include "common/camera_model.h"
 #include "common/node.h"
 #include "common/status.h"
 #include "objscan/camera_info_t.hpp"
@@ -123,6 +125,7 @@ class PlannerNode : public Node {
   Phase logged_phase_ = Phase::kExplore;
   bool shutdown_sent_ = false;
   bool finished_ = false;
+  std::optional<PinholeCamera> first_camera_;  // the accepted camera_info (a different later one is rejected)
 };
 
 }  // namespace objscan

@@ -161,11 +161,7 @@ void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {
     return;
   }
   if (have_camera_) {
-    const bool same = camera.width == camera_.width && camera.height == camera_.height && camera.fx == camera_.fx &&
-                      camera.fy == camera_.fy && camera.cx == camera_.cx && camera.cy == camera_.cy &&
-                      camera.skew == camera_.skew && camera.k1 == camera_.k1 && camera.k2 == camera_.k2 &&
-                      camera.p1 == camera_.p1 && camera.p2 == camera_.p2 && camera.k3 == camera_.k3;
-    if (!same)
+    if (!SameCalibration(camera_, camera))
       status_.Reject("camera_info: changed", "calibration differs from the first; ignored");
     else
       status_.CountIn();
