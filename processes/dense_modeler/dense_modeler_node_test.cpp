@@ -221,6 +221,43 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
 
 // With --refine-mesh the node keeps full-resolution gray copies of its carving views and the final phase refines
 // the mesh in them (photometric_refinement.h); off (the default) nothing is scored.
+// A second, different pose for a frame (forged, or a second session on the bus) and a second calibration are
+// rejected and counted; the frame takes part in no later pair and the model stays where the object is.
+TEST_F(NodeFixture, ConflictingPoseAndCalibrationAreRejected) {
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  PublishTarget();
+  const int n = 16;
+  const auto features = scene_.SurfacePoints(2000);
+  for (int i = 0; i <= n; ++i) {
+    PublishFrame(i, n, features);
+    if (i == 5) {  // a forged pose for frame 5, 300 mm off, and a forged calibration
+      CameraPoseEstimate forged;
+      forged.seq = 5;
+      forged.utime = std::llround(5 * 1e6 / 30);
+      forged.world_from_camera = scene_.RingPose(5, n);
+      forged.world_from_camera.translation().x() += 300;
+      forged.status = PoseStatus::kTracking;
+      bus_->PublishMessage("CAMERA_POSE", PoseToMessage(forged));
+      PinholeCamera other = scene_.camera;
+      other.fx *= 1.1;
+      bus_->PublishMessage("CAMERA_INFO", CameraToMessage(other, 0));
+      PublishPose(5, n);  // the true pose once more: rejected too, the frame is used no more
+      Drain();
+    }
+  }
+  EXPECT_EQ(node.status().rejected_total(), 3);  // the forged pose, the calibration, the pose after the conflict
+  EXPECT_LE(node.pairs_done(), n - 1);            // pair 5-6 not run
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  ASSERT_EQ(out_.models.size(), 1u);
+  const model_t& m = out_.models[0];
+  EXPECT_GT(m.num_voxels, 5000);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_GT(m.bbox_min_mm[k], -140);
+    EXPECT_LT(m.bbox_max_mm[k], 140);
+  }
+}
+
 TEST_F(NodeFixture, MeshRefinementUsesTheKeptViewsWhenOn) {
   const int n = 16;
   const auto features = scene_.SurfacePoints(2000);
