@@ -281,6 +281,18 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
 }
 
 namespace {
+// Landmarks describe frames already seen: a seq further ahead of the newest image is forged.
+constexpr int64_t kLandmarksSeqAheadOfImages = 300;
+
+// The same track set: the same ids and pixels (a re-publication, not a second tracker's).
+bool SameTracks(const TrackFrame& a, const TrackFrame& b) {
+  if (a.features.size() != b.features.size()) return false;
+  for (size_t i = 0; i < a.features.size(); ++i)
+    if (a.features[i].id != b.features[i].id || a.features[i].u != b.features[i].u || a.features[i].v != b.features[i].v)
+      return false;
+  return true;
+}
+
 // The same pose within what a re-publication could change (a float round trip): 0.01 mm, 1e-6 rad.
 bool SamePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return (a.translation() - b.translation()).norm() < 0.01 &&
@@ -383,6 +395,7 @@ void DenseModelerNode::OnImage(const image_t& msg) {
     status_.Reject("image: older than the ring buffer", "seq " + std::to_string(msg.seq));
     return;
   }
+  newest_image_seq_ = std::max(newest_image_seq_, msg.seq);
   status_.CountIn();
   status_.SetLastDataUtime(msg.utime);
   if (frame.image.channels() == 1) cv::cvtColor(frame.image, frame.image, cv::COLOR_GRAY2BGR);
@@ -402,6 +415,24 @@ void DenseModelerNode::OnTracks(const feature_tracks_t& msg) {
   if (!slot) {
     status_.Reject("tracks: older than the ring buffer", "seq " + std::to_string(msg.seq));
     return;
+  }
+  // One frame, one set of tracks (as for poses, OnPose): a second, different one makes the frame unusable.
+  if (slot->conflicting_poses) {
+    status_.Reject("tracks: frame with conflicting inputs", "seq " + std::to_string(msg.seq));
+    return;
+  }
+  if (slot->tracks) {
+    if (!SameTracks(*slot->tracks, tracks)) {
+      status_.Reject("tracks: a second, different set for the frame (forged, or a second session)",
+                     "seq " + std::to_string(msg.seq));
+      slot->conflicting_poses = true;
+      carving_views_.erase(std::remove_if(carving_views_.begin(), carving_views_.end(),
+                                          [&](const StoredView& v) { return v.seq == msg.seq; }),
+                           carving_views_.end());
+      return;
+    }
+    status_.CountIn();
+    return;  // the same tracks again
   }
   status_.CountIn();
   slot->tracks = std::move(tracks);
@@ -501,6 +532,16 @@ void DenseModelerNode::OnLandmarks(const landmarks_t& msg) {
     status_.Reject("landmarks: not in world frame", "frame " + msg.frame);
     return;
   }
+  // Each message replaces the whole map: one from the past (older than the map in use) or about a frame not seen
+  // yet (a forged seq) would replace it with something else (the fuzz test's 5 landmarks at (1, 2, 3) mm moved the
+  // region of interest: model p90 434 mm).
+  if (msg.seq < last_landmarks_seq_ || msg.seq > newest_image_seq_ + kLandmarksSeqAheadOfImages) {
+    status_.Reject(msg.seq < last_landmarks_seq_ ? "landmarks: older than the map in use" : "landmarks: seq ahead of the images",
+                   "seq " + std::to_string(msg.seq) + ", map in use " + std::to_string(last_landmarks_seq_) +
+                       ", newest image " + std::to_string(newest_image_seq_));
+    return;
+  }
+  last_landmarks_seq_ = msg.seq;
   status_.CountIn();
   landmark_ids_.clear();
   landmark_points_.clear();

@@ -54,6 +54,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <set>
 #include <memory>
@@ -169,7 +170,7 @@ class DenseModelerNode : public Node {
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only
     bool processed = false;                  // pairing / carving copy done
-    bool conflicting_poses = false;          // two different poses arrived for it: used no more
+    bool conflicting_poses = false;          // two different poses or track sets arrived for it: used no more
   };
   struct StoredView {
     int64_t seq = 0;
@@ -257,6 +258,8 @@ class DenseModelerNode : public Node {
   int64_t dense_points_ = 0;
   int64_t refine_searches_ = 0, refine_full_searches_ = 0;  // epipolar searches of the pairs so far, every step scored
   int64_t last_seq_ = -1, last_utime_ = 0;
+  int64_t newest_image_seq_ = -1;                       // newest image accepted
+  int64_t last_landmarks_seq_ = std::numeric_limits<int64_t>::min();  // seq of the landmark map in use
   int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
   int64_t complete_frames_ = 0;
   int final_poses_used_ = 0;

@@ -313,8 +313,9 @@ class PoseEstimator {
   // Rescales frames first_frame..last_frame and the points point_ids about the centre of pivot_frame so that the
   // cameras' mean height above the floor plane found among those points equals the robot model's for their tilt
   // relative to the plane; sets SCALE_CAMERA_HEIGHT. Returns false (nothing changed) when no floor is found.
+  // max_factor > 0: a scale change beyond [1 / max_factor, max_factor] is not applied (false, *applied_scale set).
   bool RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids, int pivot_frame,
-                            double* applied_scale = nullptr);
+                            double* applied_scale = nullptr, double max_factor = 0);
   // Median over consecutive posed frames with odometry in [first_frame, last_frame] of odometry / visual step
   // length. False when no step qualifies.
   bool OdometryStepScale(int first_frame, int last_frame, double* scale) const;
