@@ -212,7 +212,11 @@ std::vector<std::string> Planner::TakeEvents() {
   return out;
 }
 
-bool Planner::Stuck() const { return blocked_since_ >= 0 && now_ - blocked_since_ > 2 * kSecond; }
+bool Planner::Stuck() const {
+  const bool held_by_the_map = blocked_since_ >= 0 && now_ - blocked_since_ > 2 * kSecond;
+  const bool not_moving = std::abs(commanded_v_mm_s_) > 20 && now_ - progress_utime_ > 3 * kSecond;
+  return held_by_the_map || not_moving;
+}
 
 double Planner::PhaseSeconds() const {
   return phases_.empty() ? 0.0 : (now_ - phases_.back().start_utime) * 1e-6;
@@ -252,6 +256,10 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
     const double moved = (base.position() - base_.position()).norm();
     if (moved < 300) path_length_mm_ += moved;  // a relocalization jump is no travel
     if (path_.empty() || (base.position() - path_.back()).norm() >= 50) path_.push_back(base.position());
+  }
+  if (!have_base_ || (base.position() - progress_position_).norm() > 30 || std::abs(commanded_v_mm_s_) <= 20) {
+    progress_position_ = base.position();
+    progress_utime_ = now_;
   }
   base_ = base;
   have_base_ = true;
@@ -319,6 +327,7 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
   tilt_command_ = tilt;
+  commanded_v_mm_s_ = v.v_mm_s;
   PlannerCommand command;
   command.stop = false;
   command.v_mm_s = v.v_mm_s;
@@ -675,7 +684,11 @@ bool Planner::StartBypass(double azimuth) {
             " times without orbit progress: that arc counts as blocked");
       return false;
     }
-    follower_.SetPath(cost_field_.PathTo(map_, index));
+    std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, index);
+    // Time to get there (room_08: a bypass followed for 150 s, neither reached nor stuck, until the frame budget).
+    bypass_deadline_ =
+        now_ + static_cast<int64_t>((2 * PathLength(path) / options_.orbit_speed_mm_s + 15) * kSecond);
+    follower_.SetPath(std::move(path));
     orbit_bypass_ = true;
     Event("orbit: circle blocked ahead, bypass to " + Mm(goal));
     return true;
@@ -780,7 +793,9 @@ Planner::Motion Planner::Orbit() {
     }
   }
   if (orbit_bypass_) {
-    if (follower_.empty() || follower_.Reached(base_, 80) || Stuck()) {
+    if (now_ > bypass_deadline_ && !follower_.empty() && !follower_.Reached(base_, 80))
+      Event("orbit: the bypass to " + Mm(follower_.goal()) + " was not reached in time");
+    if (follower_.empty() || follower_.Reached(base_, 80) || Stuck() || now_ > bypass_deadline_) {
       blocked_since_ = -1;
       orbit_bypass_ = false;
       follower_.Clear();

@@ -240,6 +240,12 @@ class Planner {
   bool head_initialised_ = false;
   double dt_ = 1.0 / 30.0;      // s, period of the current step
   int64_t blocked_since_ = -1;  // µs, since when the safety check holds a robot that wants to move
+  // A base that is told to drive but does not move (held by something the map does not show; room_08's base touched
+  // a table and stood against it for 6 367 frames while the planner followed its bypass): the last position that
+  // was 30 mm from the one before, when it was reached, and the speed last commanded.
+  Eigen::Vector2d progress_position_ = Eigen::Vector2d::Zero();
+  int64_t progress_utime_ = 0;
+  double commanded_v_mm_s_ = 0;
   double last_step_ms_ = 0, last_next_view_ms_ = 0;
 
   // target
@@ -279,6 +285,7 @@ class Planner {
   Eigen::Vector2d last_bypass_goal_ = Eigen::Vector2d::Constant(1e12);
   double last_bypass_progress_ = 0;  // rad, orbit_progress_ when it was chosen
   int bypass_repeats_ = 0;
+  int64_t bypass_deadline_ = 0;  // µs, data time by which the current bypass should have been driven
   bool orbit_mapping_ = false;     // driving to unknown floor near the target (the circle ran into it)
   int orbit_mappings_ = 0;
   bool glancing_ = false;          // looking at the blocked arc ahead
