@@ -202,6 +202,7 @@ void PoseSolverNode::OnOdometry(const odometry_t& msg) {
   }
   status_.ObserveSeq("odometry", msg.seq);
   status_.CountIn();
+  odometry_seen_ = true;
 }
 
 void PoseSolverNode::OnTracks(const feature_tracks_t& msg) {
@@ -431,8 +432,14 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
       static_cast<double>(posed) < options_.min_posed_fraction * static_cast<double>(frames)) {
     failure = "only " + std::to_string(posed) + " of " + std::to_string(frames) +
               " frames got a pose (min-posed-fraction " + std::to_string(options_.min_posed_fraction).substr(0, 4) +
-              "): neighbouring views share too few tracks. Try views closer together or in order around the object "
-              "(--order), the other tracking mode (--klt / --wide-baseline), or more texture";
+              "): ";
+    if (odometry_seen_)  // a robot: the stream is continuous, so tracking was lost and no new map started
+      failure += "tracking was lost and no new map started for long (last reason: " +
+                 (estimator_->init_wait_reason().empty() ? std::string("none logged") : estimator_->init_wait_reason()) +
+                 "). A new map needs the base to travel with texture in view; see the log's 'no map yet' lines";
+    else
+      failure += "neighbouring views share too few tracks. Try views closer together or in order around the object "
+                 "(--order), the other tracking mode (--klt / --wide-baseline), or more texture";
     LogError(failure);
   }
   PublishFinished(bus_, status_, options_.control_channel, options_.name, last_seq_ >= 0 ? last_utime_ : msg.utime,

@@ -108,7 +108,8 @@ class PoseSolverNode : public Node {
   std::unique_ptr<ObservationSpool> spool_;  // with output_dir: every frame's observations, on disk, for the COLMAP
                                              // model written at the end (memory stays flat over a long stream)
   int64_t last_seq_ = -1, last_utime_ = 0;
-  int64_t frames_without_map_ = 0;  // frames in a row without a map (start or lost)
+  int64_t frames_without_map_ = 0;
+  bool odometry_seen_ = false;  // an odometry reading was accepted (a robot, not an image folder)  // frames in a row without a map (start or lost)
   int64_t lost_frames_ = 0;
   bool finished_ = false;
 };
