@@ -109,11 +109,14 @@ bool ChildProcess::Running() {
   return false;
 }
 
+std::string SignalName(int signal) {
+  const char* name = sigabbrev_np(signal);
+  return name ? std::string("SIG") + name : "signal " + std::to_string(signal);
+}
+
 std::string ChildProcess::DescribeExit() const {
-  if (term_signal_ != 0) {
-    const char* name = sigabbrev_np(term_signal_);
-    return "was killed by signal " + std::to_string(term_signal_) + (name ? std::string(" (SIG") + name + ")" : "");
-  }
+  if (term_signal_ != 0)
+    return "was killed by signal " + std::to_string(term_signal_) + " (" + SignalName(term_signal_) + ")";
   return "exited with code " + std::to_string(exit_code_);
 }
 

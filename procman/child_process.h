@@ -11,6 +11,9 @@
 
 namespace objscan {
 
+// "SIGKILL" for 9 ("signal N" when unknown).
+std::string SignalName(int signal);
+
 class ChildProcess {
  public:
   ChildProcess(std::string name, std::vector<std::string> argv, std::string log_path);

@@ -1,7 +1,5 @@
 #include "procman/session.h"
 
-#include <string.h>
-
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -218,6 +216,44 @@ bool ParseProcessList(const std::string& text, std::vector<SessionProcess>* proc
   return true;
 }
 
+namespace {
+// A run that was interrupted or lost a process: the surviving processors still finish what they have (trajectory,
+// model), in list order, so each can take what the one before it wrote. Each gets its usual trigger (the drivers' end
+// of stream, the FINISHED of the one before it) and, when that does not come, FINALIZE addressed to it; each has
+// finalize_timeout_s, a second stop signal ends the wait. Returns why the results are partial.
+std::string FinishSurvivors(bool interrupted, const SessionOptions& options, const std::vector<SessionProcess>& processes,
+                            const std::vector<std::unique_ptr<ChildProcess>>& children, Bus& bus, Monitor& monitor) {
+  const std::string partial = interrupted ? "interrupted by " + SignalName(StopSignal()) : "a process failed";
+  const int stop_count = StopRequestCount();
+  for (size_t i = 0; i < children.size(); ++i) {
+    ChildProcess& c = *children[i];
+    const auto done = [&] { return !c.Running() || monitor.finished_.count(c.name()) > 0; };
+    if (processes[i].is_driver || done()) continue;
+    const int64_t trigger_until = MonotonicMicros() + 500'000;  // the trigger from upstream, if any, arrives
+    while (MonotonicMicros() < trigger_until) bus.Handle(10);
+    if (done()) continue;
+    control_t request;
+    request.utime = 0;
+    request.sender = "objscan_session";
+    request.target = c.name();
+    request.command = control_t::COMMAND_FINALIZE;
+    request.last_seq = -1;
+    request.argument = partial;
+    bus.PublishMessage(kControlChannel, request);
+    std::fprintf(stderr, "[objscan] %s: waiting for %s to write what it has\n", partial.c_str(), c.name().c_str());
+    const int64_t until = MonotonicMicros() + static_cast<int64_t>(options.finalize_timeout_s * 1e6);
+    while (!done() && MonotonicMicros() < until && StopRequestCount() == stop_count) bus.Handle(50);
+    if (StopRequestCount() != stop_count) {
+      std::fprintf(stderr, "[objscan] second stop signal: stopping without waiting for the results\n");
+      break;
+    }
+    if (!done())
+      std::fprintf(stderr, "[objscan] %s did not finish within %.0f s\n", c.name().c_str(), options.finalize_timeout_s);
+  }
+  return partial;
+}
+}  // namespace
+
 int RunSession(const SessionOptions& options, const std::vector<SessionProcess>& processes) {
   InstallStopSignalHandlers();
   const int64_t start_us = MonotonicMicros();
@@ -366,41 +402,9 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   }
   for (size_t i = 0; i < children.size(); ++i)
     if (processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
-  // A run that was interrupted or lost a process: the survivors still finish what they have (trajectory, model), in
-  // list order, so each can take what the one before it wrote. Each gets its usual trigger (the drivers' end of
-  // stream, the FINISHED of the one before it) and, when that does not come, FINALIZE addressed to it.
-  std::string partial;
-  if (!failure.empty() || interrupted) {
-    const char* signal_name = sigabbrev_np(StopSignal());
-    partial = interrupted ? "interrupted by SIG" + std::string(signal_name ? signal_name : "?") : "a process failed";
-    const int stop_count = StopRequestCount();
-    for (size_t i = 0; i < children.size(); ++i) {
-      ChildProcess& c = *children[i];
-      if (processes[i].is_driver || !c.Running() || monitor->finished_.count(c.name())) continue;
-      pump(500);  // the trigger from upstream, if any, arrives
-      if (monitor->finished_.count(c.name()) || !c.Running()) continue;
-      control_t request;
-      request.utime = 0;
-      request.sender = "objscan_session";
-      request.target = c.name();
-      request.command = control_t::COMMAND_FINALIZE;
-      request.last_seq = -1;
-      request.argument = partial;
-      bus->PublishMessage(kControlChannel, request);
-      std::fprintf(stderr, "[objscan] %s: waiting for %s to write what it has\n", partial.c_str(), c.name().c_str());
-      const int64_t until = MonotonicMicros() + static_cast<int64_t>(options.finalize_timeout_s * 1e6);
-      while (c.Running() && !monitor->finished_.count(c.name()) && MonotonicMicros() < until &&
-             StopRequestCount() == stop_count)
-        bus->Handle(50);
-      if (StopRequestCount() != stop_count) {
-        std::fprintf(stderr, "[objscan] second stop signal: stopping without waiting for the results\n");
-        break;
-      }
-      if (c.Running() && !monitor->finished_.count(c.name()))
-        std::fprintf(stderr, "[objscan] %s did not finish within %.0f s\n", c.name().c_str(),
-                     options.finalize_timeout_s);
-    }
-  }
+  const std::string partial = failure.empty() && !interrupted
+                                  ? std::string()
+                                  : FinishSurvivors(interrupted, options, processes, children, *bus, *monitor);
   for (size_t i = 0; i < children.size(); ++i)
     if (!processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
   pump(options.flush_wait_ms);  // the logger writes what is still buffered

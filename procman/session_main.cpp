@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "[objscan] %s held an earlier run: moved it to %s\n", options.out_dir.c_str(),
                  moved_to.c_str());
   const std::string kept_list = options.out_dir + "/processes.txt";
-  std::ofstream(kept_list) << text.str();
+  if (!(std::ofstream(kept_list) << text.str())) objscan::LogWarning("cannot write " + kept_list);
   if (stop_with_parent) {
     const pid_t parent = getppid();
     prctl(PR_SET_PDEATHSIG, SIGTERM);

@@ -417,18 +417,13 @@ void DenseModelerNode::OnTracks(const feature_tracks_t& msg) {
     return;
   }
   // One frame, one set of tracks (as for poses, OnPose): a second, different one makes the frame unusable.
-  if (slot->conflicting_poses) {
+  if (slot->conflicting_inputs) {
     status_.Reject("tracks: frame with conflicting inputs", "seq " + std::to_string(msg.seq));
     return;
   }
   if (slot->tracks) {
     if (!SameTracks(*slot->tracks, tracks)) {
-      status_.Reject("tracks: a second, different set for the frame (forged, or a second session)",
-                     "seq " + std::to_string(msg.seq));
-      slot->conflicting_poses = true;
-      carving_views_.erase(std::remove_if(carving_views_.begin(), carving_views_.end(),
-                                          [&](const StoredView& v) { return v.seq == msg.seq; }),
-                           carving_views_.end());
+      MarkConflicting(msg.seq, slot, "tracks: a second, different set for the frame (forged, or a second session)");
       return;
     }
     status_.CountIn();
@@ -437,6 +432,14 @@ void DenseModelerNode::OnTracks(const feature_tracks_t& msg) {
   status_.CountIn();
   slot->tracks = std::move(tracks);
   TryProcess(msg.seq);
+}
+
+void DenseModelerNode::MarkConflicting(int64_t seq, FrameSlot* slot, const std::string& reason) {
+  status_.Reject(reason, "seq " + std::to_string(seq));
+  slot->conflicting_inputs = true;
+  carving_views_.erase(std::remove_if(carving_views_.begin(), carving_views_.end(),
+                                      [&](const StoredView& v) { return v.seq == seq; }),
+                       carving_views_.end());
 }
 
 void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
@@ -478,16 +481,12 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
     return;
   }
   FrameSlot& slot = it->second;
-  if (slot.conflicting_poses) {
+  if (slot.conflicting_inputs) {
     status_.Reject("pose: frame with conflicting poses", at);
     return;
   }
   if (slot.pose && !SamePose(slot.pose->world_from_camera, pose.world_from_camera)) {
-    status_.Reject("pose: a second, different pose for the frame (forged, or a second session)", at);
-    slot.conflicting_poses = true;
-    carving_views_.erase(std::remove_if(carving_views_.begin(), carving_views_.end(),
-                                        [&](const StoredView& v) { return v.seq == msg.seq; }),
-                         carving_views_.end());
+    MarkConflicting(msg.seq, &slot, "pose: a second, different pose for the frame (forged, or a second session)");
     return;
   }
   status_.CountIn();
@@ -652,7 +651,7 @@ void DenseModelerNode::QueuePair(int64_t seq_a, int64_t seq_b) {
   if (ia == frames_.end() || ib == frames_.end()) return;
   FrameSlot& pa = ia->second;
   FrameSlot& pb = ib->second;
-  if (pa.conflicting_poses || pb.conflicting_poses) return;
+  if (pa.conflicting_inputs || pb.conflicting_inputs) return;
   if (!pa.processed || !pb.processed || pa.image.empty() || pb.image.empty()) return;
   if (options_.max_pair_landmark_error_px > 0 && !landmark_by_id_.empty()) {
     int na = 0, nb = 0;
@@ -711,7 +710,7 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   if (ia == frames_.end() || ib == frames_.end() || ia->second.image.empty() || ib->second.image.empty()) return false;
   FrameSlot& pa = ia->second;
   FrameSlot& slot = ib->second;
-  if (pa.conflicting_poses || slot.conflicting_poses) return true;  // counted where the conflict was found
+  if (pa.conflicting_inputs || slot.conflicting_inputs) return true;  // counted where the conflict was found
   const int64_t seq = seq_b;
   const int64_t start_us = MonotonicMicros();
   // Each frame's grays are made once for its two pairs (the pair matcher's and the dense pair's).

@@ -56,9 +56,9 @@
 #include <deque>
 #include <limits>
 #include <map>
-#include <set>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -170,7 +170,7 @@ class DenseModelerNode : public Node {
     std::optional<TrackFrame> tracks;
     std::optional<CameraPoseEstimate> pose;  // usable poses only
     bool processed = false;                  // pairing / carving copy done
-    bool conflicting_poses = false;          // two different poses or track sets arrived for it: used no more
+    bool conflicting_inputs = false;          // two different poses or track sets arrived for it: used no more
   };
   struct StoredView {
     int64_t seq = 0;
@@ -198,6 +198,9 @@ class DenseModelerNode : public Node {
   // full and seq is older than all its frames (it would be evicted at once).
   FrameSlot* Slot(int64_t seq);
   void TryProcess(int64_t seq);
+  // A second, different pose or track set for frame seq: rejected (reason), the frame used no more (its carving view
+  // dropped, no later pair).
+  void MarkConflicting(int64_t seq, FrameSlot* slot, const std::string& reason);
   // Queues the pair (seq_a, seq_b) when both frames are complete, unless its frames disagree with the landmarks
   // (max_pair_landmark_error_px: then skipped and counted), and runs the waiting pairs that can run.
   void QueuePair(int64_t seq_a, int64_t seq_b);
