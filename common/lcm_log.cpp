@@ -37,12 +37,12 @@ bool LcmLogReader::ReadAt(int64_t offset, void* out, size_t bytes) {
 bool LcmLogReader::Open(const std::string& path, std::string* error) {
   struct stat st {};
   if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-    *error = "cannot read log " + path + ": no such file";
+    *error = "cannot open log " + path + ": no such file";
     return false;
   }
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) {
-    *error = "cannot read log " + path;
+    *error = "cannot open log " + path;
     return false;
   }
   size_ = st.st_size;
@@ -56,6 +56,13 @@ bool LcmLogReader::Open(const std::string& path, std::string* error) {
     return false;
   }
   return true;
+}
+
+bool LcmLogReader::CutTail() {
+  damage_.truncated_tail = true;
+  if (damage_.first_offset < 0) damage_.first_offset = offset_;
+  offset_ = size_;
+  return false;
 }
 
 bool LcmLogReader::Next(LcmLogEvent* event) {
@@ -98,21 +105,13 @@ bool LcmLogReader::Next(LcmLogEvent* event) {
         }
         if (!later) {
           end_skip(offset_);
-          damage_.truncated_tail = true;
-          if (damage_.first_offset < 0) damage_.first_offset = offset_;
-          offset_ = size_;
-          return false;
+          return CutTail();
         }
       }
     } else if (!have_header && skip_start < 0) {
       // Fewer bytes left than a header: a cut tail if they start like one, else trailing garbage.
       uint8_t m[4];
-      if (size_ - offset_ >= 4 && ReadAt(offset_, m, 4) && U32(m) == kMagic) {
-        damage_.truncated_tail = true;
-        if (damage_.first_offset < 0) damage_.first_offset = offset_;
-        offset_ = size_;
-        return false;
-      }
+      if (size_ - offset_ >= 4 && ReadAt(offset_, m, 4) && U32(m) == kMagic) return CutTail();
     }
     if (skip_start < 0) skip_start = offset_;
     ++offset_;  // resynchronise: the next byte that starts a header that parses

@@ -45,6 +45,7 @@ class LcmLogReader {
 
  private:
   bool ReadAt(int64_t offset, void* out, size_t bytes);
+  bool CutTail();  // the file ends inside the event at offset_: counted, reading ends (returns false)
   std::FILE* file_ = nullptr;
   int64_t size_ = 0, offset_ = 0, events_ = 0;
   LcmLogDamage damage_;

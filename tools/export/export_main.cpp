@@ -107,7 +107,12 @@ int ExportLog(int argc, char** argv) {
   if (s.calibration_changes > 0) LogWarning("the calibration changes over the log: calib.yaml holds the first one");
   if (s.frames_without_true_pose > 0)
     LogWarning("some frames have no true pose: poses_gt.txt has fewer lines than images/ has files");
-  return s.frames_written > 0 ? 0 : Fail("no frame written");
+  if (s.frames_written == 0) return Fail("no frame written");
+  if (!result.log_damage.empty()) {
+    LogError("the log is damaged: " + result.log_damage + "; the folder holds the frames that could be read (exit 3)");
+    return 3;
+  }
+  return 0;
 }
 }  // namespace
 

@@ -1,8 +1,7 @@
 #include "tools/export/log_export.h"
 
-#include <lcm/eventlog.h>
-
 #include "common/adapters.h"
+#include "common/lcm_log.h"
 #include "common/log.h"
 #include "common/message_size_check.h"
 #include "common/options.h"
@@ -19,8 +18,8 @@ bool Fail(std::string* error, const std::string& text) {
 }
 
 template <class Msg>
-bool Decode(const lcm_eventlog_event_t& event, Msg* msg) {
-  return DecodeMessage(event.data, event.datalen, msg, nullptr);
+bool Decode(const LcmLogEvent& event, Msg* msg) {
+  return DecodeMessage(event.data.data(), static_cast<int>(event.data.size()), msg, nullptr);
 }
 }  // namespace
 
@@ -50,33 +49,31 @@ bool ValidateLogExportOptions(const LogExportOptions& options, std::string* why)
 bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result, std::string* error) {
   *result = LogExportResult();
   if (!ValidateLogExportOptions(options, error)) return false;
-  lcm_eventlog_t* log = lcm_eventlog_create(options.log_path.c_str(), "r");
-  if (log == nullptr) return Fail(error, "cannot open LCM log " + options.log_path);
+  LcmLogReader log;
+  if (!log.Open(options.log_path, error)) return false;
 
   DatasetWriter writer;
   DatasetWriterOptions writer_options;
   writer_options.out_dir = options.out_dir;
   writer_options.every = options.every;
   writer_options.max_frames = options.max_frames;
-  if (!writer.Open(writer_options, error)) {
-    lcm_eventlog_destroy(log);
-    return false;
-  }
+  if (!writer.Open(writer_options, error)) return false;
   auto reject = [result](const std::string& reason, const std::string& detail) {
     if (result->rejected[reason]++ == 0) LogWarning("skipped: " + reason + " (" + detail + "); further ones counted");
   };
 
   bool ok = true;
-  while (lcm_eventlog_event_t* event = lcm_eventlog_read_next_event(log)) {
+  LcmLogEvent event;
+  while (log.Next(&event)) {
     ++result->events_read;
-    const std::string channel(event->channel, event->channellen);
-    const std::string where = "event " + std::to_string(event->eventnum) + " on " + channel;
+    const std::string& channel = event.channel;
+    const std::string where = "event " + std::to_string(event.event_number) + " on " + channel;
     if (channel == options.image_channel) {
       if (!writer.LimitReached()) {
         image_t msg;
         ImageFrame frame;
         std::string reason;
-        if (!Decode(*event, &msg)) {
+        if (!Decode(event, &msg)) {
           writer.CountUndecodable();
           reject("image: not an image_t", where);
         } else if (!ImageFromMessage(msg, &frame, &reason)) {
@@ -96,7 +93,7 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
       camera_info_t msg;
       PinholeCamera camera;
       std::string reason;
-      if (!Decode(*event, &msg))
+      if (!Decode(event, &msg))
         reject("camera_info: not a camera_info_t", where);
       else if (!CameraFromMessage(msg, &camera, &reason))
         reject(reason, where);
@@ -106,7 +103,7 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
       pose_t msg;
       CameraPoseEstimate pose;
       std::string reason;
-      if (!Decode(*event, &msg))
+      if (!Decode(event, &msg))
         reject("ground truth: not a pose_t", where);
       else if (!PoseFromMessage(msg, &pose, &reason))
         reject(reason, where);
@@ -116,18 +113,17 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
       odometry_t msg;
       OdometryReading reading;
       std::string reason;
-      if (!Decode(*event, &msg))
+      if (!Decode(event, &msg))
         reject("odometry: not an odometry_t", where);
       else if (!OdometryFromMessage(msg, &reading, &reason))
         reject(reason, where);
       else
         writer.AddOdometry(reading);
     }
-    lcm_eventlog_free_event(event);
     if (!ok) break;
   }
-  lcm_eventlog_destroy(log);
   if (!ok) return false;
+  result->log_damage = log.damage().Describe();
   if (!writer.Finish(error)) return false;
   result->dataset = writer.summary();
   return true;

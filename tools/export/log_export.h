@@ -35,6 +35,7 @@ struct LogExportResult {
   DatasetExportSummary dataset;
   int64_t events_read = 0;                  // events in the log
   std::map<std::string, int64_t> rejected;  // reason -> count (undecodable messages of the exported channels)
+  std::string log_damage;                   // what of the log was skipped as damaged ("" when whole)
 };
 
 // Reads the whole log and writes the folder. False with *error when the log cannot be opened, the options are

@@ -1,10 +1,9 @@
 #include "tools/logtool/log_compare.h"
 
-#include <lcm/eventlog.h>
-
 #include <cmath>
 #include <unordered_map>
 
+#include "common/lcm_log.h"
 #include "common/message_size_check.h"
 #include "objscan/feature_tracks_t.hpp"
 
@@ -12,21 +11,16 @@ namespace objscan {
 
 bool ReadLogMessages(const std::string& path, const std::set<std::string>& skip, std::vector<LogMessage>* out,
                      std::string* error) {
-  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "r");
-  if (log == nullptr) {
-    *error = "cannot open LCM log " + path;
+  LcmLogReader log;
+  if (!log.Open(path, error)) return false;
+  out->clear();
+  LcmLogEvent e;
+  while (log.Next(&e))
+    if (!skip.count(e.channel)) out->push_back({e.channel, e.data});
+  if (log.damage().Any()) {  // a damaged log is not compared as if it were whole
+    *error = path + ": " + log.damage().Describe();
     return false;
   }
-  out->clear();
-  while (lcm_eventlog_event_t* e = lcm_eventlog_read_next_event(log)) {
-    std::string channel(e->channel, e->channellen);
-    if (!skip.count(channel)) {
-      const auto* bytes = static_cast<const uint8_t*>(e->data);
-      out->push_back({std::move(channel), std::vector<uint8_t>(bytes, bytes + e->datalen)});
-    }
-    lcm_eventlog_free_event(e);
-  }
-  lcm_eventlog_destroy(log);
   return true;
 }
 
