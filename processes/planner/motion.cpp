@@ -157,4 +157,91 @@ Velocity SafeVelocity(const OccupancyMap& map, const BasePose& base, const Veloc
   return {0, wanted.omega_rad_s};
 }
 
+std::vector<Eigen::Vector2d> TrailBack(const std::vector<Eigen::Vector2d>& path, const Eigen::Vector2d& from,
+                                       double length_mm, double min_length_mm, double max_gap_mm) {
+  std::vector<Eigen::Vector2d> trail{from};
+  double length = 0;
+  for (auto it = path.rbegin(); it != path.rend() && length < length_mm; ++it) {
+    const double step = (*it - trail.back()).norm();
+    if (step > max_gap_mm) break;
+    if (step < 1) continue;
+    length += step;
+    trail.push_back(*it);
+  }
+  // Back and forth over the same floor (a shuttle's legs): the trail ends at its point farthest from `from`.
+  size_t farthest = 0;
+  for (size_t i = 1; i < trail.size(); ++i)
+    if ((trail[i] - from).norm() > (trail[farthest] - from).norm()) farthest = i;
+  trail.resize(farthest + 1);
+  length = 0;
+  for (size_t i = 1; i < trail.size(); ++i) length += (trail[i] - trail[i - 1]).norm();
+  if (length < min_length_mm || (trail.back() - from).norm() < 0.5 * min_length_mm) trail.clear();
+  return trail;
+}
+
+namespace {
+// Distance from p to the polyline, and the arc length of its nearest point from the polyline's start.
+double DistanceToPolyline(const std::vector<Eigen::Vector2d>& line, const Eigen::Vector2d& p, double* along) {
+  double best = (line.front() - p).norm(), s = 0;
+  if (along) *along = 0;
+  for (size_t i = 1; i < line.size(); ++i) {
+    const Eigen::Vector2d a = line[i - 1], ab = line[i] - a;
+    const double l2 = ab.squaredNorm();
+    const double t = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+    const double d = (a + t * ab - p).norm();
+    if (d < best) {
+      best = d;
+      if (along) *along = s + t * std::sqrt(l2);
+    }
+    s += std::sqrt(l2);
+  }
+  return best;
+}
+
+Eigen::Vector2d PointAlong(const std::vector<Eigen::Vector2d>& line, double s) {
+  for (size_t i = 1; i < line.size(); ++i) {
+    const double l = (line[i] - line[i - 1]).norm();
+    if (s <= l && l > 0) return line[i - 1] + (line[i] - line[i - 1]) * (s / l);
+    s -= l;
+  }
+  return line.back();
+}
+}  // namespace
+
+Velocity FollowTrail(const BasePose& base, const std::vector<Eigen::Vector2d>& trail, bool reverse, double speed,
+                     double max_omega, bool* reached) {
+  *reached = true;
+  if (trail.empty()) return {};
+  const Eigen::Vector2d p = base.position();
+  const double to_end = (trail.back() - p).norm();
+  if (to_end <= 40) return {};
+  *reached = false;
+  double along = 0, total = 0;
+  DistanceToPolyline(trail, p, &along);
+  for (size_t i = 1; i < trail.size(); ++i) total += (trail[i] - trail[i - 1]).norm();
+  const Eigen::Vector2d target = PointAlong(trail, std::min(total, along + 120.0));
+  const Eigen::Vector2d d = (target - p).norm() > 1 ? Eigen::Vector2d(target - p) : Eigen::Vector2d(trail.back() - p);
+  const double travel_heading = base.theta_rad + (reverse ? M_PI : 0.0);
+  const double error = WrapAngle(std::atan2(d.y(), d.x()) - travel_heading);
+  Velocity out;
+  out.omega_rad_s = std::clamp(kHeadingGain * error, -max_omega, max_omega);
+  if (std::abs(error) < 60 * M_PI / 180) {
+    const double v = speed * std::cos(error) * std::clamp(std::min(to_end, total - along) / 150.0, 0.3, 1.0);
+    out.v_mm_s = reverse ? -v : v;
+  }
+  return out;
+}
+
+bool StaysOnTrail(const std::vector<Eigen::Vector2d>& trail, const BasePose& base, const Velocity& v,
+                  double horizon_s, double tolerance_mm) {
+  if (trail.empty()) return false;
+  const int steps = std::max(1, static_cast<int>(std::ceil(horizon_s / 0.05)));
+  BasePose pose = base;
+  for (int i = 0; i < steps; ++i) {
+    pose = Integrate(pose, v, horizon_s / steps);
+    if (DistanceToPolyline(trail, pose.position(), nullptr) > tolerance_mm) return false;
+  }
+  return true;
+}
+
 }  // namespace objscan

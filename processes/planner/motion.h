@@ -50,6 +50,24 @@ Velocity FollowCircle(const BasePose& base, const Eigen::Vector2d& centre, doubl
 // True when every point of the segment a -> b (every 25 mm) lies in a Passable cell.
 bool LineOfSight(const OccupancyMap& map, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
 
+// The robot's own trail: positions it drove through (Planner::path(), every 50 mm, world mm). The floor its
+// footprint swept there is known free whatever the map says, up to the odometry's drift over the trail's length.
+// TrailBack: the trail from `from` back along `path` (its newest point last) until length_mm, ending early at a
+// jump of more than max_gap_mm between points (a relocalization), and cut at its point farthest from `from` (a
+// trail that went back and forth over the same floor). First point `from`; a trail shorter than min_length_mm, or
+// whose end is less than half that from `from`, comes back empty.
+std::vector<Eigen::Vector2d> TrailBack(const std::vector<Eigen::Vector2d>& path, const Eigen::Vector2d& from,
+                                       double length_mm, double min_length_mm, double max_gap_mm = 150);
+// Pure pursuit along a trail towards its last point (lookahead 120 mm beyond the nearest point on it), driving
+// forward or backing up (reverse: the base's rear leads, heading kept). Turns in place when the lookahead point is
+// more than 60 deg off the direction of travel; slows down over the last 150 mm. *reached (zero velocity) within
+// 40 mm of the last point.
+Velocity FollowTrail(const BasePose& base, const std::vector<Eigen::Vector2d>& trail, bool reverse,
+                     double speed_mm_s, double max_omega_rad_s, bool* reached);
+// True when the base keeps within tolerance_mm of the trail (as a polyline) under velocity v for horizon_s.
+bool StaysOnTrail(const std::vector<Eigen::Vector2d>& trail, const BasePose& base, const Velocity& v,
+                  double horizon_s, double tolerance_mm);
+
 // Integrates a unicycle for dt seconds.
 BasePose Integrate(const BasePose& base, const Velocity& velocity, double dt_s);
 

@@ -17,6 +17,15 @@ constexpr double kShuttleLegMm = 400;             // mm, one leg of the look-aro
 constexpr int kMaxBypassRepeats = 2;               // bypasses to the same goal without orbit progress ...
 constexpr double kBypassProgressRad = 10 * kDeg;   // ... (less than this much azimuth) before the arc is given up
 constexpr double kShuttleSpeed = 100;             // mm/s
+constexpr double kMinTrailMm = 150;               // mm, shortest trail a shuttle runs on
+constexpr double kTrailToleranceMm = 60;          // mm, how far off its trail a shuttle may drive unchecked
+// Lost pose: after kRelocalizeAfterFrames steps without a pose the base retraces up to kRelocalizeTrailMm of its
+// trail, for at most kRelocalizeBudgetS; kPoseBackFrames poses in a row end it.
+constexpr int kRelocalizeAfterFrames = 15;
+constexpr int kPoseBackFrames = 5;
+constexpr double kRelocalizeTrailMm = 400;
+constexpr double kRelocalizeBudgetS = 60;
+constexpr double kRelocalizeFixationMm = 900;  // mm, distance of the floor point the head fixates meanwhile
 constexpr double kStartArcSpeed = 100;          // mm/s
 constexpr double kStartArcTurn = 8 * kDeg;      // rad/s: the start span needs rotation as well as translation
 constexpr double kFixationMm = 1800;            // mm ahead on the path: the floor point the head fixates
@@ -250,8 +259,18 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
   ++frames_;
   if (phases_.empty()) EnterPhase(Phase::kExplore, "start");
   const bool used = estimator_.AddCameraPose(pose);
+  lost_frames_ = used ? 0 : lost_frames_ + 1;
+  tracked_frames_ = used ? tracked_frames_ + 1 : 0;
+  if (tracked_frames_ >= kPoseBackFrames) relocalize_gave_up_ = false;
   if (pose.world_from_camera.matrix().allFinite()) camera_pose_ = pose.world_from_camera;
   const BasePose base = estimator_.Estimate();
+  if (const OdometryReading* r = estimator_.latest_odometry()) {  // the trail shuttles follow (never jumps)
+    odometry_base_ = OdometryPose(*r);
+    have_odometry_base_ = true;
+    if (odometry_trail_.empty() || (odometry_base_.position() - odometry_trail_.back()).norm() >= 25)
+      odometry_trail_.push_back(odometry_base_.position());
+    if (odometry_trail_.size() > 400) odometry_trail_.erase(odometry_trail_.begin(), odometry_trail_.begin() + 200);
+  }
   if (have_base_) {
     const double moved = (base.position() - base_.position()).norm();
     if (moved < 300) path_length_mm_ += moved;  // a relocalization jump is no travel
@@ -280,7 +299,9 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
   if (confirmed_ && frames_ % 30 == 0) coverage_.Update();  // ~1 Hz for the status
   dt_ = dt;
   Motion motion;
-  switch (phase_) {
+  if (!done() && UpdateRelocalizing()) {
+    motion = Relocalize();
+  } else switch (phase_) {
     case Phase::kExplore: motion = Explore(); break;
     case Phase::kApproach: motion = Approach(); break;
     case Phase::kOrbit: motion = Orbit(); break;
@@ -302,7 +323,9 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
   bool limited = false;
   const bool wants_to_move = std::abs(v.v_mm_s) > 1;
-  v = SafeVelocity(map_, base_, v, 0.5, &limited);
+  const bool on_trail = motion.trail != nullptr && wants_to_move && have_odometry_base_ &&
+                        StaysOnTrail(*motion.trail, odometry_base_, v, 0.5, kTrailToleranceMm);
+  if (!on_trail) v = SafeVelocity(map_, base_, v, 0.5, &limited);
   if (limited) ++safety_stops_;
   if (wants_to_move && v.v_mm_s == 0) {
     if (blocked_since_ < 0) blocked_since_ = now_;
@@ -453,6 +476,7 @@ Planner::Motion Planner::LookAround() {
     shuttle_short_legs_ = 0;
     shuttle_stalled_ = false;
     follower_.Clear();
+    if (!StartShuttle(&look_shuttle_, kShuttleLegMm)) look_shuttle_ = TrailShuttle{};
   }
   if (std::abs(pan_command_ - sweep_target_rad_) < 2 * kDeg) {
     sweep_target_rad_ = -sweep_target_rad_;
@@ -463,8 +487,17 @@ Planner::Motion Planner::LookAround() {
       return Frontier();
     }
   }
-  const double travelled = (base_.position() - shuttle_leg_start_).norm();
   const bool held = blocked_since_ >= 0 && now_ - blocked_since_ > kSecond;
+  if (!look_shuttle_.back.empty()) {  // legs on the trail: the floor the robot came over
+    Motion m;
+    m.velocity = ShuttleStep(&look_shuttle_, held, &m.trail);
+    m.camera_turn_needs_translation = true;
+    m.aim_at_point = false;
+    m.pan_rad = sweep_target_rad_;
+    m.tilt_rad = kLookAroundTiltRad;
+    return m;
+  }
+  const double travelled = (base_.position() - shuttle_leg_start_).norm();
   if (!shuttle_stalled_ && (travelled >= kShuttleLegMm || held)) {
     shuttle_short_legs_ = travelled < 30 ? shuttle_short_legs_ + 1 : 0;
     shuttle_stalled_ = shuttle_short_legs_ >= 2;
@@ -479,6 +512,122 @@ Planner::Motion Planner::LookAround() {
   m.aim_at_point = false;
   m.pan_rad = sweep_target_rad_;
   m.tilt_rad = kLookAroundTiltRad;
+  return m;
+}
+
+bool Planner::StartShuttle(TrailShuttle* shuttle, double length_mm) {
+  if (!have_odometry_base_) {
+    *shuttle = TrailShuttle{};
+    return false;
+  }
+  shuttle->back = TrailBack(odometry_trail_, odometry_base_.position(), length_mm, kMinTrailMm);
+  shuttle->forth.assign(shuttle->back.rbegin(), shuttle->back.rend());
+  shuttle->outbound = false;
+  NextShuttleLeg(shuttle);
+  return !shuttle->back.empty();
+}
+
+void Planner::NextShuttleLeg(TrailShuttle* shuttle) {
+  shuttle->outbound = !shuttle->outbound;
+  shuttle->leg_start_us = now_;
+  blocked_since_ = -1;
+  const std::vector<Eigen::Vector2d>& trail = shuttle->outbound ? shuttle->back : shuttle->forth;
+  if (trail.empty()) return;
+  // The way the trail leads from here: its point ~100 mm on (or its end).
+  Eigen::Vector2d ahead = trail.back();
+  for (const Eigen::Vector2d& p : trail)
+    if ((p - odometry_base_.position()).norm() >= 100) {
+      ahead = p;
+      break;
+    }
+  const double bearing = std::atan2(ahead.y() - odometry_base_.y_mm, ahead.x() - odometry_base_.x_mm);
+  shuttle->backing = std::abs(WrapAngle(bearing - odometry_base_.theta_rad)) > M_PI / 2;
+}
+
+Velocity Planner::ShuttleStep(TrailShuttle* shuttle, bool held, const std::vector<Eigen::Vector2d>** trail) {
+  const double speed = std::min(kShuttleSpeed, options_.limits.max_reverse_mm_s);
+  const int64_t leg_limit_us = static_cast<int64_t>((2 * kRelocalizeTrailMm / speed + 5) * kSecond);
+  Velocity v;
+  for (int attempt = 0; attempt < 2; ++attempt) {  // the next leg at once when this one is done
+    bool reached = false;
+    v = FollowTrail(odometry_base_, shuttle->outbound ? shuttle->back : shuttle->forth, shuttle->backing, speed,
+                    options_.tracking_turn_rad_s, &reached);
+    if (!reached && !held && now_ - shuttle->leg_start_us <= leg_limit_us) break;
+    NextShuttleLeg(shuttle);
+    held = false;
+  }
+  *trail = shuttle->outbound ? &shuttle->back : &shuttle->forth;
+  return v;
+}
+
+// ---------------------------------------------------------------- LOST POSE
+
+// Without a pose (tracking lost, the pose solver waiting for a new map) the base retraces its own trail back and
+// forth (floor it drove over: free whatever the map says) while the head fixates one floor point to the side, so
+// the camera translates and turns about a point of the scene: the span a new map needs (>= 50 mm of travel and
+// >= 8 deg of rotation without a standstill); turning in place or sweeping the head gives neither (room_07: lost in
+// a head-only look-around, no new map in 1 420 frames). It ends when poses are back (kPoseBackFrames in a row), or
+// after kRelocalizeBudgetS: then the phase goes on by odometry until the pose is back. Not before the first pose,
+// nor without kMinTrailMm of trail behind the robot.
+bool Planner::UpdateRelocalizing() {
+  char text[200];
+  if (relocalizing_) {
+    const double seconds = (now_ - relocalize_start_us_) * 1e-6;
+    if (tracked_frames_ >= kPoseBackFrames) {
+      relocalizing_ = false;
+      std::snprintf(text, sizeof(text), "pose back after %.1f s retracing the trail", seconds);
+      Event(text);
+      follower_.Clear();
+      next_replan_ = now_;
+      return false;
+    }
+    if (seconds > kRelocalizeBudgetS) {
+      relocalizing_ = false;
+      relocalize_gave_up_ = true;
+      std::snprintf(text, sizeof(text),
+                    "no pose after %.0f s retracing the trail: going on by odometry (the pose solver's log says what "
+                    "its new map waits for)",
+                    seconds);
+      Event(text);
+      follower_.Clear();
+      return false;
+    }
+    return true;
+  }
+  if (relocalize_gave_up_ || views_ == 0 || lost_frames_ < kRelocalizeAfterFrames) return false;
+  if (!StartShuttle(&relocalize_shuttle_, kRelocalizeTrailMm)) return false;
+  relocalizing_ = true;
+  relocalize_start_us_ = now_;
+  ++relocalizations_;
+  // The fixated point: 60 deg to the side with more room around it (a wall close by fills the view).
+  double best = -1;
+  for (int side : {1, -1}) {
+    const double a = base_.theta_rad + side * 60 * kDeg;
+    const Eigen::Vector2d p = base_.position() + kRelocalizeFixationMm * Eigen::Vector2d(std::cos(a), std::sin(a));
+    int index;
+    const double clearance = map_.IndexOf(p, &index) ? map_.ObstacleDistanceMm(index) : 0;
+    if (clearance > best) {
+      best = clearance;
+      relocalize_fixation_ = p;
+    }
+  }
+  double length = 0;
+  for (size_t i = 1; i < relocalize_shuttle_.back.size(); ++i)
+    length += (relocalize_shuttle_.back[i] - relocalize_shuttle_.back[i - 1]).norm();
+  std::snprintf(text, sizeof(text), "pose lost for %d frames: retracing %.0f mm of the trail for a new map",
+                lost_frames_, length);
+  Event(text);
+  follower_.Clear();
+  return true;
+}
+
+Planner::Motion Planner::Relocalize() {
+  activity_ = "relocalize: retracing the trail";
+  const bool held = blocked_since_ >= 0 && now_ - blocked_since_ > kSecond;
+  Motion m;
+  m.velocity = ShuttleStep(&relocalize_shuttle_, held, &m.trail);
+  m.aim_point = Eigen::Vector3d(relocalize_fixation_.x(), relocalize_fixation_.y(), 0);
+  m.camera_turn_needs_translation = true;
   return m;
 }
 
@@ -1014,6 +1163,7 @@ PlanSummary Planner::Summary() const {
   s.confirmed_seq = confirmed_seq_;
   s.safety_stops = safety_stops_;
   s.orbit_glances = glances_;
+  s.relocalizations = relocalizations_;
   return s;
 }
 

@@ -128,6 +128,7 @@ struct PlanSummary {
   int64_t confirmed_seq = -1;         // frame of the first confirmation
   int64_t safety_stops = 0;           // decisions whose speed the swept-footprint check cut
   int orbit_glances = 0;              // ORBIT looked at a blocked arc ahead (target out of view meanwhile)
+  int relocalizations = 0;            // times the base retraced its trail for a new map after the pose was lost
 };
 
 class Planner {
@@ -175,6 +176,17 @@ class Planner {
     // standstill): a camera that swings to unmapped floor while the base turns in place loses the pose solver's
     // track (room_03: lost at the first U-turn, restarted on a pure rotation, map 1.3x off in scale).
     bool camera_turn_needs_translation = false;
+    // The robot's own trail this motion follows (TrailBack of the odometry trail, odometry frame): the
+    // swept-footprint check lets it pass while the odometry pose keeps within kTrailToleranceMm of it, where the map
+    // alone would hold it (room_07: a start 168 mm from a wall that the map drew 50-100 mm nearer).
+    const std::vector<Eigen::Vector2d>* trail = nullptr;
+  };
+  // Back and forth along the robot's own trail, from where the shuttle began back to the trail's far end and again.
+  struct TrailShuttle {
+    std::vector<Eigen::Vector2d> back, forth;  // from the start back along the trail; the same reversed
+    bool outbound = true;  // on `back` (else on `forth`)
+    bool backing = true;   // this leg backs up (chosen at its start: whichever way the trail leads with less turning)
+    int64_t leg_start_us = 0;
   };
 
   void EnterPhase(Phase phase, const std::string& why);
@@ -184,6 +196,15 @@ class Planner {
   bool Stuck() const;
   Motion Explore();
   Motion LookAround();
+  // Starts a shuttle on the trail behind the robot (up to length_mm); false when less than kMinTrailMm lies behind.
+  bool StartShuttle(TrailShuttle* shuttle, double length_mm);
+  // Turns the shuttle to its other leg (the first leg: outbound).
+  void NextShuttleLeg(TrailShuttle* shuttle);
+  // This step's velocity on the shuttle's current leg (the next leg when this one is done or *held); *trail = it.
+  Velocity ShuttleStep(TrailShuttle* shuttle, bool held, const std::vector<Eigen::Vector2d>** trail);
+  // Whether this step relocalizes (see Relocalize); starts and ends the episodes.
+  bool UpdateRelocalizing();
+  Motion Relocalize();
   Motion StartArc();
   Motion Frontier();
   Motion Investigate();
@@ -217,6 +238,12 @@ class Planner {
   CostField cost_field_;
 
   std::vector<Eigen::Vector2d> path_;
+  // The base's positions by odometry (odometry frame, every 25 mm, the newest 200-400): the trail the shuttles
+  // retrace. Odometry never jumps, unlike the estimate after an unjoined map restart (room_07: a look-around trail
+  // taken from the estimates led the base into a wall 6 times).
+  std::vector<Eigen::Vector2d> odometry_trail_;
+  BasePose odometry_base_;  // the latest odometry pose
+  bool have_odometry_base_ = false;
   FloorPlane floor_;  // the floor among the landmarks (heights for the map are taken above it)
   bool have_floor_ = false;
   Eigen::Isometry3d camera_pose_ = Eigen::Isometry3d::Identity();  // world_from_camera of the current step
@@ -266,6 +293,17 @@ class Planner {
   int64_t shuttle_leg_start_us_ = 0;
   int shuttle_short_legs_ = 0;       // consecutive legs that could not travel
   bool shuttle_stalled_ = false;     // the base cannot move either way: the head sweeps alone
+  TrailShuttle look_shuttle_;        // the look-around's legs on the trail (empty: straight legs)
+
+  // Lost pose (any phase)
+  int lost_frames_ = 0;              // consecutive steps without a usable pose
+  int tracked_frames_ = 0;           // consecutive steps with one
+  bool relocalizing_ = false;
+  bool relocalize_gave_up_ = false;  // until the pose is back: the phase goes on by odometry
+  int64_t relocalize_start_us_ = 0;
+  int relocalizations_ = 0;
+  TrailShuttle relocalize_shuttle_;
+  Eigen::Vector2d relocalize_fixation_ = Eigen::Vector2d::Zero();  // world, the floor point the head fixates
   int reachable_cells_ = 0;     // cells the last cost field reached
   int64_t goal_deadline_ = 0;
   int64_t next_replan_ = 0;
