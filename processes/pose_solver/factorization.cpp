@@ -200,4 +200,40 @@ bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOption
   return true;
 }
 
+bool SpanMotionAgreesWithOdometry(const std::vector<Eigen::Isometry3d>& visual,
+                                  const std::vector<Eigen::Isometry3d>& odometry, std::string* why) {
+  if (visual.size() != odometry.size() || visual.size() < 2) return true;
+  const size_t n = visual.size();
+  std::vector<Eigen::Vector3d> tv(n), to(n);
+  double travel = 0, vv = 0, vo = 0;
+  for (size_t f = 0; f < n; ++f) {  // translations relative to the first camera, in its frame
+    tv[f] = visual[0].linear().transpose() * (visual[f].translation() - visual[0].translation());
+    to[f] = odometry[0].linear().transpose() * (odometry[f].translation() - odometry[0].translation());
+    travel = std::max(travel, to[f].norm());
+    vv += tv[f].squaredNorm();
+    vo += tv[f].dot(to[f]);
+  }
+  if (travel < 20) return true;
+  const double scale = vv > 0 ? vo / vv : 0;
+  double worst = 0;
+  size_t worst_frame = 0;
+  for (size_t f = 0; f < n; ++f) {
+    const double d = (scale * tv[f] - to[f]).norm();
+    if (d > worst) {
+      worst = d;
+      worst_frame = f;
+    }
+  }
+  if (scale > 0 && worst <= 0.5 * travel + 5) return true;
+  if (why) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "the span's camera motion disagrees with the odometry: %.0f mm off at frame %zu of %zu after the "
+                  "best scale (%.3g) over %.0f mm of odometry travel",
+                  worst, worst_frame, n, scale, travel);
+    *why = text;
+  }
+  return false;
+}
+
 }  // namespace objscan

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,17 @@ struct TrackList {
 // why (optional): on false, what was missing ("3 frames share >= 30 tracks (need 4)", "rotation 2.1 deg < 8 deg ...").
 bool SelectStartSpan(const std::vector<TrackList>& frames, const StartSpanOptions& options, int* first, int* last,
                      std::vector<int64_t>* common_ids, std::string* why = nullptr);
+
+// A start span's reconstructed camera motion against the odometry's (world_from_camera per frame of the span, in
+// any two frames): the translations relative to the span's first camera, in that camera's frame, must agree up to
+// one positive scale, to within half the odometry's travel plus 5 mm at every frame. Odometry is a poor metric but
+// not a wrong direction; a short span can fit its pixels in the depth-reversed or a depth-ambiguous solution
+// (room_07: a 52 mm sideways retrace reconstructed as 60 mm of descent at 0.16 px RMS, and every pose after it was
+// off). Spans whose odometry travelled under 20 mm are not judged (true). False with *why (optional) saying by how
+// much they disagree. Needs visual.size() == odometry.size().
+bool SpanMotionAgreesWithOdometry(const std::vector<Eigen::Isometry3d>& visual_world_from_camera,
+                                  const std::vector<Eigen::Isometry3d>& odometry_world_from_camera,
+                                  std::string* why = nullptr);
 
 // Ids present in every frame of [first, last] (sorted).
 std::vector<int64_t> CommonIds(const std::vector<TrackList>& frames, int first, int last);

@@ -113,5 +113,43 @@ TEST(Factorization, StartSpanNeedsRotationAndCommonTracks) {
   EXPECT_NE(why.find("2 frames since the base last stood still"), std::string::npos) << why;
 }
 
+// SpanMotionAgreesWithOdometry: a camera backing 60 mm sideways while turning 12 deg (a retrace). The reconstruction
+// in another world frame and at another scale agrees; the same span with the motion reconstructed as descent (the
+// depth ambiguity of a short span) does not; nor does one moving the opposite way.
+std::vector<Eigen::Isometry3d> Retrace(const Eigen::Isometry3d& world_from_start, double scale,
+                                       const Eigen::Vector3d& direction_in_camera) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (int f = 0; f <= 30; ++f) {
+    Eigen::Isometry3d relative = Eigen::Isometry3d::Identity();
+    relative.linear() = Eigen::AngleAxisd(0.4 * f * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    relative.translation() = scale * 2.0 * f * direction_in_camera.normalized();
+    poses.push_back(world_from_start * relative);
+  }
+  return poses;
+}
+
+TEST(Factorization, SpanMotionMustAgreeWithTheOdometry) {
+  Eigen::Isometry3d odometry_start = Eigen::Isometry3d::Identity();
+  odometry_start.linear() = Eigen::AngleAxisd(1.2, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()).toRotationMatrix();
+  odometry_start.translation() = Eigen::Vector3d(-230, 145, 386);
+  const std::vector<Eigen::Isometry3d> odometry = Retrace(odometry_start, 1.0, Eigen::Vector3d(1, 0, 0.2));
+  Eigen::Isometry3d visual_start = Eigen::Isometry3d::Identity();  // the span's own frame: camera 0 at the origin
+  std::string why;
+  EXPECT_TRUE(SpanMotionAgreesWithOdometry(Retrace(visual_start, 0.013, Eigen::Vector3d(1, 0, 0.2)), odometry, &why))
+      << why;
+  // 2 % scale error and 3 mm of noise-like wobble in the odometry: still agrees.
+  std::vector<Eigen::Isometry3d> wobbly = Retrace(odometry_start, 1.02, Eigen::Vector3d(1, 0, 0.2));
+  for (size_t f = 0; f < wobbly.size(); ++f) wobbly[f].translation().z() += (f % 2 ? 3.0 : -3.0);
+  EXPECT_TRUE(SpanMotionAgreesWithOdometry(Retrace(visual_start, 0.5, Eigen::Vector3d(1, 0, 0.2)), wobbly, &why))
+      << why;
+  // Reconstructed as descent (camera y axis points down) and as moving backwards: disagree, and say by how much.
+  EXPECT_FALSE(SpanMotionAgreesWithOdometry(Retrace(visual_start, 0.5, Eigen::Vector3d(0, 1, 0)), odometry, &why));
+  EXPECT_NE(why.find("disagrees with the odometry"), std::string::npos) << why;
+  EXPECT_FALSE(SpanMotionAgreesWithOdometry(Retrace(visual_start, 0.5, Eigen::Vector3d(-1, 0, -0.2)), odometry, &why));
+  // Under 20 mm of odometry travel: not judged.
+  EXPECT_TRUE(SpanMotionAgreesWithOdometry(Retrace(visual_start, 0.5, Eigen::Vector3d(0, 1, 0)),
+                                           Retrace(odometry_start, 0.25, Eigen::Vector3d(1, 0, 0.2)), &why));
+}
+
 }  // namespace
 }  // namespace objscan

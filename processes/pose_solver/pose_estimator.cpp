@@ -404,6 +404,7 @@ bool PoseEstimator::TryInitialize(int newest) {
   const int64_t start_us = MonotonicMicros();
   const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
   if (ok) span_first_ = first + first_considered;
+  else init_wait_reason_ = last_message_;
   init_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   return ok;
 }
@@ -436,6 +437,17 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   if (!(best_rms < 2.0 * options_.max_landmark_error_px)) {
     last_message_ = "initialization: span BA RMS " + std::to_string(best_rms) + " px too large";
     return false;
+  }
+  {  // the reconstruction's motion against the odometry's (SpanMotionAgreesWithOdometry)
+    std::vector<Eigen::Isometry3d> odometry;
+    for (int f = first; f <= last && frames_[f].has_odometry; ++f)
+      odometry.push_back(frames_[f].odometry_world_from_camera);
+    std::string why;
+    if (static_cast<int>(odometry.size()) == nf &&
+        !SpanMotionAgreesWithOdometry(best.world_from_camera, odometry, &why)) {
+      last_message_ = "initialization: " + why;
+      return false;
+    }
   }
   // Commit the span.
   std::vector<int64_t> new_points;
