@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The closed loop's plumbing through the user's launcher (issue 24), in a private multicast namespace:
-# `objscan run --sim --closed-loop` in room_01 with a 600-frame budget. The simulator runs in command mode in
+# The closed loop's plumbing through the user's launcher (issue 24), in a private multicast namespace: the main job
+# `objscan run --sim` (the closed loop) in room_01 with a 600-frame budget. The simulator runs in command mode in
 # lock-step on ROBOT_COMMAND, so frames advance only while the planner answers every camera pose; the object finder
 # and the dense modeler (--require-target) run beside it. Checks: the session ends by itself when the budget ends the
 # stream, the planner never commanded a collision, every frame got exactly one command, plan.json / target.json and
@@ -19,7 +19,7 @@ FRAMES=600
 OUT="$WORK/room"
 
 rc=0
-in_ns "$NS" "$SRC/objscan" run --sim --closed-loop --scene room_01 --frames $FRAMES --out "$OUT" --lcm-url "$URL" \
+in_ns "$NS" "$SRC/objscan" run --sim --scene room_01 --frames $FRAMES --out "$OUT" --lcm-url "$URL" \
   > "$WORK/run.out" 2>&1 || rc=$?
 tail -n 12 "$WORK/run.out"
 S="$OUT/summary.json"

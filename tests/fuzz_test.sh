@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 28's fuzz test, in a private multicast namespace: the simulated orbit (`objscan run --sim`, 120 frames) runs
+# Issue 28's fuzz test, in a private multicast namespace: the simulated orbit (`objscan run --sim --orbit`, 120 frames) runs
 # once clean and once while objscan_bus_fuzz publishes hostile messages on every input channel of every process
 # (random bytes, a fingerprint then garbage, truncated messages, array counts of -1 / 2^25 / 2^31-1, NaN / inf
 # fields, forged sequence numbers, duplicate ids; 150 per second for the whole run). Checks: the fuzzed session ends
@@ -18,7 +18,7 @@ URL="udpm://239.255.76.67:7673?ttl=0&recv_buf_size=4194304"
 FRAMES=120
 
 run() {  # NAME
-  in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames $FRAMES --out "$WORK/$1" --lcm-url "$URL" \
+  in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames $FRAMES --out "$WORK/$1" --lcm-url "$URL" \
     > "$WORK/$1.out" 2>&1
 }
 mesh() {  # NAME FIELD(p90|completeness)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# End to end through the user's launcher, in a private multicast namespace: `objscan run --sim` starts every
+# End to end through the user's launcher, in a private multicast namespace: `objscan run --sim --orbit` starts every
 # process on a live udpm bus, logs the session, stops on its own and writes summary.json; and
 # `objscan run --dataset` does the same on a real image set (Middlebury templeSparseRing).
 set -euo pipefail
@@ -21,7 +21,7 @@ check_summary() {  # DIR FRAMES
   [ -s "$1/session.lcmlog" ] || fail "no session log"
 }
 
-in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames $FRAMES --out "$WORK/sim" --lcm-url "$URL" \
+in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames $FRAMES --out "$WORK/sim" --lcm-url "$URL" \
   || { tail -n 30 "$WORK"/sim/logs/*.log; fail "objscan run --sim failed"; }
 check_summary "$WORK/sim" $FRAMES
 [ -s "$WORK/sim/ground_truth/poses_gt.txt" ] || fail "no ground truth written"
@@ -58,4 +58,4 @@ if [ -d "$DATA/middlebury_dinoSparseRing" ]; then
     echo "dino: $posed of 16 views posed, status ok"
   fi
 fi
-echo "PASS: objscan run --sim and --dataset ran to the end, logged every message and wrote summaries"
+echo "PASS: objscan run --sim --orbit and --dataset ran to the end, logged every message and wrote summaries"

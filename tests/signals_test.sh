@@ -16,12 +16,12 @@ FRAMES=160
 # namespace wrapper), LAUNCHER the `objscan run` process itself.
 start() {
   local url="udpm://239.255.76.67:$2?ttl=0&recv_buf_size=4194304"
-  in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames $FRAMES --out "$WORK/$1" --lcm-url "$url" \
+  in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames $FRAMES --out "$WORK/$1" --lcm-url "$url" \
     > "$WORK/$1.out" 2>&1 &
   JOB=$!
   local i
   for i in $(seq 100); do
-    LAUNCHER=$(pgrep -o -f "objscan run --sim .* --out $WORK/$1 " || true)
+    LAUNCHER=$(pgrep -o -f "objscan run --sim --orbit .* --out $WORK/$1 " || true)
     [ -n "$LAUNCHER" ] && return 0
     sleep 0.1
   done
@@ -92,7 +92,7 @@ results_written orphan
 
 # 4. Output folders: the interrupted run of 1 is moved aside whole; a folder that is not an objscan output is refused.
 size_before=$(stat -c %s "$WORK/term/session.lcmlog")
-in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames 40 --out "$WORK/term" \
+in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames 40 --out "$WORK/term" \
   --lcm-url "udpm://239.255.76.67:7694?ttl=0&recv_buf_size=4194304" > "$WORK/again.out" 2>&1 \
   || { cat "$WORK/again.out"; fail "run into an earlier run's folder failed"; }
 grep -q "held an earlier run: moved it to $WORK/term.1" "$WORK/again.out" || { cat "$WORK/again.out"; fail "no move message"; }
@@ -100,7 +100,7 @@ grep -q "held an earlier run: moved it to $WORK/term.1" "$WORK/again.out" || { c
 grep -q '"status": "interrupted"' "$WORK/term.1/summary.json" || fail "the earlier summary was not kept"
 grep -q '"status": "ok"' "$WORK/term/summary.json" || fail "the new run's summary is not in the folder"
 mkdir -p "$WORK/mine"; echo keep > "$WORK/mine/notes.txt"
-rc=0; in_ns "$NS" "$SRC/objscan" run --sim --scene sphere --frames 20 --out "$WORK/mine" \
+rc=0; in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames 20 --out "$WORK/mine" \
   --lcm-url "udpm://239.255.76.67:7695?ttl=0&recv_buf_size=4194304" > "$WORK/mine.out" 2>&1 || rc=$?
 [ "$rc" != 0 ] || fail "a folder of other files was used as output"
 grep -q "not an objscan output" "$WORK/mine.out" || { cat "$WORK/mine.out"; fail "no clear message for a foreign folder"; }
