@@ -198,18 +198,23 @@ TEST(PlannerClosedLoopTest, ExploresFindsOrbitsAddsViewsAndFinishes) {
   EXPECT_GE(log.summary.max_disagreement.distance_mm, log.true_disagreement_mm - 2.0);
 }
 
+// The living room with the start in a corner: a wall 0.7 m ahead and 0.7 m to the right.
+toy::Room CornerStartRoom() {
+  toy::Room room = toy::MakeLivingRoom(true);
+  room.solids.erase(std::remove_if(room.solids.begin(), room.solids.end(),
+                                   [](const toy::Solid& s) { return s.name.rfind("wall", 0) == 0 || s.name == "crate"; }),
+                    room.solids.end());
+  toy::AddWalls(&room, {-5200, -700}, {700, 3200});
+  return room;
+}
+
 // Put down in a corner facing a wall (0.7 m ahead, 0.7 m to the right), the robot cannot reach anything it has seen:
 // it looks around by shuttling back and forth on the floor it came from while the head sweeps, never turning the
 // camera faster than it travels (a turn in place onto unmapped floor loses the pose solver's track), then explores
 // and finds the target as from an open start.
 TEST(PlannerClosedLoopTest, CornerStartLooksAroundWhileShuttlingAndFindsTheTarget) {
   const PlannerOptions options = TestOptions();
-  toy::Room room = toy::MakeLivingRoom(true);
-  room.solids.erase(std::remove_if(room.solids.begin(), room.solids.end(),
-                                   [](const toy::Solid& s) { return s.name.rfind("wall", 0) == 0 || s.name == "crate"; }),
-                    room.solids.end());
-  toy::AddWalls(&room, {-5200, -700}, {700, 3200});
-  toy::ToyWorld world(room, options.robot);
+  toy::ToyWorld world(CornerStartRoom(), options.robot);
   const RunLog log = RunMission(world, options, 30 * 900);
   EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
   EXPECT_EQ(log.collisions, 0);
@@ -271,12 +276,7 @@ class FakeReinitialization {
 // Either way the pose is back within seconds and the mission goes on.
 TEST(PlannerClosedLoopTest, PoseLostWhileLookingAroundRetracesTheTrailUntilANewMap) {
   const PlannerOptions options = TestOptions();
-  toy::Room room = toy::MakeLivingRoom(true);
-  room.solids.erase(std::remove_if(room.solids.begin(), room.solids.end(),
-                                   [](const toy::Solid& s) { return s.name.rfind("wall", 0) == 0 || s.name == "crate"; }),
-                    room.solids.end());
-  toy::AddWalls(&room, {-5200, -700}, {700, 3200});
-  toy::ToyWorld world(room, options.robot);
+  toy::ToyWorld world(CornerStartRoom(), options.robot);
   int look_around_frames = 0;
   auto gate = std::make_shared<FakeReinitialization>([&] { return look_around_frames > 45; }, 30);
   const RunLog log = RunMission(
