@@ -354,6 +354,8 @@ void PoseEstimator::FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_wo
 }
 
 bool PoseEstimator::TryInitialize(int newest) {
+  constexpr int kRetryFramesAfterDisagreement = 15;
+  if (newest < init_retry_frame_) return false;  // init_wait_reason_ still says why
   int first_considered = std::max(init_start_, newest - options_.start_span.max_frames + 1);
   // With odometry, the span starts after the base last stood still or turned in place (synthetic: a span of 57
   // turning and 10 orbit frames initialised at ATE 335 mm, scale 0.67; room_03: a restart on 8 turning frames, map
@@ -405,6 +407,10 @@ bool PoseEstimator::TryInitialize(int newest) {
   const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
   if (ok) span_first_ = first + first_considered;
   else init_wait_reason_ = last_message_;
+  if (!ok && last_message_.find("disagrees with the odometry") != std::string::npos) {
+    init_retry_frame_ = newest + kRetryFramesAfterDisagreement;
+    init_wait_reason_ += "; next try at frame " + std::to_string(frames_[newest].seq + kRetryFramesAfterDisagreement);
+  }
   init_ms_ = (MonotonicMicros() - start_us) * 1e-3;
   return ok;
 }

@@ -359,6 +359,9 @@ class PoseEstimator {
   std::string last_message_;
   std::string notice_;  // a later event worth a log line (TakeNotice)
   std::string init_wait_reason_;  // why the latest preliminary-phase attempt did not start a map
+  // After a span refused for disagreeing with the odometry (each try reconstructs the whole span: ~1-2 s at 30+
+  // frames; room_07 fell 60 frames behind trying every frame), the next try waits until this frame.
+  int init_retry_frame_ = -1;
   // kSixDof: a map restarted through odometry whose span showed no floor keeps the odometry's scale over a few
   // frames (room_05's closed loop: ~20 % off, the new floor 75 mm above the old one, the planner's map full of
   // phantom obstacles). Its first frame and landmarks, while the floor is looked for again at its keyframes.
