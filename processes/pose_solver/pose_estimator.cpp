@@ -438,22 +438,23 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     for (int p = 0; p < np; ++p) meas[f][p] = frames_[first + f].pixels[frames_[first + f].Find(common[p])];
   BaProblem best;
   double best_rms = std::numeric_limits<double>::infinity();
-  if (!ReconstructSpan(camera_, meas, MakeBaOptions(options_.init_ba_iterations), &best, &best_rms, &last_message_))
+  // The reconstruction's motion against the odometry's (SpanMotionAgreesWithOdometry), when every frame has it.
+  std::vector<Eigen::Isometry3d> odometry;
+  for (int f = first; f <= last && frames_[f].has_odometry; ++f)
+    odometry.push_back(frames_[f].odometry_world_from_camera);
+  SpanCheck agrees;
+  if (static_cast<int>(odometry.size()) == nf)
+    agrees = [&odometry](const BaProblem& candidate, std::string* why) {
+      if (SpanMotionAgreesWithOdometry(candidate.world_from_camera, odometry, why)) return true;
+      *why = "initialization: " + *why;
+      return false;
+    };
+  if (!ReconstructSpan(camera_, meas, MakeBaOptions(options_.init_ba_iterations), &best, &best_rms, &last_message_,
+                       agrees))
     return false;
   if (!(best_rms < 2.0 * options_.max_landmark_error_px)) {
     last_message_ = "initialization: span BA RMS " + std::to_string(best_rms) + " px too large";
     return false;
-  }
-  {  // the reconstruction's motion against the odometry's (SpanMotionAgreesWithOdometry)
-    std::vector<Eigen::Isometry3d> odometry;
-    for (int f = first; f <= last && frames_[f].has_odometry; ++f)
-      odometry.push_back(frames_[f].odometry_world_from_camera);
-    std::string why;
-    if (static_cast<int>(odometry.size()) == nf &&
-        !SpanMotionAgreesWithOdometry(best.world_from_camera, odometry, &why)) {
-      last_message_ = "initialization: " + why;
-      return false;
-    }
   }
   // Commit the span.
   std::vector<int64_t> new_points;
@@ -600,7 +601,8 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
 }
 
 bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<Eigen::Vector2d>>& meas,
-                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why) {
+                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why,
+                     const SpanCheck& acceptable) {
   FactorizationResult fact;
   if (!FactorizeWeakPerspective(meas, &fact, why)) return false;
   const int nf = static_cast<int>(meas.size());
@@ -609,6 +611,7 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
   const double depth = 1000.0;  // arbitrary working unit until the scale is fixed by the caller
   const Eigen::Matrix3d k_inv = camera.K().inverse();
   double best_rms = std::numeric_limits<double>::infinity();
+  std::string refused;
   for (int candidate = 0; candidate < 2; ++candidate) {
     const FactorizationResult fr = candidate == 0 ? fact : fact.Mirrored();
     BaProblem bp;
@@ -630,6 +633,7 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
     BaOptions bo = ba_options;
     bo.model = MotionModel::kSixDof;
     const BaSummary s = RunBundleAdjustment(camera, RobotGeometry(), bo, &bp);
+    if (s.ok && s.final_rms_px < best_rms && acceptable && !acceptable(bp, &refused)) continue;
     if (s.ok && s.final_rms_px < best_rms) {
       best_rms = s.final_rms_px;
       *out = std::move(bp);
@@ -637,7 +641,7 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
   }
   *rms_px = best_rms;
   if (!std::isfinite(best_rms)) {
-    if (why) *why = "span BA failed";
+    if (why) *why = refused.empty() ? "span BA failed" : refused;
     return false;
   }
   return true;

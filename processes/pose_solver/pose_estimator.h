@@ -63,6 +63,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <functional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -150,9 +151,13 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& options, std::stri
 // The preliminary-phase reconstruction of a span: weak-perspective factorization of meas[frame][point] (every point
 // in every frame, undistorted px), perspective upgrade of both depth-reversal candidates (depth 1000 units, scale
 // arbitrary), 6-DOF BA of each (frame 0 fixed, baseline 0..last held), the candidate with the lower RMS returned in
-// *out (world = the factorization's model frame) with its RMS in *rms_px. False with *why on failure.
+// *out (world = the factorization's model frame) with its RMS in *rms_px. With `acceptable`, only candidates it
+// accepts count (on a short span both fit the pixels alike; the odometry tells them apart: SpanMotionAgreesWith-
+// Odometry); its reason for the last refusal becomes *why. False with *why on failure.
+using SpanCheck = std::function<bool(const BaProblem& candidate, std::string* why)>;
 bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<Eigen::Vector2d>>& meas,
-                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why = nullptr);
+                     const BaOptions& ba_options, BaProblem* out, double* rms_px, std::string* why = nullptr,
+                     const SpanCheck& acceptable = {});
 
 struct Landmark {
   int64_t id = 0;                                         // track id
