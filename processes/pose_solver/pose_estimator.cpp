@@ -576,6 +576,8 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   // After a loss the odometry chaining above is only a start: the new map, adjusted in the final model, is joined
   // to the old one through the landmarks both saw (Sim(3)), and those landmarks are fused.
   std::string join_message;
+  unjoined_first_ = -1;
+  unjoined_points_.clear();
   if (was_recovering && options_.join_search_mm > 0) {
     int pairs = 0;
     if (JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
@@ -586,6 +588,10 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       const int fused = FuseLandmarks(last, new_points);
       join_message += ", " + std::to_string(fused) + " landmarks fused, " + std::to_string(fuse_pending_.size()) +
                       " waiting for parallax";
+    } else {
+      unjoined_first_ = first;
+      unjoined_points_ = new_points;
+      unjoined_tried_size_ = new_points.size();
     }
   }
   // Per-frame statistics.
@@ -787,6 +793,7 @@ void PoseEstimator::AddKeyframe(int f) {
       segment_floor_points_.clear();
     }
   }
+  TryLateJoin(f, added);
   // Tracks waiting for parallax (from a map join or fuse_landmarks), and with fuse_landmarks the new landmarks.
   std::vector<int64_t> candidates;
   candidates.swap(fuse_pending_);
@@ -1044,6 +1051,33 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
     << sim.scale << ")";
   *message = m.str();
   return true;
+}
+
+void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
+  constexpr int kLateJoinFrames = 900;  // 30 s at 30 Hz: beyond, the maps are far apart in what they saw
+  if (unjoined_first_ < 0) return;
+  unjoined_points_.insert(unjoined_points_.end(), added.begin(), added.end());
+  if (f - unjoined_first_ > kLateJoinFrames) {
+    unjoined_first_ = -1;
+    unjoined_points_.clear();
+    return;
+  }
+  if (unjoined_points_.size() < unjoined_tried_size_ + unjoined_tried_size_ / 2) return;
+  unjoined_tried_size_ = unjoined_points_.size();
+  // Landmarks merged or removed since are skipped by JoinToOldMap (it reads points_).
+  int pairs = 0;
+  std::string message;
+  if (!JoinToOldMap(unjoined_first_, f, unjoined_points_, &pairs, &message)) return;
+  segment_floor_first_ = -1;  // joined: the old map's scale
+  segment_floor_points_.clear();
+  join_first_frame_ = unjoined_first_;
+  const int fused = FuseLandmarks(f, unjoined_points_);
+  std::ostringstream m;
+  m << "map restarted at frame " << frames_[unjoined_first_].seq << " " << message << " at frame " << frames_[f].seq
+    << ", " << fused << " landmarks fused";
+  notice_ = m.str();
+  unjoined_first_ = -1;
+  unjoined_points_.clear();
 }
 
 void PoseEstimator::MergeLandmark(int64_t from, int64_t to, int f) {

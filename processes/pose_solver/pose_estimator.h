@@ -280,6 +280,9 @@ class PoseEstimator {
   // landmarks by the Sim(3) (kFourDof: x, y, yaw) of the landmarks both saw (see the top); false (nothing moved,
   // with *message) when too few pairs agree or they are degenerate.
   bool JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs, std::string* message);
+  // At keyframe f: JoinToOldMap for the pending unjoined map (unjoined_first_..f) once it grew; on success its
+  // landmarks are fused and notice_ says so. Gives up kLateJoinFrames after the restart.
+  void TryLateJoin(int f, const std::vector<int64_t>& added);
   // Moves every held observation of landmark `from` to landmark `to`, removes `from` and aliases its track (frame f
   // is the last that carried it).
   void MergeLandmark(int64_t from, int64_t to, int f);
@@ -343,6 +346,12 @@ class PoseEstimator {
   std::vector<int64_t> fuse_pending_;  // new landmarks whose tracks lack the parallax to be fused yet
   int join_first_frame_ = 0;           // first frame of the last joined map (without fuse_landmarks, fusion targets
                                        // are landmarks last seen before it)
+  // A restarted map not joined at its start (too few landmarks in common yet: room_07's restarts shared 5-10) is
+  // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: none pending), its landmarks,
+  // and their count at the last try (a new try once it grew by half).
+  int unjoined_first_ = -1;
+  std::vector<int64_t> unjoined_points_;
+  size_t unjoined_tried_size_ = 0;
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
   int init_start_ = 0;      // first frame considered by the (re)initialization
