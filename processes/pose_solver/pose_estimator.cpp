@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
+#include <unordered_set>
 
 #include <ctime>
 
@@ -1057,11 +1058,7 @@ void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   constexpr int kLateJoinFrames = 900;  // 30 s at 30 Hz: beyond, the maps are far apart in what they saw
   if (unjoined_first_ < 0) return;
   unjoined_points_.insert(unjoined_points_.end(), added.begin(), added.end());
-  if (f - unjoined_first_ > kLateJoinFrames) {
-    unjoined_first_ = -1;
-    unjoined_points_.clear();
-    return;
-  }
+  if (f - unjoined_first_ > kLateJoinFrames) return;
   if (unjoined_points_.size() < unjoined_tried_size_ + unjoined_tried_size_ / 2) return;
   unjoined_tried_size_ = unjoined_points_.size();
   // Landmarks merged or removed since are skipped by JoinToOldMap (it reads points_).
@@ -1547,10 +1544,14 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
   return out;
 }
 
-std::vector<Landmark> PoseEstimator::Landmarks() const {
+std::vector<Landmark> PoseEstimator::Landmarks(bool current_map_only) const {
   std::vector<Landmark> out;
   out.reserve(points_.size());
+  std::unordered_set<int64_t> current;
+  const bool only_current = current_map_only && unjoined_first_ >= 0;
+  if (only_current) current.insert(unjoined_points_.begin(), unjoined_points_.end());
   for (const auto& [id, p] : points_) {
+    if (only_current && !current.count(id)) continue;
     Landmark l;
     l.id = id;
     l.position_mm = p.x;

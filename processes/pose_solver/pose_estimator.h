@@ -205,7 +205,11 @@ class PoseEstimator {
   // order); frames that could not be posed keep status LOST (or INITIALIZING when no map was ever built).
   std::vector<CameraPoseEstimate> Finish();
 
-  std::vector<Landmark> Landmarks() const;
+  // current_map_only: while the newest map is a restart not joined to the old one (JoinToOldMap, TryLateJoin), only
+  // its own landmarks: the old ones lie in another frame, and a consumer that takes both together with the current
+  // poses sees double walls and phantom obstacles (room_08: 25 k of 39 k obstacle points more than 150 mm from any
+  // solid after an unjoined restart, the planner boxed in).
+  std::vector<Landmark> Landmarks(bool current_map_only = false) const;
   // Track ids re-associated with an older landmark (fuse_landmarks), as (track id, landmark id) in the order of
   // fusion: the track's observations belong to that landmark (Landmarks() lists it under the landmark id only).
   const std::vector<std::pair<int64_t, int64_t>>& FusedTrackIds() const { return fused_tracks_; }
@@ -281,7 +285,7 @@ class PoseEstimator {
   // with *message) when too few pairs agree or they are degenerate.
   bool JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs, std::string* message);
   // At keyframe f: JoinToOldMap for the pending unjoined map (unjoined_first_..f) once it grew; on success its
-  // landmarks are fused and notice_ says so. Gives up kLateJoinFrames after the restart.
+  // landmarks are fused and notice_ says so. Stops trying kLateJoinFrames after the restart (the map stays apart).
   void TryLateJoin(int f, const std::vector<int64_t>& added);
   // Moves every held observation of landmark `from` to landmark `to`, removes `from` and aliases its track (frame f
   // is the last that carried it).
@@ -347,8 +351,8 @@ class PoseEstimator {
   int join_first_frame_ = 0;           // first frame of the last joined map (without fuse_landmarks, fusion targets
                                        // are landmarks last seen before it)
   // A restarted map not joined at its start (too few landmarks in common yet: room_07's restarts shared 5-10) is
-  // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: none pending), its landmarks,
-  // and their count at the last try (a new try once it grew by half).
+  // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: every map joined), its landmarks
+  // (Landmarks(true)), and their count at the last try (a new try once it grew by half).
   int unjoined_first_ = -1;
   std::vector<int64_t> unjoined_points_;
   size_t unjoined_tried_size_ = 0;

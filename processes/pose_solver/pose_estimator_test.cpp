@@ -230,6 +230,41 @@ TEST(PoseEstimator, AMapTooSmallToJoinAtItsStartJoinsLater) {
   EXPECT_LT(late, 1.0);  // mm
 }
 
+// While a restarted map is not joined to the old one, Landmarks(true) (what the node publishes at keyframes) holds
+// the new map's landmarks only: every track after the loss has a new id, so they are the ones with ids above every
+// landmark of the old map. Once joined (late, here), the whole map again.
+TEST(PoseEstimator, AnUnjoinedRestartPublishesItsOwnLandmarksOnly) {
+  SyntheticOrbitOptions so = SimLikeOdometryErrors();
+  so.lost_begin = 80;
+  so.lost_end = 95;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  for (const int min_landmarks : {100000, 200}) {  // never joined; joined at a later keyframe
+    PoseEstimatorOptions o;
+    o.join_min_landmarks = min_landmarks;
+    PoseEstimator est(s.camera, o);
+    int64_t old_max_id = -1;
+    size_t restarted_current = 0, restarted_all = 0;
+    for (size_t f = 0; f < s.frames.size(); ++f) {
+      est.AddFrame(s.frames[f], &s.odometry[f]);
+      if (f == 79)
+        for (const Landmark& l : est.Landmarks()) old_max_id = std::max(old_max_id, l.id);
+      if (f == 110) {
+        const std::vector<Landmark> current = est.Landmarks(true);
+        restarted_current = current.size();
+        restarted_all = est.Landmarks().size();
+        for (const Landmark& l : current) EXPECT_GT(l.id, old_max_id) << "an old landmark in the new map's list";
+      }
+    }
+    EXPECT_GT(restarted_current, 50u) << min_landmarks;
+    EXPECT_LT(restarted_current, restarted_all) << min_landmarks;
+    const size_t end_current = est.Landmarks(true).size(), end_all = est.Landmarks().size();
+    if (min_landmarks == 200)
+      EXPECT_EQ(end_current, end_all);  // joined
+    else
+      EXPECT_LT(end_current, end_all);  // still apart
+  }
+}
+
 // A map restarted through odometry while no floor is in view takes the odometry's scale over a short span (20 %
 // slip here; room_05's closed loop: its floor 75 mm above the old one, a room of phantom obstacles for the planner).
 // Once its keyframes see the floor, the camera height above it rescales the new map.

@@ -299,7 +299,7 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
     }
     if (spool_->ok() && !spool_->Append(frame)) LogError(spool_->error());
   }
-  if (r.keyframe) PublishLandmarks(frame.utime, frame.seq);
+  if (r.keyframe) PublishLandmarks(frame.utime, frame.seq, true);
   if (r.pose.status == PoseStatus::kLost) ++lost_frames_;
   last_seq_ = frame.seq;
   last_utime_ = frame.utime;
@@ -313,8 +313,8 @@ void PoseSolverNode::ProcessFrame(const TrackFrame& frame) {
   status_.SetValue("frame_ms", frame_ms);
 }
 
-void PoseSolverNode::PublishLandmarks(int64_t utime, int64_t seq) {
-  const std::vector<Landmark> lms = estimator_->Landmarks();
+void PoseSolverNode::PublishLandmarks(int64_t utime, int64_t seq, bool current_map_only) {
+  const std::vector<Landmark> lms = estimator_->Landmarks(current_map_only);
   landmarks_t m;
   m.utime = utime;
   m.seq = seq;
@@ -364,7 +364,7 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
       if (bus_.PublishMessage(options_.final_pose_channel, PoseToMessage(p))) status_.CountOut();
       pacer.After();
     }
-    PublishLandmarks(last_seq_ >= 0 ? last_utime_ : msg.utime, last_seq_);
+    PublishLandmarks(last_seq_ >= 0 ? last_utime_ : msg.utime, last_seq_, false);
     if (!options_.output_dir.empty()) {
       std::string error;
       std::error_code ec;

@@ -6,7 +6,8 @@
 //                      fixes the metric scale); when the preliminary phase succeeds, the earlier frames of its
 //                      window that the new map poses are published again (same seq and utime, late, in frame
 //                      order, before the current frame's pose),
-//   LANDMARKS          landmarks_t at every keyframe (frame "world", rgb is a constant grey: no images here),
+//   LANDMARKS          landmarks_t at every keyframe (frame "world", rgb is a constant grey: no images here; after
+//                      a restart not joined to the old map only the new map's landmarks, see Landmarks(true)),
 //   CAMERA_POSE_FINAL  after the final global BA: one pose_t per frame, in frame order,
 //   then final LANDMARKS and control_t COMMAND_FINISHED (sender = name, last_seq = last frame's seq) on
 //   OBJSCAN_CONTROL. The final phase runs on control_t COMMAND_FINISHED from sender finish_on_sender ("tracker")
@@ -93,7 +94,8 @@ class PoseSolverNode : public Node {
   void OnOdometry(const odometry_t& msg);
   void OnControl(const control_t& msg);
   void ProcessFrame(const TrackFrame& frame);
-  void PublishLandmarks(int64_t utime, int64_t seq);
+  // current_map_only: PoseEstimator::Landmarks(true) (at keyframes); the final map is published whole.
+  void PublishLandmarks(int64_t utime, int64_t seq, bool current_map_only);
   void RunFinalPhase(const control_t& msg);
 
   Bus& bus_;
