@@ -195,7 +195,16 @@ void Planner::SetTarget(const TargetObservation& t) {
       if (previous != TargetState::kLost && have_target_position_) Event("target lost (last seen at " + Mm(xy) + ")");
       break;
     case TargetState::kSearching:
-      // The finder dropped the target it had confirmed (later views rejected it): it was not the object.
+      // The finder dropped the target it had confirmed (later views rejected it). After the orbit (NEXT_VIEWS) the
+      // object was circled and modeled; a drop then came from the map around it changing (room_08: after an
+      // unjoined map restart its cluster merged with the floor, "too large"): the mission ends with that model.
+      if (confirmed_ && phase_ == Phase::kNextViews) {
+        Event("the finder dropped the confirmed target at " + Mm(target_.centre_mm.head<2>()) +
+              " after the orbit: the model built so far is kept");
+        EnterPhase(Phase::kFinish, "target dropped after the orbit");
+        break;
+      }
+      // Before: it was not the object.
       if (confirmed_ && !done()) {
         Event("the finder dropped the confirmed target at " + Mm(target_.centre_mm.head<2>()) + ": exploring again");
         confirmed_ = false;

@@ -295,6 +295,25 @@ TEST(PlannerClosedLoopTest, PoseLostWhileLookingAroundRetracesTheTrailUntilANewM
   EXPECT_TRUE(log.commands_within_limits) << log.limit_violation;
 }
 
+// The finder drops the confirmed target during the next views (after the whole orbit): the mission ends with the
+// model so far (FINISH) instead of exploring again.
+TEST(PlannerClosedLoopTest, TargetDroppedAfterTheOrbitEndsTheMissionWithItsModel) {
+  const PlannerOptions options = TestOptions();
+  toy::ToyWorld world(toy::MakeLivingRoom(true), options.robot);
+  bool dropped = false;
+  const RunLog log = RunMission(world, options, 30 * 900, [&](const Planner& planner, toy::ToyWorld& w) {
+    if (!dropped && planner.phase() == Phase::kNextViews) {
+      w.ForceDropped(w.seq() + 1);
+      dropped = true;
+    }
+  });
+  ASSERT_TRUE(dropped);
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+  EXPECT_TRUE(log.summary.target_confirmed);
+  EXPECT_GE(log.summary.orbit_percent, 95.0);
+  EXPECT_EQ(log.collisions, 0);
+}
+
 TEST(PlannerClosedLoopTest, NoUsablePoseForTheFirst30SecondsOnlyDelaysTheSearch) {
   const PlannerOptions options = TestOptions();
   toy::ToyWorld world(toy::MakeLivingRoom(true), options.robot);

@@ -250,7 +250,7 @@ TargetObservation ToyWorld::FindTarget() {
   TargetObservation o;
   o.utime = utime();
   o.seq = seq_;
-  if (target_index_ < 0) return o;
+  if (target_index_ < 0 || (force_dropped_from_ >= 0 && seq_ >= force_dropped_from_)) return o;
   const Solid& t = room_.solids[target_index_];
   const Eigen::Vector3d centre = TargetCentre();
   o.centre_mm = centre + Eigen::Vector3d(8, -6, 4);

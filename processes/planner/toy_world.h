@@ -78,6 +78,8 @@ class ToyWorld {
   int collisions() const { return collisions_; }
   // Distance (mm) from the robot's centre to the nearest non-drivable solid's surface, minus the footprint.
   double Clearance(const Eigen::Vector2d& p) const;
+  // The finder reports SEARCHING from frame `from_seq` on: it dropped the target it had confirmed.
+  void ForceDropped(int64_t from_seq) { force_dropped_from_ = from_seq; }
   // The finder reports LOST for frames in [from, to) (to test re-finding).
   void ForceLost(int64_t from_seq, int64_t to_seq) {
     force_lost_from_ = from_seq;
@@ -112,6 +114,7 @@ class ToyWorld {
   // target finder
   std::vector<Eigen::Vector2d> places_;
   int64_t last_in_view_ = -1;
+  int64_t force_dropped_from_ = -1;
   bool confirmed_ = false;
   int64_t force_lost_from_ = -1, force_lost_to_ = -1;
 };
