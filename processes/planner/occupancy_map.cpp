@@ -98,6 +98,7 @@ OccupancyMap::OccupancyMap(const OccupancyMapOptions& options) : options_(option
   seen_.assign(n, 0);
   stood_.assign(n, 0);
   obstacle_.assign(n, 0);
+  remembered_.assign(n, 0);
   floor_.assign(n, 0);
   state_.assign(n, State::kUnknown);
   obstacle_distance_.assign(n, kFar);
@@ -184,7 +185,22 @@ void OccupancyMap::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
       ++floor_landmarks_;
     }
   }
+  remembered_cells_ = 0;
+  for (size_t i = 0; i < remembered_.size(); ++i) {
+    if (!remembered_[i]) continue;
+    if (floor_[i]) {
+      remembered_[i] = 0;  // the floor is visible there now
+    } else {
+      ++remembered_cells_;
+      if (!obstacle_[i]) obstacle_[i] = 1;
+    }
+  }
   landmarks_dirty_ = true;
+}
+
+void OccupancyMap::RememberObstacles() {
+  for (size_t i = 0; i < obstacle_.size(); ++i)
+    if (obstacle_[i]) remembered_[i] = 1;
 }
 
 void OccupancyMap::MarkView(const Eigen::Isometry3d& world_from_camera, const CameraIntrinsics& camera) {

@@ -64,6 +64,13 @@ class OccupancyMap {
   explicit OccupancyMap(const OccupancyMapOptions& options);
 
   void SetLandmarks(const std::vector<MapLandmark>& landmarks);
+  // The landmarks are about to be replaced by those of a new map (the pose solver restarted it and has not joined
+  // it to the old one): the obstacle cells so far stay obstacles ("remembered") until a later set has a floor
+  // landmark in the cell (the floor visible there: nothing stands on it). An unjoined map lies a few cm off, but an
+  // obstacle forgotten is worse than one misplaced (room_04: the approach drove into a crate the new map had not
+  // seen yet, twice).
+  void RememberObstacles();
+  int remembered_cells() const { return remembered_cells_; }
   void MarkView(const Eigen::Isometry3d& world_from_camera, const CameraIntrinsics& camera);
   void MarkFootprint(const Eigen::Vector2d& position_mm);
   // Recomputes states and distance fields when an input changed since the last call.
@@ -104,7 +111,8 @@ class OccupancyMap {
   OccupancyMapOptions options_;
   int size_ = 0;      // cells per side
   double origin_ = 0; // mm, world x (= y) of the map's corner
-  std::vector<uint8_t> seen_, stood_, obstacle_, floor_;
+  std::vector<uint8_t> seen_, stood_, obstacle_, floor_, remembered_;
+  int remembered_cells_ = 0;  // remembered obstacle cells not cleared yet
   std::vector<State> state_;
   std::vector<float> obstacle_distance_, unknown_distance_, floor_distance_;
   std::vector<int32_t> unknown_sum_;  // summed-area table of unknown cells, (size+1)^2

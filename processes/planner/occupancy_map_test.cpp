@@ -183,5 +183,40 @@ TEST(OccupancyMapTest, UnknownCellsNearCountsTheSquare) {
   EXPECT_EQ(map.UnknownCellsNear(index, 200), 6 * 9);
 }
 
+// A restarted map (RememberObstacles, then the new map's landmarks without the box): the box's cells stay
+// obstacles; a floor landmark of a later set in one of them clears that cell only.
+TEST(OccupancyMapTest, RememberedObstaclesStayUntilTheFloorShowsThere) {
+  OccupancyMapOptions o;
+  o.size_mm = 4000;
+  OccupancyMap map(o);
+  std::vector<MapLandmark> old_map;
+  auto add = [](std::vector<MapLandmark>* set, float x, float y, float z) {
+    MapLandmark l;
+    l.position_mm = Eigen::Vector3f(x, y, z);
+    l.observations = 5;
+    l.error_px = 0.5f;
+    set->push_back(l);
+  };
+  for (int i = 0; i < 5; ++i) add(&old_map, 1000 + 10 * i, 25, 100);  // a box side at x 1000-1040, y 25
+  for (int x = -500; x <= 1500; x += 50)
+    for (int y = -500; y <= 500; y += 50) add(&old_map, x + 5, y + 5, 0);  // floor around
+  map.SetLandmarks(old_map);
+  map.Update();
+  int box;
+  ASSERT_TRUE(map.IndexOf({1020, 25}, &box));
+  EXPECT_EQ(map.StateOf(box), OccupancyMap::State::kOccupied);
+  map.RememberObstacles();
+  std::vector<MapLandmark> new_map;  // the new map: some floor, the box not seen yet
+  for (int x = -500; x <= 500; x += 50) add(&new_map, x + 5, 5, 0);
+  map.SetLandmarks(new_map);
+  map.Update();
+  EXPECT_EQ(map.StateOf(box), OccupancyMap::State::kOccupied);
+  EXPECT_GT(map.remembered_cells(), 0);
+  add(&new_map, 1020, 30, 0);  // the floor seen in the box's cell: not an obstacle after all
+  map.SetLandmarks(new_map);
+  map.Update();
+  EXPECT_NE(map.StateOf(box), OccupancyMap::State::kOccupied);
+}
+
 }  // namespace
 }  // namespace objscan

@@ -145,6 +145,16 @@ bool Planner::AddOdometry(const OdometryReading& reading) {
 // the pose solver's world is the odometry frame at its start, and a floor a few degrees off z = 0 in it makes the
 // far floor an obstacle (1 deg at 3 m = 52 mm; room_01's early map was 7.6 deg off).
 void Planner::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
+  // A set less than half the last one: the pose solver restarted its map without joining it and sends the new one
+  // only; what the old one showed standing stays an obstacle (OccupancyMap::RememberObstacles).
+  constexpr size_t kMinLandmarksForRestart = 200;
+  if (last_landmark_count_ >= kMinLandmarksForRestart && 2 * landmarks.size() < last_landmark_count_) {
+    map_.RememberObstacles();
+    ++map_restarts_;
+    Event("the sparse map restarted (" + std::to_string(last_landmark_count_) + " -> " +
+          std::to_string(landmarks.size()) + " landmarks): its obstacles are kept until the floor shows there");
+  }
+  last_landmark_count_ = landmarks.size();
   std::vector<Eigen::Vector3d> points;
   points.reserve(landmarks.size());
   for (const MapLandmark& l : landmarks)
@@ -1173,6 +1183,7 @@ PlanSummary Planner::Summary() const {
   s.safety_stops = safety_stops_;
   s.orbit_glances = glances_;
   s.relocalizations = relocalizations_;
+  s.map_restarts = map_restarts_;
   return s;
 }
 

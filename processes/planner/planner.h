@@ -129,6 +129,7 @@ struct PlanSummary {
   int64_t safety_stops = 0;           // decisions whose speed the swept-footprint check cut
   int orbit_glances = 0;              // ORBIT looked at a blocked arc ahead (target out of view meanwhile)
   int relocalizations = 0;            // times the base retraced its trail for a new map after the pose was lost
+  int map_restarts = 0;               // landmark sets under half the one before (a restarted, unjoined map)
 };
 
 class Planner {
@@ -238,6 +239,8 @@ class Planner {
   CostField cost_field_;
 
   std::vector<Eigen::Vector2d> path_;
+  size_t last_landmark_count_ = 0;  // landmarks in the last set (a set under half of it: a restarted map)
+  int map_restarts_ = 0;
   // The base's positions by odometry (odometry frame, every 25 mm, the newest 200-400): the trail the shuttles
   // retrace. Odometry never jumps, unlike the estimate after an unjoined map restart (room_07: a look-around trail
   // taken from the estimates led the base into a wall 6 times).
