@@ -1,5 +1,7 @@
 #include "processes/planner/motion.h"
 
+#include "processes/planner/path_search.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -173,9 +175,7 @@ std::vector<Eigen::Vector2d> TrailBack(const std::vector<Eigen::Vector2d>& path,
   for (size_t i = 1; i < trail.size(); ++i)
     if ((trail[i] - from).norm() > (trail[farthest] - from).norm()) farthest = i;
   trail.resize(farthest + 1);
-  length = 0;
-  for (size_t i = 1; i < trail.size(); ++i) length += (trail[i] - trail[i - 1]).norm();
-  if (length < min_length_mm || (trail.back() - from).norm() < 0.5 * min_length_mm) trail.clear();
+  if (PathLength(trail) < min_length_mm || (trail.back() - from).norm() < 0.5 * min_length_mm) trail.clear();
   return trail;
 }
 
@@ -216,9 +216,9 @@ Velocity FollowTrail(const BasePose& base, const std::vector<Eigen::Vector2d>& t
   const double to_end = (trail.back() - p).norm();
   if (to_end <= 40) return {};
   *reached = false;
-  double along = 0, total = 0;
+  double along = 0;
   DistanceToPolyline(trail, p, &along);
-  for (size_t i = 1; i < trail.size(); ++i) total += (trail[i] - trail[i - 1]).norm();
+  const double total = PathLength(trail);
   const Eigen::Vector2d target = PointAlong(trail, std::min(total, along + 120.0));
   const Eigen::Vector2d d = (target - p).norm() > 1 ? Eigen::Vector2d(target - p) : Eigen::Vector2d(trail.back() - p);
   const double travel_heading = base.theta_rad + (reverse ? M_PI : 0.0);

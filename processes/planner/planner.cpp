@@ -240,8 +240,10 @@ std::vector<std::string> Planner::TakeEvents() {
   return out;
 }
 
+bool Planner::HeldLongerThan(int64_t us) const { return blocked_since_ >= 0 && now_ - blocked_since_ > us; }
+
 bool Planner::Stuck() const {
-  const bool held_by_the_map = blocked_since_ >= 0 && now_ - blocked_since_ > 2 * kSecond;
+  const bool held_by_the_map = HeldLongerThan(2 * kSecond);
   const bool not_moving = std::abs(commanded_v_mm_s_) > 20 && now_ - progress_utime_ > 3 * kSecond;
   return held_by_the_map || not_moving;
 }
@@ -506,7 +508,7 @@ Planner::Motion Planner::LookAround() {
       return Frontier();
     }
   }
-  const bool held = blocked_since_ >= 0 && now_ - blocked_since_ > kSecond;
+  const bool held = HeldLongerThan(kSecond);
   if (!look_shuttle_.back.empty()) {  // legs on the trail: the floor the robot came over
     Motion m;
     m.velocity = ShuttleStep(&look_shuttle_, held, &m.trail);
@@ -565,7 +567,7 @@ void Planner::NextShuttleLeg(TrailShuttle* shuttle) {
 
 Velocity Planner::ShuttleStep(TrailShuttle* shuttle, bool held, const std::vector<Eigen::Vector2d>** trail) {
   const double speed = std::min(kShuttleSpeed, options_.limits.max_reverse_mm_s);
-  const int64_t leg_limit_us = static_cast<int64_t>((2 * kRelocalizeTrailMm / speed + 5) * kSecond);
+  const int64_t leg_limit_us = static_cast<int64_t>((2 * PathLength(shuttle->back) / speed + 5) * kSecond);
   Velocity v;
   for (int attempt = 0; attempt < 2; ++attempt) {  // the next leg at once when this one is done
     bool reached = false;
@@ -630,11 +632,8 @@ bool Planner::UpdateRelocalizing() {
       relocalize_fixation_ = p;
     }
   }
-  double length = 0;
-  for (size_t i = 1; i < relocalize_shuttle_.back.size(); ++i)
-    length += (relocalize_shuttle_.back[i] - relocalize_shuttle_.back[i - 1]).norm();
   std::snprintf(text, sizeof(text), "pose lost for %d frames: retracing %.0f mm of the trail for a new map",
-                lost_frames_, length);
+                lost_frames_, PathLength(relocalize_shuttle_.back));
   Event(text);
   follower_.Clear();
   return true;
@@ -642,9 +641,8 @@ bool Planner::UpdateRelocalizing() {
 
 Planner::Motion Planner::Relocalize() {
   activity_ = "relocalize: retracing the trail";
-  const bool held = blocked_since_ >= 0 && now_ - blocked_since_ > kSecond;
   Motion m;
-  m.velocity = ShuttleStep(&relocalize_shuttle_, held, &m.trail);
+  m.velocity = ShuttleStep(&relocalize_shuttle_, HeldLongerThan(kSecond), &m.trail);
   m.aim_point = Eigen::Vector3d(relocalize_fixation_.x(), relocalize_fixation_.y(), 0);
   m.camera_turn_needs_translation = true;
   return m;

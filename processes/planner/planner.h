@@ -193,6 +193,8 @@ class Planner {
   void EnterPhase(Phase phase, const std::string& why);
   void Event(const std::string& text);
   double PhaseSeconds() const;
+  // True when the swept-footprint check has held a robot that wants to move for more than `us` (µs).
+  bool HeldLongerThan(int64_t us) const;
   // True when the swept-footprint check has held the robot still for > 2 s although the phase wants to move.
   bool Stuck() const;
   Motion Explore();

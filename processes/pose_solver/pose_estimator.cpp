@@ -408,7 +408,7 @@ bool PoseEstimator::TryInitialize(int newest) {
   const bool ok = InitializeSpan(first + first_considered, last + first_considered, common);
   if (ok) span_first_ = first + first_considered;
   else init_wait_reason_ = last_message_;
-  if (!ok && last_message_.find("disagrees with the odometry") != std::string::npos) {
+  if (!ok && span_refused_by_odometry_) {
     init_retry_frame_ = newest + kRetryFramesAfterDisagreement;
     init_wait_reason_ += "; next try at frame " + std::to_string(frames_[newest].seq + kRetryFramesAfterDisagreement);
   }
@@ -444,15 +444,18 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   for (int f = first; f <= last && frames_[f].has_odometry; ++f)
     odometry.push_back(frames_[f].odometry_world_from_camera);
   SpanCheck agrees;
+  span_refused_by_odometry_ = false;
   if (static_cast<int>(odometry.size()) == nf)
-    agrees = [&odometry](const BaProblem& candidate, std::string* why) {
+    agrees = [this, &odometry](const BaProblem& candidate, std::string* why) {
       if (SpanMotionAgreesWithOdometry(candidate.world_from_camera, odometry, why)) return true;
       *why = "initialization: " + *why;
+      span_refused_by_odometry_ = true;
       return false;
     };
   if (!ReconstructSpan(camera_, meas, MakeBaOptions(options_.init_ba_iterations), &best, &best_rms, &last_message_,
                        agrees))
     return false;
+  span_refused_by_odometry_ = false;  // a candidate agreed
   if (!(best_rms < 2.0 * options_.max_landmark_error_px)) {
     last_message_ = "initialization: span BA RMS " + std::to_string(best_rms) + " px too large";
     return false;

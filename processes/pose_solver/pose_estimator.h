@@ -380,6 +380,7 @@ class PoseEstimator {
   // After a span refused for disagreeing with the odometry (each try reconstructs the whole span: ~1-2 s at 30+
   // frames; room_07 fell 60 frames behind trying every frame), the next try waits until this frame.
   int init_retry_frame_ = -1;
+  bool span_refused_by_odometry_ = false;  // the last InitializeSpan failed because no candidate agreed with it
   // kSixDof: a map restarted through odometry whose span showed no floor keeps the odometry's scale over a few
   // frames (room_05's closed loop: ~20 % off, the new floor 75 mm above the old one, the planner's map full of
   // phantom obstacles). Its first frame and landmarks, while the floor is looked for again at its keyframes.
