@@ -43,6 +43,25 @@ struct OdometryReading {
 enum class PoseStatus : int8_t { kInitializing = 0, kTracking = 1, kLost = 2, kRelocalized = 3, kGroundTruth = 4 };
 enum class ScaleSource : int8_t { kNone = 0, kCameraHeight = 1, kOdometry = 2, kTrue = 3 };
 
+// True when lengths are millimetres: the scale comes from the odometry, from the floor and a configured camera
+// height, or from the simulator's truth. Without either (images only) lengths are in an arbitrary unit.
+inline bool IsMetric(ScaleSource s) { return s != ScaleSource::kNone; }
+// What the scale of a result is, for file headers, final log lines and summary.json: "metric (...)" or
+// "arbitrary (...)", one line, no newline.
+inline const char* ScaleDescription(ScaleSource s) {
+  switch (s) {
+    case ScaleSource::kOdometry:
+      return "metric (mm, scale from the odometry)";
+    case ScaleSource::kCameraHeight:
+      return "metric (mm, scale from the floor and the configured camera height)";
+    case ScaleSource::kTrue:
+      return "metric (mm, true poses)";
+    case ScaleSource::kNone:
+      break;
+  }
+  return "arbitrary (no odometry and no camera height: lengths are in an unknown unit, not mm)";
+}
+
 struct CameraPoseEstimate {
   int64_t utime = 0;        // µs, capture time of the frame
   int64_t seq = 0;          // frame sequence number

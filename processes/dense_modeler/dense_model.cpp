@@ -212,8 +212,8 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
   return model;
 }
 
-bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size, ModelPaths* paths,
-                     std::string* error) {
+bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size, ScaleSource scale,
+                     ModelPaths* paths, std::string* error) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
@@ -224,8 +224,8 @@ bool WriteModelFiles(const std::string& dir, const FinalModel& model, double vox
   p.voxels_ply = (std::filesystem::path(dir) / "model_voxels.ply").string();
   p.mesh_ply = (std::filesystem::path(dir) / "model_mesh.ply").string();
   p.octomap = (std::filesystem::path(dir) / "model.bt").string();
-  if (!WriteVoxelPly(p.voxels_ply, model.voxels, voxel_size, error)) return false;
-  if (!WriteMeshPly(p.mesh_ply, model.mesh, error)) return false;
+  if (!WriteVoxelPly(p.voxels_ply, model.voxels, voxel_size, scale, error)) return false;
+  if (!WriteMeshPly(p.mesh_ply, model.mesh, scale, error)) return false;
   if (!WriteOctomap(p.octomap, model.voxels, voxel_size, error)) return false;
   if (paths) *paths = p;
   return true;

@@ -114,8 +114,8 @@ struct ModelPaths {
 };
 
 // Writes DIR/model_voxels.ply, DIR/model_mesh.ply, DIR/model.bt (creating DIR). False with *error on failure.
-bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size_mm, ModelPaths* paths,
-                     std::string* error);
+bool WriteModelFiles(const std::string& dir, const FinalModel& model, double voxel_size_mm, ScaleSource scale,
+                     ModelPaths* paths, std::string* error);
 
 // Downsamples a view by an integer factor (area average) and scales the camera accordingly
 // (pixel centres: u' = (u + 0.5) / f - 0.5).

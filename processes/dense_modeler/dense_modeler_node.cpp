@@ -459,6 +459,7 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
   // is true cannot be told, so the frame is used no more (the fuzz test's forged seq-1 poses had made the model's
   // p90 230 mm when one arrived before the true pose).
   const std::string at = "seq " + std::to_string(msg.seq);
+  scale_source_ = pose.scale_source;
   if (final_pose) {
     if (conflicting_final_.count(msg.seq)) {
       status_.Reject("final pose: frame with conflicting poses", at);
@@ -952,7 +953,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
-          std::to_string(model.mesh.triangles.size()) + " triangles");
+          std::to_string(model.mesh.triangles.size()) + " triangles; scale " + ScaleDescription(scale_source_));
   std::string per_pass;
   for (int64_t r : model.carving.removed_per_iteration) per_pass += (per_pass.empty() ? "" : " ") + std::to_string(r);
   LogInfo("carving: " + std::to_string(model.carving.iterations) + " passes, removed per pass: " + per_pass);
@@ -978,7 +979,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   ModelPaths paths;
   if (!options_.output_dir.empty()) {
     std::string error;
-    if (!WriteModelFiles(options_.output_dir, model, grid_.voxel_size(), &paths, &error)) {
+    if (!WriteModelFiles(options_.output_dir, model, grid_.voxel_size(), scale_source_, &paths, &error)) {
       LogError("writing the model failed: " + error);
       paths = ModelPaths{};
     }

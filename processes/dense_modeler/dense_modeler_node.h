@@ -238,6 +238,7 @@ class DenseModelerNode : public Node {
   int64_t stored_matches_ = 0;
   bool stored_complete_ = true;  // false once max_stored_matches was exceeded (stored_pairs_ freed)
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
+  ScaleSource scale_source_ = ScaleSource::kNone;  // of the last usable pose: says mm or arbitrary in the files
   std::set<int64_t> conflicting_final_;  // frames with two different final poses: no final pose
   bool have_box_ = false;  // confirmed TARGET box
   Eigen::Vector3d box_min_ = Eigen::Vector3d::Zero(), box_max_ = Eigen::Vector3d::Zero();

@@ -33,8 +33,9 @@ bool WriteFile(const std::string& path, const std::string& data, std::string* er
 }  // namespace
 
 bool WriteVoxelPly(const std::string& path, const std::vector<CarvedVoxel>& voxels, double voxel_size,
-                   std::string* error) {
-  std::string buf = "ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler voxel centres, mm\n";
+                   ScaleSource scale, std::string* error) {
+  std::string buf = std::string("ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler voxel centres, ") +
+                    (IsMetric(scale) ? "mm" : "arbitrary unit") + "\ncomment scale: " + ScaleDescription(scale) + "\n";
   buf += "comment voxel_size_mm " + std::to_string(voxel_size) + "\n";
   buf += "element vertex " + std::to_string(voxels.size()) + "\n";
   buf +=
@@ -51,8 +52,9 @@ bool WriteVoxelPly(const std::string& path, const std::vector<CarvedVoxel>& voxe
   return WriteFile(path, buf, error);
 }
 
-bool WriteMeshPly(const std::string& path, const TriangleMesh& mesh, std::string* error) {
-  std::string buf = "ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler surface, mm\n";
+bool WriteMeshPly(const std::string& path, const TriangleMesh& mesh, ScaleSource scale, std::string* error) {
+  std::string buf = std::string("ply\nformat binary_little_endian 1.0\ncomment objscan dense_modeler surface, ") +
+                    (IsMetric(scale) ? "mm" : "arbitrary unit") + "\ncomment scale: " + ScaleDescription(scale) + "\n";
   buf += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
   buf +=
       "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"

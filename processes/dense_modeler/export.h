@@ -8,16 +8,18 @@
 #include <string>
 #include <vector>
 
+#include "common/sensor_data.h"
 #include "processes/dense_modeler/marching_cubes.h"
 #include "processes/dense_modeler/space_carving.h"
 
 namespace objscan {
 
-// Vertex properties: x y z (float, mm), red green blue (uchar), votes (int), views (int).
+// Vertex properties: x y z (float, mm), red green blue (uchar), votes (int), views (int). The PLY header's comments
+// say whether lengths are mm or an arbitrary unit (scale: the poses' ScaleSource, ScaleDescription's words).
 bool WriteVoxelPly(const std::string& path, const std::vector<CarvedVoxel>& voxels, double voxel_size_mm,
-                   std::string* error);
-// Vertex properties x y z red green blue, faces as uchar-count int lists.
-bool WriteMeshPly(const std::string& path, const TriangleMesh& mesh, std::string* error);
+                   ScaleSource scale, std::string* error);
+// Vertex properties x y z red green blue, faces as uchar-count int lists; scale comments as WriteVoxelPly.
+bool WriteMeshPly(const std::string& path, const TriangleMesh& mesh, ScaleSource scale, std::string* error);
 bool WriteOctomap(const std::string& path, const std::vector<CarvedVoxel>& voxels, double voxel_size_mm,
                   std::string* error);
 

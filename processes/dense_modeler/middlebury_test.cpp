@@ -140,7 +140,8 @@ RingResult RunRing(const RingSet& set) {
       100 * result.in_box);
   if (const char* out = std::getenv("OBJSCAN_DENSE_TEST_OUTPUT")) {
     std::string error;
-    EXPECT_TRUE(WriteModelFiles(std::string(out) + "/" + set.label, model, grid.voxel_size(), nullptr, &error))
+    EXPECT_TRUE(WriteModelFiles(std::string(out) + "/" + set.label, model, grid.voxel_size(), ScaleSource::kTrue, nullptr,
+                                &error))
         << error;
   }
   return result;

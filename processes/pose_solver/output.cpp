@@ -23,7 +23,12 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEst
                         bool include_all_statuses) {
   std::ofstream out(path);
   if (!out) return Fail(error, "cannot write " + path);
-  out << "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions in mm\n";
+  // The scale of the poses written (the last one's: a map's scale source only improves, none -> metric).
+  ScaleSource scale = ScaleSource::kNone;
+  for (const auto& p : poses)
+    if (include_all_statuses || IsWrittenPose(p.status)) scale = p.scale_source;
+  out << "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions in "
+      << (IsMetric(scale) ? "mm" : "an arbitrary unit") << "\n# scale: " << ScaleDescription(scale) << "\n";
   out << std::fixed;
   for (const auto& p : poses) {
     if (!include_all_statuses && !IsWrittenPose(p.status)) continue;
@@ -57,10 +62,13 @@ bool ReadTumTrajectory(const std::string& path, std::vector<CameraPoseEstimate>*
   return true;
 }
 
-bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, std::string* error) {
+bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, ScaleSource scale,
+                       std::string* error) {
   std::ofstream out(path);
   if (!out) return Fail(error, "cannot write " + path);
-  out << "ply\nformat ascii 1.0\ncomment objscan pose_solver landmarks, mm, world frame\nelement vertex "
+  out << "ply\nformat ascii 1.0\ncomment objscan pose_solver landmarks, world frame, "
+      << (IsMetric(scale) ? "mm" : "arbitrary unit") << "\ncomment scale: " << ScaleDescription(scale)
+      << "\nelement vertex "
       << landmarks.size()
       << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
          "property uchar blue\nproperty int nobs\nproperty float error\nend_header\n";

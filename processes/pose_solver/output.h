@@ -25,7 +25,9 @@ bool IsWrittenPose(PoseStatus status);
 // Writes poses whose status is in `statuses` (default: tracking and relocalized).
 bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
                         bool include_all_statuses = false);
-bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, std::string* error);
+// Header comments say whether positions are mm or an arbitrary unit (scale: the map's ScaleSource).
+bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, ScaleSource scale,
+                       std::string* error);
 
 // One image of the COLMAP model: its pose and its 2-D observations (undistorted or raw pixels as measured).
 struct ColmapImage {

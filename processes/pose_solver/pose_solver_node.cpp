@@ -372,7 +372,7 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
       const std::vector<Landmark> lms = estimator_->Landmarks();
       bool ok = WriteTumTrajectory(options_.output_dir + "/trajectory.txt", final_poses, &error) &&
                 WriteTumTrajectory(options_.output_dir + "/trajectory_online.txt", online_poses_, &error) &&
-                WriteLandmarksPly(options_.output_dir + "/landmarks.ply", lms, &error);
+                WriteLandmarksPly(options_.output_dir + "/landmarks.ply", lms, estimator_->scale_source(), &error);
       if (ok) {
         // Images in frame order; their observations come back from the spool in the same (seq) order. The two
         // are merged by seq: a spooled frame without a pose (the estimator rejected it) is skipped.
@@ -428,6 +428,11 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
   const int64_t posed = std::count_if(final_poses.begin(), final_poses.end(),
                                       [](const CameraPoseEstimate& p) { return IsWrittenPose(p.status); });
   status_.SetValue("final_posed", static_cast<double>(posed));
+  if (estimator_) {
+    status_.SetValue("scale_metric", IsMetric(estimator_->scale_source()) ? 1.0 : 0.0);
+    LogInfo("final: " + std::to_string(posed) + " of " + std::to_string(frames) + " frames posed; scale " +
+            ScaleDescription(estimator_->scale_source()));
+  }
   if (failure.empty() && frames > 0 &&
       static_cast<double>(posed) < options_.min_posed_fraction * static_cast<double>(frames)) {
     failure = "only " + std::to_string(posed) + " of " + std::to_string(frames) +
