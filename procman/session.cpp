@@ -19,6 +19,7 @@
 #include "common/status.h"
 #include "common/time.h"
 #include "common/message_size_check.h"
+#include "common/sensor_data.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
@@ -123,6 +124,15 @@ class Monitor {
         if (m.command == control_t::COMMAND_FINISHED) finished_.insert(m.sender);
         if (m.command == control_t::COMMAND_END_OF_STREAM) end_of_stream_ = true;
       }
+    } else if (raw.channel == "CAMERA_POSE" || raw.channel == "CAMERA_POSE_FINAL") {
+      // The scale of the results: the last tracking pose's (the final poses' at the end).
+      pose_t m;
+      if (DecodeMessage(raw.data, raw.size, &m, nullptr) &&
+          (m.status == pose_t::STATUS_TRACKING || m.status == pose_t::STATUS_RELOCALIZED) &&
+          m.scale_source >= pose_t::SCALE_NONE && m.scale_source <= pose_t::SCALE_TRUE) {
+        scale_source_ = static_cast<ScaleSource>(m.scale_source);
+        have_scale_ = true;
+      }
     } else if (raw.channel == "FEATURE_TRACKS") {
       feature_tracks_t m;
       if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
@@ -141,6 +151,8 @@ class Monitor {
   bool end_of_stream_ = false;
   int64_t track_frames_ = 0, live_tracks_sum_ = 0, min_live_tracks_ = 0;
   std::set<int64_t> distinct_ids_;
+  bool have_scale_ = false;  // a tracking pose was seen
+  ScaleSource scale_source_ = ScaleSource::kNone;
 };
 
 std::string Hz(double v) {
@@ -445,6 +457,10 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   json.Key("wall_time_s").Number(elapsed_s());
   json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].frames);
   json.Key("expected_frames").Int(options.expected_frames);
+  if (monitor->have_scale_) {  // whether the lengths of the result files are mm
+    json.Key("scale_metric").Bool(IsMetric(monitor->scale_source_));
+    json.Key("scale").String(ScaleDescription(monitor->scale_source_));
+  }
   json.Key("end_of_stream").Bool(monitor->end_of_stream_);
   json.Key("tracks").BeginObject();
   json.Key("frames").Int(monitor->track_frames_);
@@ -543,6 +559,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
                monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0,
                static_cast<long long>(bus_gaps + dropped_inputs), log_complete ? "complete" : "INCOMPLETE",
                static_cast<long long>(logged_events), elapsed_s(), summary_path.c_str());
+  if (monitor->have_scale_) std::fprintf(stderr, "[objscan] scale: %s\n", ScaleDescription(monitor->scale_source_));
   if (!failure.empty()) std::fprintf(stderr, "[objscan] error: %s\n", failure.c_str());
   if (interrupted) return 130;
   return failure.empty() ? 0 : 1;

@@ -25,6 +25,9 @@ in_ns "$NS" "$SRC/objscan" run --sim --orbit --scene sphere --frames $FRAMES --o
   || { tail -n 30 "$WORK"/sim/logs/*.log; fail "objscan run --sim failed"; }
 check_summary "$WORK/sim" $FRAMES
 [ -s "$WORK/sim/ground_truth/poses_gt.txt" ] || fail "no ground truth written"
+# The simulator's odometry makes the results metric; summary.json and every result file say so.
+grep -q '"scale_metric": true' "$WORK/sim/summary.json" || { cat "$WORK/sim/summary.json"; fail "sim: scale not metric"; }
+grep -q '^# scale: metric' "$WORK/sim/trajectory.txt" || { head -5 "$WORK/sim/trajectory.txt"; fail "sim: trajectory header lacks the scale"; }
 
 DATA="${OBJSCAN_DATA_DIR:-$SRC/../shared/data}"
 if [ -d "$DATA/middlebury_templeSparseRing" ]; then
@@ -33,6 +36,9 @@ if [ -d "$DATA/middlebury_templeSparseRing" ]; then
   in_ns "$NS" "$SRC/objscan" run --dataset "$DATA/middlebury_templeSparseRing" --out "$WORK/temple" --lcm-url "$URL" \
     > "$WORK/temple.out" 2>&1 || { cat "$WORK/temple.out"; tail -n 30 "$WORK"/temple/logs/*.log; fail "objscan run --dataset failed"; }
   check_summary "$WORK/temple" 16
+  # Images only: the lengths are in an arbitrary unit, and the summary and files say so.
+  grep -q '"scale_metric": false' "$WORK/temple/summary.json" || { cat "$WORK/temple/summary.json"; fail "temple: scale claimed metric"; }
+  grep -q '^# scale: arbitrary' "$WORK/temple/trajectory.txt" || { head -5 "$WORK/temple/trajectory.txt"; fail "temple: trajectory header lacks the scale"; }
   grep -q "tracking: descriptors" "$WORK/temple.out" || { cat "$WORK/temple.out"; fail "temple: wide baseline not detected"; }
   posed=$(grep -vc '^#' "$WORK/temple/trajectory.txt" || true)
   [ "${posed:-0}" -ge 15 ] || fail "temple: only ${posed:-0} of 16 views posed"
