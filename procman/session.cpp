@@ -3,6 +3,8 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <functional>
+#include <unistd.h>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
@@ -113,6 +115,10 @@ class Monitor {
     if (raw.channel == "PROCESS_STATUS") {
       process_status_t m;
       if (DecodeMessage(raw.data, raw.size, &m, nullptr)) {
+        if (is_own_ && !is_own_(m.name, m.host, m.pid)) {
+          NoteForeign(m);
+          return;
+        }
         if (m.state == process_status_t::STATE_ERROR &&
             std::find(error_order_.begin(), error_order_.end(), m.name) == error_order_.end())
           error_order_.push_back(m.name);
@@ -144,6 +150,21 @@ class Monitor {
     }
   }
 
+  // Another process on this bus that is not one of ours (same name and pid on this host). One with the name of one
+  // of our processes is another session's: its messages mix with ours (the same channels, frame numbers from 0).
+  void NoteForeign(const process_status_t& m) {
+    const std::string who = "'" + m.name + "' (pid " + std::to_string(m.pid) + " on host " + m.host + ")";
+    if (!foreign_.insert(who).second) return;
+    const bool same_name = is_ours_ && is_ours_(m.name);
+    if (same_name && foreign_session_.empty()) foreign_session_ = who;
+    LogWarning(std::string(same_name ? "another session is on this bus: " : "a process of no session here is on this bus: ") +
+               who + (same_name ? " runs next to ours and its messages mix with this run's" : " (not counted as ours)"));
+  }
+
+  std::function<bool(const std::string& name, const std::string& host, int32_t pid)> is_own_;  // unset: all ours
+  std::function<bool(const std::string& name)> is_ours_;  // a name in the session's process list
+  std::set<std::string> foreign_;    // foreign processes heard, as "'name' (pid P on host H)"
+  std::string foreign_session_;      // the first foreign process with one of our names ("" = none)
   std::map<std::string, ChannelCount> channels_;
   std::map<std::string, process_status_t> statuses_;
   std::vector<std::string> error_order_;  // processes in the order they first reported STATE_ERROR
@@ -295,11 +316,34 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   for (const auto& p : processes)
     children.push_back(std::make_unique<ChildProcess>(p.name, p.argv, logs_dir + "/" + p.name + ".log"));
 
+  // Our processes are the children we started on this host; a status from any other (host, pid) is foreign.
+  char host_buf[256] = {0};
+  const std::string own_host = gethostname(host_buf, sizeof(host_buf) - 1) == 0 ? host_buf : "";
+  monitor->is_own_ = [&children, own_host](const std::string& name, const std::string& host, int32_t pid) {
+    for (const auto& c : children)
+      if (c->name() == name && c->pid() == pid && host == own_host) return true;
+    return false;
+  };
+  monitor->is_ours_ = [&children](const std::string& name) {
+    return std::any_of(children.begin(), children.end(), [&](const auto& c) { return c->name() == name; });
+  };
+  const auto foreign_session_failure = [&] {
+    return "another session is on this bus (" + options.lcm_url + "): " + monitor->foreign_session_ +
+           " is not one of this run's processes, and the two runs' messages mix (the same channels, frame numbers "
+           "from 0), so neither run's results would be right. Run each session on a bus of its own: leave out "
+           "--lcm-url (objscan run then picks a free port), or give each run another port, e.g. " +
+           std::string("udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304");
+  };
+
   auto pump = [&](int ms) {
     const int64_t until = MonotonicMicros() + ms * 1000LL;
     while (MonotonicMicros() < until) bus->Handle(10);
   };
   auto check_children = [&]() -> bool {
+    if (!monitor->foreign_session_.empty()) {
+      failure = foreign_session_failure();
+      return false;
+    }
     for (size_t i = 0; i < children.size(); ++i) {
       ChildProcess& c = *children[i];
       if (!c.started() || c.Running()) continue;
@@ -454,6 +498,12 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   if (!failure.empty()) json.Key("error").String(failure);
   if (!partial.empty()) json.Key("partial_results").String(partial + ": the result files hold what the processes had");
   json.Key("label").String(options.label);
+  json.Key("lcm_url").String(options.lcm_url);
+  if (!monitor->foreign_.empty()) {  // processes on this bus that were not this session's
+    json.Key("foreign_processes").BeginArray();
+    for (const std::string& f : monitor->foreign_) json.String(f);
+    json.EndArray();
+  }
   json.Key("wall_time_s").Number(elapsed_s());
   json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].frames);
   json.Key("expected_frames").Int(options.expected_frames);
