@@ -337,6 +337,29 @@ TEST(PlannerClosedLoopTest, RoomWithoutTargetEndsInNoTargetWithinTheBudget) {
   EXPECT_GT(log.summary.path_length_mm, 5000.0);  // it did search
 }
 
+// An unjoined map restart in the middle of the search (the pose solver's map starts again from nothing): the search
+// goes on over the new map, with the old map's obstacles remembered, until the room is explored again; it neither
+// ends early nor drives into what the new map has not seen yet.
+TEST(PlannerClosedLoopTest, AMapRestartDuringTheSearchExploresTheRoomAgain) {
+  PlannerOptions options = TestOptions();
+  options.explore_budget_s = 300;
+  toy::ToyWorld undisturbed(toy::MakeLivingRoom(false), options.robot);
+  const RunLog reference = RunMission(undisturbed, options, 30 * 400);
+  ASSERT_EQ(reference.end_phase, Phase::kNoTarget) << PhaseName(reference.end_phase);
+  for (const double restart_s : {30.0, 90.0}) {
+    toy::ToyWorld world(toy::MakeLivingRoom(false), options.robot);
+    world.ForceMapRestart(static_cast<int64_t>(restart_s * 30));
+    const RunLog log = RunMission(world, options, 30 * 400);
+    std::printf("restart at %.0f s: %s after %.1f s, path %.0f mm (%.0f mm without the restart)\n", restart_s,
+                PhaseName(log.end_phase), log.frames / 30.0, log.summary.path_length_mm,
+                reference.summary.path_length_mm);
+    EXPECT_EQ(log.end_phase, Phase::kNoTarget) << "restart at " << restart_s << " s";
+    EXPECT_GT(log.summary.path_length_mm, reference.summary.path_length_mm) << "restart at " << restart_s << " s";
+    EXPECT_EQ(log.collisions, 0) << "restart at " << restart_s << " s";
+    EXPECT_TRUE(log.commands_within_limits) << log.limit_violation;
+  }
+}
+
 TEST(PlannerClosedLoopTest, ObstacleOnTheCircleIsPassedOutsideWithoutCollision) {
   const PlannerOptions options = TestOptions();
   toy::Room room = toy::MakeLivingRoom(true);

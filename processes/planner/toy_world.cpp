@@ -233,6 +233,14 @@ bool ToyWorld::Visible(const Eigen::Isometry3d& camera_from_world, const Eigen::
 
 bool ToyWorld::Landmarks(std::vector<MapLandmark>* landmarks) {
   if (seq_ % 6 != 0) return false;
+  if (force_restart_at_ >= 0 && seq_ >= force_restart_at_) {
+    force_restart_at_ = -1;
+    map_.clear();
+    for (Point& p : points_) {
+      p.sightings = 0;
+      p.last_camera = Eigen::Vector3d::Constant(1e9);
+    }
+  }
   const Eigen::Isometry3d world_from_camera = WorldFromCamera();
   const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
   const Eigen::Vector3d camera = world_from_camera.translation();

@@ -80,6 +80,9 @@ class ToyWorld {
   double Clearance(const Eigen::Vector2d& p) const;
   // The finder reports SEARCHING from frame `from_seq` on: it dropped the target it had confirmed.
   void ForceDropped(int64_t from_seq) { force_dropped_from_ = from_seq; }
+  // The sparse map restarts at frame `at_seq`, as the pose solver's does after a loss it cannot join: the landmark
+  // set starts again from nothing (every point must be seen twice more).
+  void ForceMapRestart(int64_t at_seq) { force_restart_at_ = at_seq; }
   // The finder reports LOST for frames in [from, to) (to test re-finding).
   void ForceLost(int64_t from_seq, int64_t to_seq) {
     force_lost_from_ = from_seq;
@@ -117,6 +120,7 @@ class ToyWorld {
   int64_t force_dropped_from_ = -1;
   bool confirmed_ = false;
   int64_t force_lost_from_ = -1, force_lost_to_ = -1;
+  int64_t force_restart_at_ = -1;
 };
 
 }  // namespace toy

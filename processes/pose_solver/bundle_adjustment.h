@@ -79,14 +79,7 @@ struct BaOptions {
 struct BaSummary {
   bool ok = false;
   int iterations = 0;
-  double initial_rms_px = 0;  // Pose-only refinement (points held fixed, given as data): the correspondences listed in
-                              // `use`, the camera model,
-  // loss and iteration count of options. Returns false (pose untouched) on failure.
-  bool RefinePose(const PinholeCamera& camera, const RobotGeometry& robot, const BaOptions& options,
-                  const std::vector<Eigen::Vector3d>& points_in_world, const std::vector<Eigen::Vector2d>& pixels,
-                  const std::vector<int>& use, Eigen::Isometry3d* world_from_camera);
-
-  // RMS reprojection error over all observations before / after
+  double initial_rms_px = 0;  // RMS reprojection error over all observations before / after
   double final_rms_px = 0;
   std::string message;
 };
