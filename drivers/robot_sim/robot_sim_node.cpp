@@ -115,6 +115,8 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
         "write target_surface.ply, scene.txt, poses_gt.txt, robot_gt.txt here (empty = off)");
   p.Add("surface-density", &o->surface_density_per_mm2, "points per mm^2 in target_surface.ply");
   p.Add("publish-ground-truth", &o->publish_ground_truth, "publish GROUND_TRUTH_POSE");
+  p.Add("odometry", &o->publish_odometry,
+        "publish ROBOT_ODOMETRY (--odometry=false: images only, to test image-only input; orbit mode only)");
   p.Add("image-channel", &o->image_channel, "output channel for image_t");
   p.Add("info-channel", &o->info_channel, "output channel for camera_info_t");
   p.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
@@ -205,6 +207,8 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (!std::isfinite(o.surface_density_per_mm2) || o.surface_density_per_mm2 <= 0 || o.surface_density_per_mm2 > 100)
     return fail("--surface-density must be in (0, 100]");
   if (o.camera_name.empty()) return fail("--camera-name must not be empty");
+  if (!o.publish_odometry && o.mode == "command")
+    return fail("--odometry=false needs --mode orbit: in command mode the planner steers by the odometry");
   if (o.image_channel.empty() || o.info_channel.empty() || o.odometry_channel.empty() ||
       o.ground_truth_channel.empty() || o.command_channel.empty() || o.control_channel.empty() ||
       o.status_channel.empty())
@@ -399,7 +403,7 @@ void RobotSimNode::PublishFrame() {
   status_.RecordLatencyMs(render_ms_);
 
   Publish(options_.info_channel, CameraToMessage(camera_, frame.utime));
-  Publish(options_.odometry_channel, OdometryToMessage(frame.odometry));
+  if (options_.publish_odometry) Publish(options_.odometry_channel, OdometryToMessage(frame.odometry));
   if (options_.publish_ground_truth) {
     CameraPoseEstimate pose;
     pose.utime = frame.utime;

@@ -2,7 +2,8 @@
 // (robot_sim.h) in a scene (scene.h), renders the camera view (renderer.h) and publishes, per frame i and in this
 // order:
 //   CAMERA_INFO        camera_info_t (ideal pinhole, distortion "none")
-//   ROBOT_ODOMETRY     odometry_t with the error model of robot_sim.h (seq = i, utime = image utime + sync offset)
+//   ROBOT_ODOMETRY     odometry_t with the error model of robot_sim.h (seq = i, utime = image utime + sync offset);
+//                      not with --odometry=false (images only)
 //   GROUND_TRUTH_POSE  pose_t world_from_camera (mm), STATUS_GROUND_TRUTH, SCALE_TRUE, seq = i (evaluation only)
 //   CAMERA_IMAGE       image_t (rgb8 by default; bgr8, gray8 or jpeg), seq = i, utime = llround(i * 1e6 / rate)
 // and after the last frame control_t COMMAND_END_OF_STREAM (sender "robot_sim", last_seq) on OBJSCAN_CONTROL.
@@ -105,6 +106,8 @@ struct RobotSimNodeOptions {
   std::string ground_truth_dir;          // write ground-truth files here ("" = off)
   double surface_density_per_mm2 = 1.0;  // points per mm^2 in target_surface.ply
   bool publish_ground_truth = true;      // publish GROUND_TRUTH_POSE
+  bool publish_odometry = true;          // publish ROBOT_ODOMETRY (false: images only, as a camera without a robot;
+                                         // orbit mode only: the command mode's planner steers by it)
   // channels
   std::string image_channel = "CAMERA_IMAGE";              // image_t out
   std::string info_channel = "CAMERA_INFO";                // camera_info_t out

@@ -677,18 +677,33 @@ bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vec
   }
   const int n = static_cast<int>(xs.size());
   if (n < options_.min_floor_points) return false;
+  // Which way is up. With odometry the world is the odometry's frame: z is up, and the floor's normal is within
+  // 20 deg of it. Images only: the world is the first camera's frame, so z is that camera's optical axis (a plane
+  // facing the camera was taken for the floor: image-only sphere orbit, "metric" scale 1.62x off). Up is then taken
+  // from the cameras themselves: a camera on a pan-tilt head has no roll and looks down by its tilt, so the floor's
+  // normal lies within the tilt range (up to 70 deg) of the mean image-up direction (-y) of the posed cameras.
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  double max_angle_deg = 20.0;
+  if (std::none_of(frames_.begin(), frames_.end(), [](const Frame& fr) { return fr.has_odometry; })) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const Frame& fr : frames_)
+      if (fr.posed) sum += fr.world_from_camera.linear() * Eigen::Vector3d(0, -1, 0);
+    if (sum.norm() < 1e-9) return false;
+    up = sum.normalized();
+    max_angle_deg = 70.0;
+  }
   std::mt19937 rng(static_cast<uint32_t>(options_.seed));
   std::uniform_int_distribution<int> pick(0, n - 1);
   int best_count = 0;
   Eigen::Vector4d best(0, 0, 1, 0);
-  const double cos_max = std::cos(20.0 * M_PI / 180.0);
+  const double cos_max = std::cos(max_angle_deg * M_PI / 180.0);
   for (int it = 0; it < 300; ++it) {
     const int i = pick(rng), j = pick(rng), k = pick(rng);
     Eigen::Vector3d nrm = (xs[j] - xs[i]).cross(xs[k] - xs[i]);
     if (nrm.norm() < 1e-9) continue;
     nrm.normalize();
-    if (std::abs(nrm.z()) < cos_max) continue;
-    if (nrm.z() < 0) nrm = -nrm;  // up (the world's z is up wherever a floor is looked for)
+    if (std::abs(nrm.dot(up)) < cos_max) continue;
+    if (nrm.dot(up) < 0) nrm = -nrm;  // up
     const double d = -nrm.dot(xs[i]);
     int count = 0, below = 0;
     for (const auto& x : xs) {
@@ -1374,6 +1389,16 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
   if (max_factor > 0 && (s > max_factor || s < 1.0 / max_factor)) return false;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = c0 - s * c0;
+  if (std::none_of(frames_.begin(), frames_.end(), [](const Frame& fr) { return fr.has_odometry; })) {
+    // Images only: the world was the first camera's frame. Level it as the odometry's would be: the floor becomes
+    // z = 0 with +z up, so that every consumer (region of interest, object finder, planner, viewer) finds the floor
+    // where a robot's world has it.
+    const Eigen::Matrix3d level = Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d on_plane = s * (-d * n) + c0 - s * c0;  // a floor point after the scaling
+    t.linear() = level;
+    t.translation() = level * (c0 - s * c0);
+    t.translation().z() -= (level * on_plane).z();
+  }
   ApplySimilarity(s, t, first_frame, last_frame, point_ids);
   scale_source_ = ScaleSource::kCameraHeight;
   return true;
