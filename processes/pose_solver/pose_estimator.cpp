@@ -1384,12 +1384,16 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
         WorldFromCameraFloor(options_.robot, FloorPoseFromWorldFromCamera(options_.robot, levelled)).translation().z();
   }
   if (!(measured > 1e-6 && expected > 1e-6)) return false;
-  const double s = expected / measured;
+  const bool images_only =
+      std::none_of(frames_.begin(), frames_.end(), [](const Frame& fr) { return fr.has_odometry; });
+  if (!options_.camera_height_known && !images_only) return false;  // odometry's scale and level stay
+  // Unknown camera height (images only): the floor levels the world, the scale stays as it is.
+  const double s = options_.camera_height_known ? expected / measured : 1.0;
   if (applied_scale) *applied_scale = s;
   if (max_factor > 0 && (s > max_factor || s < 1.0 / max_factor)) return false;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = c0 - s * c0;
-  if (std::none_of(frames_.begin(), frames_.end(), [](const Frame& fr) { return fr.has_odometry; })) {
+  if (images_only) {
     // Images only: the world was the first camera's frame. Level it as the odometry's would be: the floor becomes
     // z = 0 with +z up, so that every consumer (region of interest, object finder, planner, viewer) finds the floor
     // where a robot's world has it.
@@ -1400,7 +1404,7 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
     t.translation().z() -= (level * on_plane).z();
   }
   ApplySimilarity(s, t, first_frame, last_frame, point_ids);
-  scale_source_ = ScaleSource::kCameraHeight;
+  if (options_.camera_height_known) scale_source_ = ScaleSource::kCameraHeight;
   return true;
 }
 

@@ -113,6 +113,9 @@ struct PoseEstimatorOptions {
   double ba_loss_px = 1.0;                     // px, robust loss scale
   double max_landmark_error_px = 2.5;          // px, landmarks with a larger RMS after BA are removed
   bool use_floor_for_scale = true;             // level on (4dof) / scale from (both) the floor plane when it is seen
+  bool camera_height_known = true;             // robot's camera height is the real one (a robot); false (an image
+                                               // folder): without odometry the floor only levels the world (floor
+                                               // z = 0, +z up) and the scale stays arbitrary
   double floor_tolerance_mm = 6.0;             // mm, plane inlier distance / floor landmark |z|
   int min_floor_points = 20;                   // landmarks needed to accept a floor plane
   bool refine_scale_with_odometry = true;      // kSixDof: rescale at Finish() by odometry / visual path length

@@ -1,5 +1,6 @@
 #include "processes/pose_solver/pose_estimator.h"
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -24,8 +25,9 @@ struct RunFigures {
 
 // with_odometry false: images only (AddFrame without odometry). final_heights_error_mm: max over the final poses of
 // |estimated - true| camera height, without any alignment (the world's floor z = 0 in both).
+// height_ratios: estimated / true camera height of every final pose (a levelled world at any scale: all equal).
 RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options, bool with_odometry = true,
-                    double* final_heights_error_mm = nullptr) {
+                    double* final_heights_error_mm = nullptr, std::vector<double>* height_ratios = nullptr) {
   PoseEstimator estimator(s.camera, options);
   std::vector<Eigen::Isometry3d> online_est, online_true;
   size_t memory_half = 0;
@@ -48,6 +50,7 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
     if (final_poses[f].status != PoseStatus::kTracking && final_poses[f].status != PoseStatus::kRelocalized) continue;
     fe.push_back(final_poses[f].world_from_camera);
     ft.push_back(s.world_from_camera[f]);
+    if (height_ratios) height_ratios->push_back(fe.back().translation().z() / ft.back().translation().z());
     if (final_heights_error_mm)
       *final_heights_error_mm =
           std::max(*final_heights_error_mm, std::abs(fe.back().translation().z() - ft.back().translation().z()));
@@ -110,6 +113,28 @@ TEST(PoseEstimator, SixDofOrbitWithoutOdometryIsLevelledAndScaledByTheFloor) {
   EXPECT_LE(fig.scale_error_final, 0.01);
   EXPECT_EQ(fig.scale_source, ScaleSource::kCameraHeight);
   EXPECT_LE(heights_error_mm, 5.0);
+}
+
+// Images only and no known camera height (an image folder): the floor still levels the world (every camera at the
+// same multiple of its true height), the scale stays arbitrary and is reported so.
+TEST(PoseEstimator, SixDofOrbitWithoutOdometryOrCameraHeightIsLevelledNotScaled) {
+  SyntheticOrbitOptions so;
+  so.outlier_fraction = 0.02;
+  const SyntheticOrbit s = MakeSyntheticOrbit(so);
+  PoseEstimatorOptions o;
+  o.model = MotionModel::kSixDof;
+  o.camera_height_known = false;
+  std::vector<double> ratios;
+  const RunFigures fig = RunOrbit(s, o, false, nullptr, &ratios);
+  ASSERT_FALSE(ratios.empty());
+  const auto [lo, hi] = std::minmax_element(ratios.begin(), ratios.end());
+  std::printf("images only, height unknown: estimated / true camera height %.4f .. %.4f, alignment scale %.4f\n",
+              *lo, *hi, fig.final_error.scale);
+  EXPECT_EQ(fig.final_posed, 200);
+  EXPECT_LE(fig.online.ate_rmse, 2.0);
+  EXPECT_EQ(fig.scale_source, ScaleSource::kNone);
+  EXPECT_GT(*lo, 0);
+  EXPECT_LE(*hi / *lo, 1.01);  // levelled: one ratio for all (the camera's true height is constant)
 }
 
 // The robot simulator's odometry: 2 % slip, heading drift, 0.5 deg pan/tilt biases. The floor plane + camera height

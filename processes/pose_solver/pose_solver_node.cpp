@@ -72,6 +72,9 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("ba-loss-scale", &e->ba_loss_px, "px, robust loss scale");
   p.Add("max-landmark-error", &e->max_landmark_error_px, "px, landmarks with larger RMS are removed");
   p.Add("use-floor-for-scale", &e->use_floor_for_scale, "4dof: level on and scale from the floor plane");
+  p.Add("camera-height-known", &e->camera_height_known,
+        "the robot geometry's camera height is real (false: images without odometry are only levelled by the floor, "
+        "lengths stay arbitrary)");
   p.Add("floor-tolerance", &e->floor_tolerance_mm, "mm, floor plane inlier distance");
   p.Add("min-floor-points", &e->min_floor_points, "landmarks needed to accept a floor plane");
   p.Add("refine-scale-with-odometry", &e->refine_scale_with_odometry, "6dof: rescale at the end by odometry path");
