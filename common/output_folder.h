@@ -12,4 +12,11 @@ namespace objscan {
 // name of an earlier output that was moved aside, else cleared.
 bool PrepareOutputFolder(const std::string& dir, std::string* moved_to, std::string* error);
 
+// Marks a result file as partial (a run interrupted or one that lost a process: the survivors wrote what they had),
+// in the file itself: a PLY gets "comment partial: REASON" after its format line, a text file whose first line is a
+// '#' comment (TUM trajectories) gets "# partial: REASON" after that line. Other files are left alone (false, *error
+// says why); so is a file already marked. The file is rewritten through a temporary file and a rename. REASON is one
+// line (newlines become spaces).
+bool MarkResultFilePartial(const std::string& path, const std::string& reason, std::string* error);
+
 }  // namespace objscan

@@ -72,5 +72,28 @@ TEST_F(OutputFolderTest, UsesAnEmptyFolderAndRefusesAFile) {
   EXPECT_NE(error.find("not a folder"), std::string::npos) << error;
 }
 
+TEST_F(OutputFolderTest, MarksResultFilesPartialInTheirHeaders) {
+  std::string error;
+  const std::string binary_body("\x01\x00\xff\n\x02", 5);
+  Write(root_ / "model.ply",
+        "ply\nformat binary_little_endian 1.0\ncomment units: mm\nelement vertex 1\nend_header\n" + binary_body);
+  Write(root_ / "trajectory.txt", "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw\n# scale: metric\n0 1 2 3 0 0 0 1\n");
+  Write(root_ / "plan.json", "{}\n");
+  ASSERT_TRUE(MarkResultFilePartial((root_ / "model.ply").string(), "interrupted by SIGTERM", &error)) << error;
+  ASSERT_TRUE(MarkResultFilePartial((root_ / "trajectory.txt").string(), "a process\nfailed", &error)) << error;
+  EXPECT_EQ(Read(root_ / "model.ply"), "ply\nformat binary_little_endian 1.0\ncomment partial: interrupted by SIGTERM\n"
+                                       "comment units: mm\nelement vertex 1\nend_header\n" + binary_body);
+  EXPECT_EQ(Read(root_ / "trajectory.txt"),
+            "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw\n# partial: a process failed\n# scale: metric\n"
+            "0 1 2 3 0 0 0 1\n");
+  // Marking twice changes nothing; a file of another kind is refused untouched.
+  ASSERT_TRUE(MarkResultFilePartial((root_ / "model.ply").string(), "again", &error)) << error;
+  EXPECT_EQ(Read(root_ / "model.ply").find("again"), std::string::npos);
+  EXPECT_FALSE(MarkResultFilePartial((root_ / "plan.json").string(), "x", &error));
+  EXPECT_EQ(Read(root_ / "plan.json"), "{}\n");
+  EXPECT_FALSE(MarkResultFilePartial((root_ / "missing.ply").string(), "x", &error));
+  EXPECT_FALSE(fs::exists(root_ / "model.ply.partial.tmp"));
+}
+
 }  // namespace
 }  // namespace objscan

@@ -21,6 +21,7 @@
 #include "common/status.h"
 #include "common/time.h"
 #include "common/message_size_check.h"
+#include "common/output_folder.h"
 #include "common/sensor_data.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
@@ -463,6 +464,16 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
                                   : FinishSurvivors(interrupted, options, processes, children, *bus, *monitor);
   for (size_t i = 0; i < children.size(); ++i)
     if (!processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
+  if (!partial.empty()) {  // the result files themselves say that they hold what the survivors had
+    for (const char* name : {"trajectory.txt", "trajectory_online.txt", "landmarks.ply", "model_voxels.ply",
+                             "model_mesh.ply"}) {
+      const std::string path = options.out_dir + "/" + name;
+      std::string mark_error;
+      if (access(path.c_str(), F_OK) == 0 &&
+          !MarkResultFilePartial(path, partial + ": the survivors wrote what they had", &mark_error))
+        LogWarning("cannot mark " + path + " partial: " + mark_error);
+    }
+  }
   pump(options.flush_wait_ms);  // the logger writes what is still buffered
   logger.Stop(5000);
 

@@ -54,6 +54,9 @@ results_written() {  # NAME
   for f in trajectory.txt model_mesh.ply; do
     [ -s "$WORK/$1/$f" ] || { cat "$WORK/$1.out"; tail -n 20 "$WORK/$1"/logs/*.log; fail "$1: no $f written"; }
   done
+  # The files themselves say they are partial, not only summary.json.
+  sed -n 2p "$WORK/$1/trajectory.txt" | grep -q '^# partial: ' || { head -3 "$WORK/$1/trajectory.txt"; fail "$1: trajectory.txt not marked partial"; }
+  grep -a -m1 -q '^comment partial: ' "$WORK/$1/model_mesh.ply" || fail "$1: model_mesh.ply not marked partial"
 }
 
 # 1. SIGTERM to the launcher: results, status "interrupted", exit 130.
