@@ -779,6 +779,12 @@ bool DenseModelerNode::RunPair(int64_t seq_a, int64_t seq_b) {
   const int64_t end_us = MonotonicMicros();
   ++pairs_done_;
   dense_points_ += static_cast<int64_t>(points.size());
+  if (!points.empty()) {  // the frames the model is built from (the session checks them against unjoined maps)
+    model_first_seq_ = model_first_seq_ < 0 ? a.seq : std::min(model_first_seq_, a.seq);
+    model_last_seq_ = std::max(model_last_seq_, b.seq);
+    status_.SetValue("model_first_seq", static_cast<double>(model_first_seq_));
+    status_.SetValue("model_last_seq", static_cast<double>(model_last_seq_));
+  }
   status_.SetValue("pairs", static_cast<double>(pairs_done_));
   status_.SetValue("dense_points", static_cast<double>(dense_points_));
   status_.SetValue("refine_searches", static_cast<double>(refine_searches_));

@@ -252,6 +252,7 @@ class DenseModelerNode : public Node {
   int region_source_ = 0;                            // 0 none, 1 target, 2 configuration, 3 automatic
   bool region_dirty_ = true;
   int64_t pairs_done_ = 0;
+  int64_t model_first_seq_ = -1, model_last_seq_ = -1;  // frames of the pairs that voted (seq)
   RecentValues pair_ms_{100000};   // ms, the pairs' wall times (pair matches + dense pair; status pair_ms), the last
                                    // 100 000 kept for the final log's percentiles
   RecentValues dense_ms_{100000};  // ms, ComputeDensePair's share of them (the dense pair alone)

@@ -580,11 +580,12 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   // After a loss the odometry chaining above is only a start: the new map, adjusted in the final model, is joined
   // to the old one through the landmarks both saw (Sim(3)), and those landmarks are fused.
   std::string join_message;
+  if (unjoined_first_ >= 0) unjoined_restart_seqs_.push_back(frames_[unjoined_first_].seq);  // never joined
   unjoined_first_ = -1;
   unjoined_points_.clear();
-  if (was_recovering && options_.join_search_mm > 0) {
+  if (was_recovering) {
     int pairs = 0;
-    if (JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
+    if (options_.join_search_mm > 0 && JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
       scale_source_ = scale_source_before;
       segment_floor_first_ = -1;  // joined: the old map's scale
       segment_floor_points_.clear();
@@ -1074,7 +1075,7 @@ bool PoseEstimator::JoinToOldMap(int first, int last, const std::vector<int64_t>
 
 void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   constexpr int kLateJoinFrames = 900;  // 30 s at 30 Hz: beyond, the maps are far apart in what they saw
-  if (unjoined_first_ < 0) return;
+  if (unjoined_first_ < 0 || options_.join_search_mm <= 0) return;
   unjoined_points_.insert(unjoined_points_.end(), added.begin(), added.end());
   if (f - unjoined_first_ > kLateJoinFrames) return;
   if (unjoined_points_.size() < unjoined_tried_size_ + unjoined_tried_size_ / 2) return;
@@ -1545,6 +1546,12 @@ bool PoseEstimator::RegisterAgainstMap(int f, const Eigen::Isometry3d& prior) {
   if (!PoseFromMap(f, &prior, nullptr)) return false;
   frames_[f].status = PoseStatus::kTracking;
   return true;
+}
+
+std::vector<int64_t> PoseEstimator::UnjoinedRestartSeqs() const {
+  std::vector<int64_t> seqs = unjoined_restart_seqs_;
+  if (unjoined_first_ >= 0) seqs.push_back(frames_[unjoined_first_].seq);
+  return seqs;
 }
 
 std::vector<CameraPoseEstimate> PoseEstimator::Finish() {

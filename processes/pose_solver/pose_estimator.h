@@ -216,6 +216,11 @@ class PoseEstimator {
   // Track ids re-associated with an older landmark (fuse_landmarks), as (track id, landmark id) in the order of
   // fusion: the track's observations belong to that landmark (Landmarks() lists it under the landmark id only).
   const std::vector<std::pair<int64_t, int64_t>>& FusedTrackIds() const { return fused_tracks_; }
+  // Frame seqs where a restarted map began that was never joined to the map before it (a later restart or the end
+  // came first): poses on the two sides are related by the odometry only, centimetres apart after long runs, so a
+  // model built from views on both sides mixes two frames. In order; the current map's start included while it is
+  // unjoined.
+  std::vector<int64_t> UnjoinedRestartSeqs() const;
   int num_fused() const { return static_cast<int>(fused_tracks_.size()); }
   ScaleSource scale_source() const { return scale_source_; }
   int span_first_frame() const { return span_first_; }  // index of the last preliminary span's first frame (-1: none)
@@ -357,6 +362,7 @@ class PoseEstimator {
   // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: every map joined), its landmarks
   // (Landmarks(true)), and their count at the last try (a new try once it grew by half).
   int unjoined_first_ = -1;
+  std::vector<int64_t> unjoined_restart_seqs_;  // earlier maps never joined (UnjoinedRestartSeqs)
   std::vector<int64_t> unjoined_points_;
   size_t unjoined_tried_size_ = 0;
   Phase phase_ = Phase::kInitializing;

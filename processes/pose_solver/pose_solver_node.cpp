@@ -435,6 +435,17 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
     status_.SetValue("scale_metric", IsMetric(estimator_->scale_source()) ? 1.0 : 0.0);
     LogInfo("final: " + std::to_string(posed) + " of " + std::to_string(frames) + " frames posed; scale " +
             ScaleDescription(estimator_->scale_source()));
+    // Where the final trajectory holds maps never joined to each other (the session checks them against the
+    // frames the model was built from).
+    const std::vector<int64_t> unjoined = estimator_->UnjoinedRestartSeqs();
+    status_.SetValue("unjoined_restarts", static_cast<double>(unjoined.size()));
+    status_.SetValue("last_unjoined_restart_seq", unjoined.empty() ? -1.0 : static_cast<double>(unjoined.back()));
+    if (!unjoined.empty()) {
+      std::string list;
+      for (int64_t s : unjoined) list += (list.empty() ? "" : ", ") + std::to_string(s);
+      LogWarning("the final trajectory holds maps never joined to the one before them, from frames " + list +
+                 ": poses across these frames are related by the odometry only");
+    }
   }
   if (failure.empty() && frames > 0 &&
       static_cast<double>(posed) < options_.min_posed_fraction * static_cast<double>(frames)) {
