@@ -1,11 +1,15 @@
 #include "processes/object_finder/object_finder_node.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
+
+#include <Eigen/Geometry>
 
 #include "common/adapters.h"
 #include "common/bus.h"
@@ -61,6 +65,8 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   p.Add("output-dir", &o->output_dir, "write target.json here at end of stream (\"\" = none)");
+  p.Add("final-pose-channel", &o->final_pose_channel,
+        "final poses (pose_t): target.json is re-expressed in their frame (\"\" = keep the online poses' frame)");
   ObjectFinderOptions* f = &o->finder;
   p.Add("floor-inlier-distance", &f->floor_inlier_mm, "mm, max |height| of a floor landmark");
   p.Add("floor-max-tilt", &f->floor_max_tilt_deg, "deg, max angle of the floor normal from world z");
@@ -156,9 +162,32 @@ ObjectFinderNode::ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& opti
     bus_.SubscribeMessage<odometry_t>(
         options_.odometry_channel, [this](const odometry_t& m, const RawMessage&) { OnOdometry(m); },
         status_.MalformedHandler("odometry"), 200);
+  if (!options_.final_pose_channel.empty())  // a burst of one per frame at the end: a deep queue
+    bus_.SubscribeMessage<pose_t>(
+        options_.final_pose_channel, [this](const pose_t& m, const RawMessage&) { OnFinalPose(m); },
+        status_.MalformedHandler("final pose"), 65536);
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
       status_.MalformedHandler("control"));
+}
+
+namespace {
+constexpr size_t kMaxCentres = 200000;             // camera centres kept per kind (a 1.8 h run at 30 Hz)
+constexpr int64_t kFinalPoseWaitUs = 120'000'000;  // wall clock the end waits for the pose solver's final poses
+const char* const kPoseSolverName = "pose_solver";
+}  // namespace
+
+void ObjectFinderNode::OnFinalPose(const pose_t& msg) {
+  CameraPoseEstimate pose;
+  std::string error;
+  if (!PoseFromMessage(msg, &pose, &error)) {
+    status_.Reject("final " + error, "seq " + std::to_string(msg.seq));
+    return;
+  }
+  status_.CountIn();
+  if (pose.status != PoseStatus::kTracking && pose.status != PoseStatus::kRelocalized) return;
+  if (final_centres_.size() < kMaxCentres || final_centres_.count(pose.seq))
+    final_centres_[pose.seq] = pose.world_from_camera.translation();
 }
 
 void ObjectFinderNode::OnPose(const pose_t& msg) {
@@ -179,6 +208,8 @@ void ObjectFinderNode::OnPose(const pose_t& msg) {
   }
   poses_[pose.seq] = pose.world_from_camera;
   while (poses_.size() > kPoseHistory) poses_.erase(poses_.begin());
+  if (online_centres_.size() < kMaxCentres || online_centres_.count(pose.seq))
+    online_centres_[pose.seq] = pose.world_from_camera.translation();
 }
 
 void ObjectFinderNode::OnCameraInfo(const camera_info_t& msg) {
@@ -384,16 +415,96 @@ void ObjectFinderNode::PublishTarget(int64_t wall_utime) {
 }
 
 void ObjectFinderNode::OnControl(const control_t& msg) {
-  if (!IsFinalizeRequest(msg, options_.name)) {
+  if (awaiting_final_ && msg.command == control_t::COMMAND_FINISHED && msg.sender == kPoseSolverName) {
+    status_.CountIn();
+    FinishTarget("the pose solver finished");
+    return;
+  }
+  const bool finalize = IsFinalizeRequest(msg, options_.name);
+  if (!finalize) {
     if (msg.command != control_t::COMMAND_END_OF_STREAM) return;
     if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
   }
   status_.CountIn();
   if (finished_) return;
+  if (awaiting_final_) {  // FINALIZE (or a repeated end of stream) while waiting: end with what there is
+    if (finalize) FinishTarget("asked to finalize");
+    return;
+  }
   const FinderResult& r = finder_.result();
+  end_utime_ = msg.utime;
   LogInfo("end of stream from " + msg.sender + ": " + TargetStateName(r.state) +
           (r.state == TargetState::kSearching ? std::string(", no target found") : " target " + Describe(r.box)) +
           ", " + std::to_string(finder_.updates()) + " maps");
+  if (!finalize && r.state != TargetState::kSearching && !options_.final_pose_channel.empty() &&
+      !options_.output_dir.empty()) {
+    awaiting_final_ = true;
+    awaiting_since_us_ = WallTimeMicros();
+    status_.SetState(+process_status_t::STATE_RUNNING, "waiting for the final poses on " + options_.final_pose_channel);
+    return;
+  }
+  FinishTarget("");
+}
+
+void ObjectFinderNode::FinishTarget(const std::string& why) {
+  awaiting_final_ = false;
+  FinderResult r = finder_.result();
+  std::string frame_note;
+  if (r.state != TargetState::kSearching && !final_centres_.empty()) {
+    // The Sim(3) from the online to the final camera centres over the frames since the confirmation.
+    std::vector<Eigen::Vector3d> from, to;
+    for (auto it = online_centres_.lower_bound(std::max<int64_t>(0, r.confirmed_seq)); it != online_centres_.end();
+         ++it) {
+      auto f = final_centres_.find(it->first);
+      if (f == final_centres_.end()) continue;
+      from.push_back(it->second);
+      to.push_back(f->second);
+    }
+    if (from.size() >= 10) {
+      Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
+      for (size_t i = 0; i < from.size(); ++i) a.col(i) = from[i], b.col(i) = to[i];
+      const Eigen::Matrix4d t = Eigen::umeyama(a, b, true);
+      const Eigen::Matrix3d sr = t.topLeftCorner<3, 3>();
+      const double scale = std::cbrt(sr.determinant());
+      const Eigen::Matrix3d rotation = sr / scale;
+      const Eigen::Vector3d shift = t.topRightCorner<3, 1>();
+      double sum2 = 0;
+      for (size_t i = 0; i < from.size(); ++i) sum2 += (sr * from[i] + shift - to[i]).squaredNorm();
+      const double rms = std::sqrt(sum2 / from.size());
+      char text[256];
+      if (std::isfinite(scale) && scale > 0 && rms <= 20.0) {
+        const Eigen::Vector3d before = r.box.centre_mm;
+        const auto apply = [&](TargetBox* box) {
+          box->centre_mm = sr * box->centre_mm + shift;
+          box->size_mm *= scale;
+          box->yaw_rad = std::remainder(box->yaw_rad + std::atan2(rotation(1, 0), rotation(0, 0)), 2 * M_PI);
+        };
+        apply(&r.box);
+        for (CandidateReport& c : r.other_candidates) apply(&c.box);
+        if (r.floor_valid) {
+          const Eigen::Vector3d n = rotation * r.floor.normal;
+          r.floor.offset_mm = scale * r.floor.offset_mm - n.dot(shift);
+          r.floor.normal = n;
+        }
+        std::snprintf(text, sizeof(text),
+                      "target.json in the final poses' frame (as trajectory.txt): centre moved %.1f mm (Sim(3) over "
+                      "%zu frames since the confirmation, scale %.4f, rms %.2f mm)",
+                      (r.box.centre_mm - before).norm(), from.size(), scale, rms);
+        LogInfo(text);
+      } else {
+        std::snprintf(text, sizeof(text),
+                      "target.json stays in the online poses' frame: the final poses of the %zu frames since the "
+                      "confirmation are not a rigid move of the online ones (rms %.1f mm): a map restart among them?",
+                      from.size(), rms);
+        LogWarning(text);
+      }
+    } else {
+      LogWarning("target.json stays in the online poses' frame: " + std::to_string(from.size()) +
+                 " frames since the confirmation have a final pose (10 needed)");
+    }
+  } else if (r.state != TargetState::kSearching && !why.empty()) {
+    LogWarning("target.json stays in the online poses' frame: no final poses (" + why + ")");
+  }
   if (!options_.output_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(options_.output_dir, ec);
@@ -408,13 +519,15 @@ void ObjectFinderNode::OnControl(const control_t& msg) {
   }
   PublishTarget(WallTimeMicros());
   PublishFinished(bus_, status_, options_.control_channel, options_.name,
-                  last_landmarks_seq_ >= 0 ? r.utime : msg.utime, last_landmarks_seq_);
+                  last_landmarks_seq_ >= 0 ? r.utime : end_utime_, last_landmarks_seq_);
   finished_ = true;
   status_.SetState(+process_status_t::STATE_FINISHED, "end of stream answered");
   status_.PublishIfDue(WallTimeMicros(), true);
 }
 
 void ObjectFinderNode::Tick(int64_t wall_utime) {
+  if (awaiting_final_ && wall_utime - awaiting_since_us_ > kFinalPoseWaitUs)
+    FinishTarget("none within " + std::to_string(kFinalPoseWaitUs / 1'000'000) + " s of the end of stream");
   if (have_target_ && wall_utime - target_published_us_ >= static_cast<int64_t>(options_.target_period_s * 1e6))
     PublishTarget(wall_utime);
   status_.PublishIfDue(wall_utime);

@@ -13,7 +13,12 @@
 //   OBJSCAN_CONTROL control_t COMMAND_END_OF_STREAM (target "*", "" or the process name): writes
 //                   output_dir/target.json (when set), publishes TARGET once more and control_t COMMAND_FINISHED
 //                   (sender = name, last_seq / utime = the last map's keyframe, -1 / the message's utime if none);
-//                   then Finished() (with exit_when_finished).
+//                   then Finished() (with exit_when_finished). With a target and final_pose_channel, FINISHED waits
+//                   for the pose solver's FINISHED (sender "pose_solver"; at most 120 s, or FINALIZE): target.json
+//                   is then rewritten in the final poses' frame (the Sim(3) from the online to the final camera
+//                   centres of the frames since the confirmation; kept online, with a warning, when that is not
+//                   rigid within 20 mm RMS or fewer than 10 frames have both).
+//   CAMERA_POSE_FINAL pose_t: the final poses (tracking / relocalized ones), by seq.
 // Outputs:
 //   TARGET          target_t after every update (utime/seq of the map's keyframe, frame "world", state, centre,
 //                   size, yaw, confidence, roi in that keyframe's image), repeated every target_period_s (stateless).
@@ -70,6 +75,8 @@ struct ObjectFinderNodeOptions {
   double status_period_s = 1.0;                     // s, status publication period (> 0)
   bool exit_when_finished = true;                   // Finished() turns true after end of stream was answered
   std::string output_dir;                           // write target.json here at end of stream ("" = none)
+  std::string final_pose_channel = "CAMERA_POSE_FINAL";  // input final poses (pose_t): target.json is re-expressed
+                                                         // in their frame ("" = keep the online poses' frame)
   ObjectFinderOptions finder;                       // the finder's options
 };
 
@@ -99,6 +106,9 @@ class ObjectFinderNode : public Node {
   void OnCameraInfo(const camera_info_t& msg);
   void OnOdometry(const odometry_t& msg);
   void OnControl(const control_t& msg);
+  void OnFinalPose(const pose_t& msg);
+  // Writes target.json (in the final poses' frame when they came), publishes TARGET and FINISHED: the end.
+  void FinishTarget(const std::string& why);
   bool RobotPosition(Eigen::Vector2d* xy_mm) const;
   void PublishTarget(int64_t wall_utime);
   void LogChanges(const FinderResult& r);
@@ -109,6 +119,13 @@ class ObjectFinderNode : public Node {
   ObjectFinder finder_;
   StatusReporter status_;
   std::map<int64_t, Eigen::Isometry3d> poses_;  // world_from_camera by seq, the last kPoseHistory
+  // Camera centres (mm) by seq of the online and the final poses: the Sim(3) between them over the frames since the
+  // target was confirmed carries target.json into trajectory.txt's frame (a map restart joined or re-chained in the
+  // final phase moves whole stretches: room_07, 117 mm).
+  std::map<int64_t, Eigen::Vector3d> online_centres_, final_centres_;
+  bool awaiting_final_ = false;      // end of stream answered in part: target.json waits for the final poses
+  int64_t awaiting_since_us_ = 0;    // wall clock
+  int64_t end_utime_ = 0;            // utime of the end-of-stream message
   bool have_camera_ = false;
   PinholeCamera first_camera_;  // the accepted camera_info (a different later one is rejected)
   FinderCamera camera_;

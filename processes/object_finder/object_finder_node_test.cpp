@@ -61,7 +61,7 @@ class ObjectFinderNodeTest : public ::testing::Test {
     bus_ = MakeLcmBus("memq://");
     bus_->SubscribeMessage<target_t>("TARGET", [this](const target_t& m, const RawMessage&) { targets_.push_back(m); });
     bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
-      if (m.command == control_t::COMMAND_FINISHED) finished_.push_back(m);
+      if (m.command == control_t::COMMAND_FINISHED && m.sender != "pose_solver") finished_.push_back(m);
     });
     room_.AddFloor(2500, 2000, 2.0);
     room_.AddBox("box", kBoxCentre.head<2>(), Eigen::Vector3d(150, 120, 140), 0.3, 12);
@@ -92,13 +92,23 @@ class ObjectFinderNodeTest : public ::testing::Test {
     camera.cy = room_.camera().cy;
     ASSERT_TRUE(bus_->PublishMessage("CAMERA_INFO", CameraToMessage(camera, 0)));
   }
-  void PublishPose(int64_t seq, const Eigen::Isometry3d& world_from_camera, PoseStatus status = PoseStatus::kTracking) {
+  void PublishPose(int64_t seq, const Eigen::Isometry3d& world_from_camera, PoseStatus status = PoseStatus::kTracking,
+                   const std::string& channel = "CAMERA_POSE") {
     CameraPoseEstimate pose;
     pose.seq = seq;
     pose.utime = seq * 100000;
     pose.world_from_camera = world_from_camera;
     pose.status = status;
-    ASSERT_TRUE(bus_->PublishMessage("CAMERA_POSE", PoseToMessage(pose)));
+    ASSERT_TRUE(bus_->PublishMessage(channel, PoseToMessage(pose)));
+  }
+  void PoseSolverFinished() {
+    control_t c;
+    c.utime = 0;
+    c.sender = "pose_solver";
+    c.target = "*";
+    c.command = control_t::COMMAND_FINISHED;
+    c.last_seq = 100;
+    ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", c));
   }
   // Keyframe k of a circle about the box: CAMERA_POSE then LANDMARKS, as the pose solver publishes them.
   FinderInput Keyframe(int k) {
@@ -179,7 +189,13 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
   Drain();
   EXPECT_EQ(targets_.size(), 8u);
 
+  // With a target, the end waits for the pose solver's final poses; none came (3 frames since the confirmation have
+  // online poses here): target.json stays in the online frame.
   EndOfStream();
+  Drain();
+  EXPECT_TRUE(finished_.empty());
+  EXPECT_FALSE(node_->Finished());
+  PoseSolverFinished();
   Drain();
   ASSERT_EQ(finished_.size(), 1u);
   EXPECT_EQ(finished_[0].sender, "object_finder");
@@ -205,6 +221,47 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
   EXPECT_GT(normal[2], 0.999);
   EXPECT_NEAR(static_cast<double>(json["floor"]["offset_mm"]), 0.0, 2.0);
   EXPECT_TRUE(json["other_candidates"].isSeq());
+}
+
+// The final phase moved the frames since the confirmation rigidly (a joined or re-chained map restart: room_07's
+// target.json was 117 mm off trajectory.txt's frame): target.json follows them into the final poses' frame.
+TEST_F(ObjectFinderNodeTest, TargetJsonFollowsTheFinalPoses) {
+  Start();
+  PublishInfo();
+  for (int k = 0; k < 6; ++k) PublishKeyframe(k);
+  Drain();
+  ASSERT_EQ(node_->finder().result().state, TargetState::kConfirmed);
+  // More views after the confirmation, then their final poses: the online ones turned by 5 deg and shifted.
+  Eigen::Isometry3d final_from_online = Eigen::Isometry3d::Identity();
+  final_from_online.linear() = Eigen::AngleAxisd(5 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  final_from_online.translation() = Eigen::Vector3d(100, -50, 0);
+  std::vector<std::pair<int64_t, Eigen::Isometry3d>> online;
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Isometry3d pose = room_.OnCircle(kBoxCentre.head<2>(), 1200, 90 + i * 10.0, kBoxCentre);
+    online.emplace_back(60 + i, pose);
+    PublishPose(60 + i, pose);
+  }
+  Drain();
+  EndOfStream();
+  Drain();
+  EXPECT_TRUE(finished_.empty());
+  for (const auto& [seq, pose] : online) PublishPose(seq, final_from_online * pose, PoseStatus::kTracking, "CAMERA_POSE_FINAL");
+  PoseSolverFinished();
+  Drain();
+  ASSERT_EQ(finished_.size(), 1u);
+  cv::FileStorage json((out_dir_ / "target.json").string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON);
+  ASSERT_TRUE(json.isOpened());
+  std::vector<double> centre, normal;
+  json["centre_mm"] >> centre;
+  json["floor"]["normal"] >> normal;
+  ASSERT_EQ(centre.size(), 3u);
+  const Eigen::Vector3d expected = final_from_online * kBoxCentre;
+  EXPECT_LT((Eigen::Vector3d(centre[0], centre[1], centre[2]) - expected).norm(), 10.0)
+      << centre[0] << " " << centre[1] << " " << centre[2];
+  EXPECT_NEAR(static_cast<double>(json["yaw_rad"]), 0.3 + 5 * M_PI / 180, 0.05);
+  ASSERT_EQ(normal.size(), 3u);
+  EXPECT_GT(normal[2], 0.999);
+  EXPECT_NEAR(static_cast<double>(json["floor"]["offset_mm"]), 0.0, 2.0);
 }
 
 TEST_F(ObjectFinderNodeTest, MalformedMessagesAreRejectedBeforeDecoding) {
