@@ -189,9 +189,14 @@ std::string OptionParser::Effective() const {
   return os.str();
 }
 
-bool ParseCommandLineOrExit(OptionParser& parser, int argc, char** argv, int* exit_code) {
+bool ParseCommandLineOrExit(OptionParser& parser, int argc, char** argv, int* exit_code, bool allow_positional) {
   std::string error;
-  if (!parser.Parse(argc, argv, &error)) {
+  bool ok = parser.Parse(argc, argv, &error);
+  if (ok && !allow_positional && !parser.positional().empty() && !parser.help_requested()) {
+    error = "unexpected argument '" + parser.positional()[0] + "' (options start with --, e.g. --log FILE)";
+    ok = false;
+  }
+  if (!ok) {
     std::fprintf(stderr, "error: %s\n\n%s", error.c_str(), parser.Usage().c_str());
     *exit_code = 2;
     return false;

@@ -51,6 +51,8 @@ class OptionParser {
 
 // Parses argv for a process main(): prints usage and returns 0 into *exit_code when --help was asked, prints the
 // error and usage and returns 2 into *exit_code on a bad command line; returns true when the program should run.
-bool ParseCommandLineOrExit(OptionParser& parser, int argc, char** argv, int* exit_code);
+// An argument that is no option (a log path given without --log) is a bad command line unless allow_positional
+// (the program reads positional() itself): a program that ignored it would run on something else without a word.
+bool ParseCommandLineOrExit(OptionParser& parser, int argc, char** argv, int* exit_code, bool allow_positional = false);
 
 }  // namespace objscan

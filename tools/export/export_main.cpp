@@ -31,7 +31,7 @@ int ColmapToTum(int argc, char** argv) {
                       "Converts COLMAP images.txt to a TUM camera-to-world trajectory (t = frame number / rate).");
   parser.Add("rate", &rate, "Hz, frame rate: image NNNNNN gets t = NNNNNN / rate s");
   int code = 0;
-  if (!ParseCommandLineOrExit(parser, argc, argv, &code)) return code;
+  if (!ParseCommandLineOrExit(parser, argc, argv, &code, true)) return code;
   if (parser.positional().size() != 2 || !(rate > 0)) {
     std::fprintf(stderr, "%s", parser.Usage().c_str());
     return 2;
@@ -57,7 +57,7 @@ int ColmapCamera(int argc, char** argv) {
   OptionParser parser("objscan_export colmap-camera CALIB.yaml",
                       "Prints the COLMAP camera model and parameters of an objscan calibration file.");
   int code = 0;
-  if (!ParseCommandLineOrExit(parser, argc, argv, &code)) return code;
+  if (!ParseCommandLineOrExit(parser, argc, argv, &code, true)) return code;
   if (parser.positional().size() != 1) {
     std::fprintf(stderr, "%s", parser.Usage().c_str());
     return 2;
@@ -78,7 +78,7 @@ int ExportLog(int argc, char** argv) {
                       "objscan_export colmap-camera CALIB.yaml");
   AddLogExportOptions(parser, &options);
   int code = 0;
-  if (!ParseCommandLineOrExit(parser, argc, argv, &code)) return code;
+  if (!ParseCommandLineOrExit(parser, argc, argv, &code, true)) return code;
   std::string error;
   if (!parser.positional().empty()) error = "unexpected argument " + parser.positional()[0];
   if (error.empty()) ValidateLogExportOptions(options, &error);

@@ -3,6 +3,7 @@
 //   objscan_logtool compare-bytes A B [SKIP,...]   exit 0 when the per-channel messages are byte-identical
 //                                                  (PROCESS_STATUS is always skipped: wall-clock fields)
 //   objscan_logtool compare-tracks A B TOL_PX      FEATURE_TRACKS of B against reference A; prints figures
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -54,7 +55,13 @@ int main(int argc, char** argv) {
   }
   if (command == "compare-tracks" && argc >= 5) {
     objscan::TracksComparison r;
-    if (!objscan::CompareLogTracks(argv[2], argv[3], "FEATURE_TRACKS", std::atof(argv[4]), &r, &error)) {
+    char* end = nullptr;
+    const double tolerance_px = std::strtod(argv[4], &end);
+    if (end == argv[4] || *end != '\0' || !(tolerance_px >= 0) || !std::isfinite(tolerance_px)) {
+      std::fprintf(stderr, "error: compare-tracks: TOLERANCE_PX must be a number of pixels >= 0, got '%s'\n", argv[4]);
+      return 2;
+    }
+    if (!objscan::CompareLogTracks(argv[2], argv[3], "FEATURE_TRACKS", tolerance_px, &r, &error)) {
       std::fprintf(stderr, "error: %s\n", error.c_str());
       return 1;
     }
