@@ -438,6 +438,10 @@ void ObjectFinderNode::OnControl(const control_t& msg) {
           ", " + std::to_string(finder_.updates()) + " maps");
   if (!finalize && r.state != TargetState::kSearching && !options_.final_pose_channel.empty() &&
       !options_.output_dir.empty()) {
+    // The online target.json now (a process stopped hard later still leaves it), the final one when the poses come.
+    std::error_code ec;
+    std::filesystem::create_directories(options_.output_dir, ec);
+    std::ofstream(options_.output_dir + "/target.json") << TargetJson(r, finder_.updates());
     awaiting_final_ = true;
     awaiting_since_us_ = WallTimeMicros();
     status_.SetState(+process_status_t::STATE_RUNNING, "waiting for the final poses on " + options_.final_pose_channel);
@@ -533,6 +537,9 @@ void ObjectFinderNode::Tick(int64_t wall_utime) {
   status_.PublishIfDue(wall_utime);
 }
 
-void ObjectFinderNode::OnShutdown() { status_.PublishIfDue(WallTimeMicros(), true); }
+void ObjectFinderNode::OnShutdown() {
+  if (awaiting_final_) FinishTarget("stopped before the pose solver finished");
+  status_.PublishIfDue(WallTimeMicros(), true);
+}
 
 }  // namespace objscan

@@ -195,6 +195,7 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
   Drain();
   EXPECT_TRUE(finished_.empty());
   EXPECT_FALSE(node_->Finished());
+  EXPECT_TRUE(std::filesystem::exists(out_dir_ / "target.json"));  // the online one, at once
   PoseSolverFinished();
   Drain();
   ASSERT_EQ(finished_.size(), 1u);
