@@ -1,16 +1,20 @@
 #include "drivers/camera/camera_node.h"
 
+#include <climits>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/recorded_run.h"
 #include "common/time.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/image_t.hpp"
+#include "objscan/odometry_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/process_status_t.hpp"
 
@@ -69,6 +73,10 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
   parser.Add("control-channel", &o->control_channel, "output channel for END_OF_STREAM (control_t)");
   parser.Add("status-channel", &o->status_channel, "output channel for process_status_t");
   parser.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
+  parser.Add("odometry", &o->odometry,
+             "publish an image folder's odometry.txt (needs robot.cfg and timestamps.txt beside it); false: the "
+             "images alone");
+  parser.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
 }
 
 bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
@@ -88,7 +96,7 @@ bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
   if (o.device_width < 0 || o.device_height < 0) return fail("--device-width/--device-height must be >= 0");
   if (o.camera_name.empty()) return fail("--camera-name must not be empty");
   if (o.image_channel.empty() || o.info_channel.empty() || o.ground_truth_channel.empty() ||
-      o.control_channel.empty() || o.status_channel.empty())
+      o.control_channel.empty() || o.status_channel.empty() || o.odometry_channel.empty())
     return fail("channel names must not be empty");
   return true;
 }
@@ -113,7 +121,8 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
   timestamp_rate_ = options_.rate_hz > 0 ? options_.rate_hz : 30.0;
   if (source_->IsLive() && source_->SourceRate() > 0) timestamp_rate_ = source_->SourceRate();
   LogInfo("source: " + source_->Describe());
-  LogInfo("timestamps at " + std::to_string(timestamp_rate_) + " Hz");
+  if (source_->kind() == SourceKind::kImageFolder && options_.odometry) LoadRecordedOdometry();
+  if (odometry_.empty()) LogInfo("timestamps at " + std::to_string(timestamp_rate_) + " Hz");
 
   if (!options_.lockstep_channel.empty()) {
     bus_.Subscribe(options_.lockstep_channel, [this](const RawMessage& raw) {
@@ -201,7 +210,18 @@ bool CameraNode::PublishNextFrame(int64_t wall_utime) {
     }
     status_.CountIn();
     const int64_t seq = frames_published_;
-    const int64_t utime = std::llround(static_cast<double>(seq) * 1e6 / timestamp_rate_);
+    const int64_t utime = !odometry_.empty() ? frame.recorded_utime
+                                             : std::llround(static_cast<double>(seq) * 1e6 / timestamp_rate_);
+    if (!odometry_.empty()) {
+      PublishOdometryUpTo(utime);
+      constexpr int64_t kMaxGapUs = 500000;
+      if (utime < odometry_.front().utime - kMaxGapUs || utime > odometry_.back().utime + kMaxGapUs) {
+        if (frames_without_odometry_++ == 0)
+          LogWarning(frame.name + " (t = " + std::to_string(utime / 1e6) + " s) has no odometry within 0.5 s: " +
+                     std::string(kOdometryFileName) + " covers " + std::to_string(odometry_.front().utime / 1e6) +
+                     " .. " + std::to_string(odometry_.back().utime / 1e6) + " s (further frames only counted)");
+      }
+    }
 
     // Calibration first, so that a receiver has it when the image arrives.
     camera_info_t info = CameraToMessage(frame.camera, utime);
@@ -236,8 +256,43 @@ bool CameraNode::PublishNextFrame(int64_t wall_utime) {
   }
 }
 
+void CameraNode::LoadRecordedOdometry() {
+  namespace fs = std::filesystem;
+  const fs::path root(options_.source);
+  const fs::path odometry_path = root / kOdometryFileName, robot_path = root / kRobotFileName;
+  if (!fs::is_regular_file(odometry_path)) return;
+  auto fail = [&](const std::string& what) {
+    throw std::runtime_error(odometry_path.string() + ": " + what + " (--odometry=false plays the images alone)");
+  };
+  if (!fs::is_regular_file(robot_path))
+    fail("a recorded run needs " + robot_path.string() +
+         ", the robot's geometry and head conventions (format in common/recorded_run.h)");
+  if (!fs::is_regular_file(root / kTimestampsFileName))
+    fail("a recorded run needs " + (root / kTimestampsFileName).string() + ", the time of every image");
+  if (!options_.order.empty()) fail("--order cannot reorder a recorded run");
+  if (options_.loop) fail("--loop cannot repeat a recorded run");
+  RobotDescription robot;
+  std::string error;
+  if (!ReadRobotFile(robot_path.string(), &robot, &error)) throw std::runtime_error(error);
+  std::vector<OdometryReading> readings;
+  if (!ReadOdometryFile(odometry_path.string(), &readings, &error)) throw std::runtime_error(error);
+  if (readings.empty()) fail("no reading");
+  for (const auto& r : readings) odometry_.push_back(robot.ToObjscanConvention(r));
+  LogInfo("recorded run: " + std::to_string(odometry_.size()) + " odometry readings, t = " +
+          std::to_string(odometry_.front().utime / 1e6) + " .. " + std::to_string(odometry_.back().utime / 1e6) +
+          " s; image times from " + kTimestampsFileName + "; robot from " + robot_path.string());
+}
+
+void CameraNode::PublishOdometryUpTo(int64_t utime) {
+  while (next_odometry_ < odometry_.size() && odometry_[next_odometry_].utime <= utime)
+    Publish(options_.odometry_channel, OdometryToMessage(odometry_[next_odometry_++]));
+  if (next_odometry_ < odometry_.size() && utime != INT64_MAX)  // the bracket after the frame time
+    Publish(options_.odometry_channel, OdometryToMessage(odometry_[next_odometry_++]));
+}
+
 void CameraNode::FinishStream() {
   if (end_of_stream_sent_) return;
+  if (!odometry_.empty()) PublishOdometryUpTo(INT64_MAX);
   control_t control;
   control.utime = last_utime_;
   control.sender = kProcessName;
@@ -266,6 +321,8 @@ void CameraNode::UpdateStatusValues() {
   status_.SetValue("timestamp_rate_hz", timestamp_rate_);
   status_.SetValue("lockstep_timeouts", static_cast<double>(lockstep_timeouts_));
   status_.SetValue("publish_failures", static_cast<double>(publish_failures_));
+  status_.SetValue("odometry_published", static_cast<double>(next_odometry_));
+  status_.SetValue("frames_without_odometry", static_cast<double>(frames_without_odometry_));
 }
 
 void CameraNode::Tick(int64_t wall_utime) {

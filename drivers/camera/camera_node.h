@@ -15,6 +15,12 @@
 //                       arrived on that channel (seq = bytes 16..23, big-endian, of the raw LCM message: the field
 //                       after utime in image_t / feature_tracks_t / pose_t); after --lockstep-timeout-ms it goes on
 //                       anyway (counted in lockstep_timeouts; 0 = wait forever).
+// A recorded robot run (an image folder with timestamps.txt, odometry.txt and robot.cfg, common/recorded_run.h):
+// frame utimes are the recorded ones, and before each frame's CAMERA_INFO the odometry readings up to its time
+// plus the first one after it are published on ROBOT_ODOMETRY (odometry_t, head angles turned into objscan's
+// convention by robot.cfg), so a receiver can interpolate at the frame time as it does live; the rest follow the
+// last frame, before END_OF_STREAM. odometry.txt without robot.cfg or timestamps.txt, or with --order / --loop, is a
+// start-up error (--odometry=false plays the images alone). Frames with no reading within 0.5 s are counted.
 // Bad frames (unreadable or odd-sized files) are logged with their name, counted as rejected in PROCESS_STATUS and
 // skipped. The node never throws after construction. Determinism: the published messages depend only on the source
 // and the options (not on timing), except PROCESS_STATUS.
@@ -23,8 +29,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/node.h"
+#include "common/sensor_data.h"
 #include "common/status.h"
 #include "drivers/camera/frame_source.h"
 
@@ -56,6 +64,8 @@ struct CameraNodeOptions {
   std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // output channel of the true poses
   std::string control_channel = "OBJSCAN_CONTROL";         // output channel of END_OF_STREAM
   std::string status_channel = "PROCESS_STATUS";           // output channel of process_status_t
+  bool odometry = true;  // an image folder's odometry.txt (with robot.cfg, timestamps.txt) is published
+  std::string odometry_channel = "ROBOT_ODOMETRY";         // output channel of odometry_t
   bool exit_when_finished = true;  // Finished() turns true after END_OF_STREAM (the process exits)
 };
 
@@ -97,6 +107,10 @@ class CameraNode : public Node {
   // Reads (skipping bad frames) and publishes the next frame; at the end sends END_OF_STREAM (or rewinds with
   // --loop). Returns true when a frame was published.
   bool PublishNextFrame(int64_t wall_utime);
+  // Loads odometry.txt and robot.cfg of a recorded run (see the header comment); throws std::runtime_error.
+  void LoadRecordedOdometry();
+  // Publishes the odometry readings up to utime and the first one after it (all when utime is INT64_MAX).
+  void PublishOdometryUpTo(int64_t utime);
   void FinishStream();
   template <class Msg>
   void Publish(const std::string& channel, const Msg& msg);
@@ -119,6 +133,10 @@ class CameraNode : public Node {
   int64_t last_utime_ = 0;
   bool end_of_stream_sent_ = false;
   int64_t publish_failures_ = 0;
+
+  std::vector<OdometryReading> odometry_;  // recorded odometry in objscan's convention (empty: none)
+  size_t next_odometry_ = 0;               // index of the next reading to publish
+  int64_t frames_without_odometry_ = 0;    // frames with no reading within 0.5 s
 
   int64_t lockstep_max_seq_ = -1;       // highest seq seen on the lockstep channel
   int64_t lockstep_waiting_for_ = -1;   // seq we are waiting for (-1 = not waiting)

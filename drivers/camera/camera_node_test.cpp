@@ -13,11 +13,13 @@
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/options.h"
+#include "common/recorded_run.h"
 #include "common/test_data.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
 #include "objscan/image_t.hpp"
+#include "objscan/odometry_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/process_status_t.hpp"
 
@@ -125,6 +127,91 @@ void RunToEnd(Bus& bus, CameraNode& node, int64_t* wall, int max_ticks = 100000)
     Drain(bus);
   }
   Drain(bus);
+}
+
+// A recorded robot run: image times from timestamps.txt, odometry.txt published around each frame (every reading up
+// to the frame's time and the next one, so the receiver can interpolate), head angles turned into objscan's
+// convention by robot.cfg; the rest after the last frame, before the end of stream.
+TEST(CameraNodeTest, RecordedRunPublishesItsOdometryAroundEachFrameAtTheRecordedTimes) {
+  TempDir dir("recorded");
+  WriteFolder(dir.path(), 3);
+  const int64_t t0 = 1'700'000'000'000'000;
+  std::vector<FrameTime> times;
+  for (int k = 0; k < 3; ++k) times.push_back({"img_0" + std::to_string(k) + ".png", t0 + k * 50'000});
+  std::vector<OdometryReading> readings;  // every 20 ms from 30 ms before the first frame to 170 ms after it
+  for (int i = 0; i < 11; ++i) {
+    OdometryReading r;
+    r.utime = t0 - 30'000 + i * 20'000;
+    r.seq = i;
+    r.x_mm = 10.0 * i;
+    r.pan_rad = 0.1 * i;  // this robot's pan encoder counts to the right, zero at 0.05 rad
+    readings.push_back(r);
+  }
+  RobotDescription robot;
+  robot.geometry.mast_height_mm = 450;
+  robot.pan_sign = -1;
+  robot.pan_zero_rad = 0.05;
+  std::string error;
+  ASSERT_TRUE(WriteFrameTimes((dir.path() / "timestamps.txt").string(), times, &error)) << error;
+  ASSERT_TRUE(WriteOdometryFile((dir.path() / "odometry.txt").string(), readings, &error)) << error;
+
+  auto bus = MakeLcmBus("memq://");
+  CameraNodeOptions options;
+  options.source = dir.path().string();
+  options.rate_hz = 0;
+  // Without robot.cfg the run is refused, and the message says what is missing and what else to do.
+  try {
+    CameraNode node(*bus, options);
+    ADD_FAILURE() << "a recorded run without robot.cfg was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("robot.cfg"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--odometry=false"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(WriteRobotFile((dir.path() / "robot.cfg").string(), robot, &error)) << error;
+  options.order = "3,2,1";
+  EXPECT_THROW(CameraNode(*bus, options), std::runtime_error);
+  options.order.clear();
+
+  Recorder rec(*bus);
+  std::vector<odometry_t> odometry;
+  std::vector<size_t> odometry_before_frame;  // readings received before each CAMERA_INFO
+  bus->SubscribeMessage<odometry_t>(
+      "ROBOT_ODOMETRY", [&](const odometry_t& m, const RawMessage&) { odometry.push_back(m); }, {}, 1000);
+  bus->SubscribeMessage<camera_info_t>(
+      "CAMERA_INFO", [&](const camera_info_t&, const RawMessage&) { odometry_before_frame.push_back(odometry.size()); },
+      {}, 1000);
+  CameraNode node(*bus, options);
+  int64_t wall = 1'000'000'000;
+  RunToEnd(*bus, node, &wall);
+  ASSERT_TRUE(node.Finished());
+  ASSERT_EQ(rec.images.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(rec.images[k].utime, t0 + k * 50'000);
+    EXPECT_EQ(rec.images[k].seq, k);
+  }
+  // Frame times 0, 50, 100 ms; readings at -30, -10, 10, 30, 50, 70, 90, 110, ... ms.
+  ASSERT_EQ(odometry_before_frame.size(), 3u);
+  EXPECT_EQ(odometry_before_frame[0], 3u);  // -30, -10 and the bracket 10
+  EXPECT_EQ(odometry_before_frame[1], 6u);  // 30, 50 and the bracket 70
+  EXPECT_EQ(odometry_before_frame[2], 8u);  // 90 and the bracket 110
+  ASSERT_EQ(odometry.size(), readings.size());
+  for (size_t i = 0; i < odometry.size(); ++i) {
+    EXPECT_EQ(odometry[i].utime, readings[i].utime);
+    EXPECT_EQ(odometry[i].x_mm, readings[i].x_mm);
+    EXPECT_NEAR(odometry[i].pan_rad, -(readings[i].pan_rad - 0.05), 1e-12);
+  }
+  EXPECT_EQ(rec.order.back(), "E");
+
+  // --odometry=false plays the images alone, at the rate's times.
+  CameraNodeOptions images_only = options;
+  images_only.odometry = false;
+  odometry.clear();
+  Recorder rec2(*bus);
+  CameraNode node2(*bus, images_only);
+  RunToEnd(*bus, node2, &wall);
+  EXPECT_TRUE(odometry.empty());
+  ASSERT_EQ(rec2.images.size(), 3u);
+  EXPECT_EQ(rec2.images[1].utime, std::llround(1e6 / 30.0));
 }
 
 TEST(CameraNodeTest, FolderPublishesContiguousFramesSkipsBadFilesAndEndsStream) {

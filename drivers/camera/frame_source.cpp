@@ -8,10 +8,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
+
+#include "common/recorded_run.h"
 
 namespace objscan {
 namespace fs = std::filesystem;
@@ -91,6 +94,7 @@ struct ListEntry {
   PinholeCamera camera;  // this view's intrinsics (same for all entries of an image folder)
   bool has_pose = false;
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm
+  int64_t recorded_utime = -1;  // µs, from timestamps.txt (-1: none)
 };
 
 class ListFrameSource final : public FrameSource {
@@ -126,6 +130,7 @@ class ListFrameSource final : public FrameSource {
     frame->has_true_pose = entry.has_pose;
     frame->world_from_camera = entry.world_from_camera;
     frame->name = entry.name;
+    frame->recorded_utime = entry.recorded_utime;
     frame->source_index = index;
     frame->rotated_180 = false;
     if (rotate_[static_cast<size_t>(index)]) RotateFrame180(frame);
@@ -286,6 +291,31 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
         if (entries[i].has_pose) ++matched;
       }
       note += ", ground truth by time for " + std::to_string(matched) + " frames";
+    }
+  }
+
+  // Image times of a recorded run (common/recorded_run.h), used in the natural order only.
+  const fs::path times_path = root / kTimestampsFileName;
+  if (fs::is_regular_file(times_path)) {
+    if (!options.order.empty()) {
+      note += ", " + std::string(kTimestampsFileName) + " not used (--order changes the frame order)";
+    } else {
+      std::vector<FrameTime> times;
+      if (!ReadFrameTimes(times_path.string(), &times, error)) return nullptr;
+      std::map<std::string, int64_t> by_name;
+      for (const auto& t : times) by_name[t.file_name] = t.utime;
+      for (size_t i = 0; i < names.size(); ++i) {
+        const auto it = by_name.find(names[i]);
+        if (it == by_name.end())
+          return Fail(error, times_path.string() + " has no time for " + names[i] + " (every image needs one)"),
+                 nullptr;
+        if (i > 0 && it->second <= entries[i - 1].recorded_utime)
+          return Fail(error, times_path.string() + ": the time of " + names[i] + " does not increase over " +
+                                 names[i - 1] + "'s (file-name order is the frame order)"),
+                 nullptr;
+        entries[i].recorded_utime = it->second;
+      }
+      note += ", image times from " + std::string(kTimestampsFileName);
     }
   }
 

@@ -46,6 +46,7 @@ struct SourceFrame {
   bool has_true_pose = false;  // true when world_from_camera holds the dataset's true pose
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm, true pose (when has_true_pose)
   std::string name;          // file name, or "frame N" for video / device frames
+  int64_t recorded_utime = -1;  // µs, the image's time from an image folder's timestamps.txt (-1: none)
   int source_index = 0;      // 0-based index in the natural order (frame counter for video / device)
   bool rotated_180 = false;  // true when the image was rotated 180 deg in-plane
 };

@@ -10,6 +10,7 @@
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/recorded_run.h"
 #include "common/time.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
@@ -281,6 +282,12 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
               << " head_noise_deg=" << options_.head_noise_deg << " sync_offset_ms=" << options_.sync_offset_ms
               << " odometry_origin=" << options_.odometry_origin << "\n";
     if (!scene_txt) throw std::runtime_error("cannot write " + dir + "/scene.txt");
+    // The robot's description, as a real robot's owner writes it (objscan_export --robot-file): the simulated robot
+    // reports its head angles in objscan's convention.
+    RobotDescription robot;
+    robot.geometry = sim_->options().geometry;
+    std::string robot_error;
+    if (!WriteRobotFile(dir + "/" + kRobotFileName, robot, &robot_error)) throw std::runtime_error(robot_error);
     poses_gt_.open(dir + "/poses_gt.txt");
     robot_gt_.open(dir + "/robot_gt.txt");
     if (!poses_gt_ || !robot_gt_) throw std::runtime_error("cannot write poses_gt.txt / robot_gt.txt in " + dir);

@@ -12,6 +12,7 @@
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/recorded_run.h"
 #include "common/time.h"
 #include "objscan/landmarks_t.hpp"
 #include "objscan/pose_t.hpp"
@@ -39,6 +40,9 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   p.Add("output-dir", &o->output_dir, "write trajectory.txt, trajectory_online.txt, landmarks.ply, colmap/ here");
+  p.Add("robot-file", &o->robot_file,
+        "the robot's robot.cfg (common/recorded_run.h): its geometry replaces --mast-height, --mast-offset-*, "
+        "--camera-offset-*");
   PoseEstimatorOptions* e = &o->estimator;
   p.Add("mast-height", &e->robot.mast_height_mm, "mm, pan/tilt axes above the floor");
   p.Add("mast-offset-x", &e->robot.mast_offset_x_mm, "mm, mast forward of the base centre");
@@ -130,6 +134,11 @@ bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* 
 namespace {
 PoseSolverNodeOptions ValidatedOrThrow(PoseSolverNodeOptions o) {
   std::string why;
+  if (!o.robot_file.empty()) {
+    RobotDescription robot;
+    if (!ReadRobotFile(o.robot_file, &robot, &why)) throw std::invalid_argument("pose_solver node: " + why);
+    o.estimator.robot = robot.geometry;
+  }
   if (!ValidatePoseSolverNodeOptions(o, &why)) throw std::invalid_argument("pose_solver node: " + why);
   o.estimator.model = o.model == "4dof" ? MotionModel::kFourDof : MotionModel::kSixDof;
   return o;

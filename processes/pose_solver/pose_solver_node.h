@@ -65,6 +65,7 @@ struct PoseSolverNodeOptions {
   double max_odometry_gap_s = 0.5;                       // s, odometry further than this from a frame is not used
   double status_period_s = 1.0;                          // s, status publication period (> 0)
   bool exit_when_finished = true;                        // Finished() turns true after the final phase
+  std::string robot_file;  // robot.cfg (common/recorded_run.h) whose geometry replaces estimator.robot ("" = none)
   std::string output_dir;                                // write trajectory/landmarks/COLMAP files here ("" = none)
   double min_posed_fraction = 0.9;                       // the final phase is STATE_ERROR (the session fails) when
                                                          // fewer than this fraction of the frames got a final pose,

@@ -9,6 +9,8 @@
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/recorded_run.h"
+
 namespace objscan {
 namespace fs = std::filesystem;
 
@@ -135,23 +137,22 @@ bool DatasetWriter::Finish(std::string* error) {
     summary_.true_poses_written = static_cast<int64_t>(lines.size());
   }
 
+  // The image times, on the clock of the odometry: a recorded robot run replays with its odometry from them.
+  std::vector<FrameTime> times;
+  for (const auto& f : frames) times.push_back({DatasetImageName(f.seq), f.utime});
+  if (!times.empty() && !WriteFrameTimes((root / kTimestampsFileName).string(), times, error)) return false;
+
   if (!odometry_.empty()) {
-    const fs::path path = root / "odometry.txt";
-    std::FILE* out = std::fopen(path.string().c_str(), "w");
-    if (!out) return Fail(error, "cannot write " + path.string());
-    std::fprintf(out,
-                 "# objscan robot odometry (odometry_t), one reading per line in log order. Odometry frame: x forward, "
-                 "y left, z up at the robot's start pose; theta about +z; tilt positive = looking down.\n"
-                 "# t_s utime_us seq x_mm y_mm theta_rad pan_rad tilt_rad v_mm_s omega_rad_s pan_rate_rad_s "
-                 "tilt_rate_rad_s\n");
-    for (const auto& r : odometry_) {
-      std::fprintf(out, "%.6f %" PRId64 " %" PRId64 " %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
-                   static_cast<double>(r.utime) / 1e6, r.utime, r.seq, r.x_mm, r.y_mm, r.theta_rad, r.pan_rad,
-                   r.tilt_rad, r.v_mm_s, r.omega_rad_s, r.pan_rate_rad_s, r.tilt_rate_rad_s);
-    }
-    const bool ok = std::ferror(out) == 0;
-    if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path.string());
-    summary_.odometry_written = static_cast<int64_t>(odometry_.size());
+    std::vector<OdometryReading> readings = odometry_;
+    std::stable_sort(readings.begin(), readings.end(),
+                     [](const OdometryReading& a, const OdometryReading& b) { return a.utime < b.utime; });
+    // odometry.txt's times increase: a second reading with the same time (a repeated message) is left out, counted.
+    const auto last = std::unique(readings.begin(), readings.end(),
+                                  [](const OdometryReading& a, const OdometryReading& b) { return a.utime == b.utime; });
+    summary_.odometry_repeated_time = static_cast<int64_t>(readings.end() - last);
+    readings.erase(last, readings.end());
+    if (!WriteOdometryFile((root / kOdometryFileName).string(), readings, error)) return false;
+    summary_.odometry_written = static_cast<int64_t>(readings.size());
   }
   return true;
 }

@@ -7,7 +7,9 @@
 //   DIR/poses_gt.txt       TUM "t tx ty tz qx qy qz qw", camera-to-world (world_from_camera), t = utime / 1e6 s,
 //                          positions in mm, first line "# units: mm"; one line per written frame that has a true pose
 //                          (matched by seq), in frame order. Written only when at least one true pose was given.
-//   DIR/odometry.txt       every odometry reading given, one per line, with a header naming the columns and units.
+//   DIR/timestamps.txt     "FILE_NAME UTIME_US" per written frame (the frame's utime), in frame order.
+//   DIR/odometry.txt       the odometry readings given, in time order (one per utime), with a header naming the
+//                          columns and units. timestamps.txt, odometry.txt and robot.cfg: common/recorded_run.h.
 // Numbers are written with 17 significant digits (t with 6 decimals, i.e. exact µs), so they read back exactly.
 //
 // Errors: functions return false with *error (a sentence naming the file) and never throw or exit.
@@ -44,6 +46,7 @@ struct DatasetExportSummary {
   int64_t true_poses_written = 0;        // lines in poses_gt.txt
   int64_t frames_without_true_pose = 0;  // written frames without a true pose (only when some true pose was given)
   int64_t odometry_written = 0;          // lines in odometry.txt
+  int64_t odometry_repeated_time = 0;    // readings left out because an earlier one had the same utime
   bool has_calibration = false;          // calib.yaml written
 };
 

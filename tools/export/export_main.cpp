@@ -1,6 +1,7 @@
 // objscan_export: dataset export and COLMAP conversion.
 //   objscan_export --log SESSION.lcmlog --out DIR [--every N] [--max-frames N] [--image-channel CH] ...
-//       LCM log -> dataset folder (images/NNNNNN.png, calib.yaml, poses_gt.txt, odometry.txt), readable by the
+//       LCM log -> dataset folder (images/NNNNNN.png, calib.yaml, timestamps.txt, poses_gt.txt, odometry.txt,
+//       robot.cfg with --robot-file), readable by the
 //       camera driver (--source DIR). Prints a summary as "key value" lines on stdout.
 //   objscan_export colmap-to-tum IMAGES.txt OUT.txt [--rate 30]
 //       COLMAP images.txt (cam_from_world) -> TUM camera-to-world, t = frame number in the image name / rate.
@@ -93,13 +94,13 @@ int ExportLog(int argc, char** argv) {
   std::printf(
       "events_read %lld\nframes_written %lld\nframes_not_selected %lld\nframes_undecodable %lld\n"
       "frames_duplicate_seq %lld\nframes_size_mismatch %lld\ncalibration %s\ncalibration_changes %lld\n"
-      "true_poses_written %lld\nframes_without_true_pose %lld\nodometry_written %lld\n",
+      "true_poses_written %lld\nframes_without_true_pose %lld\nodometry_written %lld\nodometry_repeated_time %lld\n",
       static_cast<long long>(result.events_read), static_cast<long long>(s.frames_written),
       static_cast<long long>(s.frames_not_selected), static_cast<long long>(s.frames_undecodable),
       static_cast<long long>(s.frames_duplicate_seq), static_cast<long long>(s.frames_size_mismatch),
       s.has_calibration ? "yes" : "no", static_cast<long long>(s.calibration_changes),
       static_cast<long long>(s.true_poses_written), static_cast<long long>(s.frames_without_true_pose),
-      static_cast<long long>(s.odometry_written));
+      static_cast<long long>(s.odometry_written), static_cast<long long>(s.odometry_repeated_time));
   for (const auto& [reason, count] : result.rejected)
     std::printf("rejected \"%s\" %lld\n", reason.c_str(), static_cast<long long>(count));
   if (!s.has_calibration) LogWarning("no camera_info_t on " + options.info_channel + ": calib.yaml not written");

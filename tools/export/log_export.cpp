@@ -1,10 +1,13 @@
 #include "tools/export/log_export.h"
 
+#include <filesystem>
+
 #include "common/adapters.h"
 #include "common/lcm_log.h"
 #include "common/log.h"
 #include "common/message_size_check.h"
 #include "common/options.h"
+#include "common/recorded_run.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/image_t.hpp"
 #include "objscan/odometry_t.hpp"
@@ -32,6 +35,9 @@ void AddLogExportOptions(OptionParser& parser, LogExportOptions* options) {
   parser.Add("odometry-channel", &options->odometry_channel, "channel of odometry_t (-> odometry.txt)");
   parser.Add("every", &options->every, "keep frames whose seq is a multiple of N (1 = all)");
   parser.Add("max-frames", &options->max_frames, "write at most N frames (0 = all)");
+  parser.Add("robot-file", &options->robot_file,
+             "the robot's robot.cfg (geometry, head conventions; the simulator writes ground_truth/robot.cfg): "
+             "checked and copied into the folder, so that it replays with its odometry");
 }
 
 bool ValidateLogExportOptions(const LogExportOptions& options, std::string* why) {
@@ -57,6 +63,8 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
   writer_options.out_dir = options.out_dir;
   writer_options.every = options.every;
   writer_options.max_frames = options.max_frames;
+  RobotDescription robot;
+  if (!options.robot_file.empty() && !ReadRobotFile(options.robot_file, &robot, error)) return false;
   if (!writer.Open(writer_options, error)) return false;
   auto reject = [result](const std::string& reason, const std::string& detail) {
     if (result->rejected[reason]++ == 0) LogWarning("skipped: " + reason + " (" + detail + "); further ones counted");
@@ -126,6 +134,12 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
   result->log_damage = log.damage().Describe();
   if (!writer.Finish(error)) return false;
   result->dataset = writer.summary();
+  if (!options.robot_file.empty() &&
+      !WriteRobotFile((std::filesystem::path(options.out_dir) / kRobotFileName).string(), robot, error))
+    return false;
+  if (result->dataset.odometry_written > 0 && options.robot_file.empty())
+    LogWarning("odometry.txt written without robot.cfg: the folder replays with its odometry only once the robot's "
+               "robot.cfg is beside it (--robot-file; format in common/recorded_run.h)");
   return true;
 }
 
