@@ -99,14 +99,17 @@ OccupancyMap::OccupancyMap(const OccupancyMapOptions& options) : options_(option
   stood_.assign(n, 0);
   obstacle_.assign(n, 0);
   remembered_.assign(n, 0);
+  remembered_floor_.assign(n, 0);
   floor_.assign(n, 0);
   state_.assign(n, State::kUnknown);
   obstacle_distance_.assign(n, kFar);
   unknown_distance_.assign(n, 0.f);
+  unexplored_distance_.assign(n, 0.f);
   floor_distance_.assign(n, kFar);
-  unknown_sum_.assign(static_cast<size_t>(size_ + 1) * (size_ + 1), 0);
+  remembered_floor_distance_.assign(n, kFar);
+  unexplored_sum_.assign(static_cast<size_t>(size_ + 1) * (size_ + 1), 0);
   for (int y = 1; y <= size_; ++y)
-    for (int x = 1; x <= size_; ++x) unknown_sum_[static_cast<size_t>(y) * (size_ + 1) + x] = x * y;
+    for (int x = 1; x <= size_; ++x) unexplored_sum_[static_cast<size_t>(y) * (size_ + 1) + x] = x * y;
 }
 
 bool OccupancyMap::IndexOf(const Eigen::Vector2d& p, int* index) const {
@@ -185,6 +188,8 @@ void OccupancyMap::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
       ++floor_landmarks_;
     }
   }
+  for (size_t i = 0; i < remembered_floor_.size() && any_remembered_floor_; ++i)
+    if (remembered_floor_[i] && obstacle_[i]) remembered_floor_[i] = 0;  // something stands there now
   remembered_cells_ = 0;
   for (size_t i = 0; i < remembered_.size(); ++i) {
     if (!remembered_[i]) continue;
@@ -198,9 +203,15 @@ void OccupancyMap::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
   landmarks_dirty_ = true;
 }
 
-void OccupancyMap::RememberObstacles() {
-  for (size_t i = 0; i < obstacle_.size(); ++i)
+void OccupancyMap::RememberOldMap() {
+  for (size_t i = 0; i < obstacle_.size(); ++i) {
     if (obstacle_[i]) remembered_[i] = 1;
+    if (floor_[i] && !obstacle_[i]) {
+      remembered_floor_[i] = 1;
+      any_remembered_floor_ = true;
+    }
+  }
+  landmarks_dirty_ = true;
 }
 
 void OccupancyMap::MarkView(const Eigen::Isometry3d& world_from_camera, const CameraIntrinsics& camera) {
@@ -266,33 +277,50 @@ void OccupancyMap::Update() {
     if (options_.free_support_mm > 0) {
       SquaredDistanceToSites(floor_, size_, size_, &squared);
       for (size_t i = 0; i < n; ++i) floor_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+      if (any_remembered_floor_) {
+        SquaredDistanceToSites(remembered_floor_, size_, size_, &squared);
+        for (size_t i = 0; i < n; ++i)
+          remembered_floor_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+      }
     }
   }
-  std::vector<uint8_t> unknown(n, 0);
+  std::vector<uint8_t> unknown(n, 0), unexplored(n, 0);
   obstacle_cells_ = free_cells_ = 0;
   for (size_t i = 0; i < n; ++i) {
     const int x = static_cast<int>(i) % size_, y = static_cast<int>(i) / size_;
     const bool border = x == 0 || y == 0 || x == size_ - 1 || y == size_ - 1;
     const bool supported = options_.free_support_mm <= 0 || floor_distance_[i] <= options_.free_support_mm;
+    const bool supported_before = any_remembered_floor_ && options_.free_support_mm > 0 &&
+                                  remembered_floor_distance_[i] <= options_.free_support_mm;
     if (obstacle_[i]) {
       state_[i] = State::kOccupied;
       ++obstacle_cells_;
-    } else if (!border && (stood_[i] || (seen_[i] && supported))) {
+    } else if (!border && (stood_[i] || (seen_[i] && (supported || supported_before)))) {
       state_[i] = State::kFree;
       ++free_cells_;
+      if (!stood_[i] && !supported) unexplored[i] = 1;  // free by the old map's floor only
     } else {
       state_[i] = State::kUnknown;
       unknown[i] = 1;
+      unexplored[i] = 1;
     }
   }
   SquaredDistanceToSites(unknown, size_, size_, &squared);
   for (size_t i = 0; i < n; ++i) unknown_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+  if (any_remembered_floor_) {
+    SquaredDistanceToSites(unexplored, size_, size_, &squared);
+    for (size_t i = 0; i < n; ++i)
+      unexplored_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+  } else {
+    unexplored_distance_ = unknown_distance_;
+  }
   const int w = size_ + 1;
   for (int y = 0; y < size_; ++y) {
     int32_t row = 0;
     for (int x = 0; x < size_; ++x) {
-      row += unknown[static_cast<size_t>(y) * size_ + x];
-      unknown_sum_[static_cast<size_t>(y + 1) * w + x + 1] = unknown_sum_[static_cast<size_t>(y) * w + x + 1] + row;
+      row += unexplored[static_cast<size_t>(y) * size_ + x];
+      unexplored_sum_[static_cast<size_t>(y + 1) * w + x + 1] =
+          unexplored_sum_[static_cast<size_t>(y) * w + x + 1] + row;
     }
   }
   landmarks_dirty_ = seen_dirty_ = false;
@@ -327,12 +355,12 @@ bool OccupancyMap::FootprintSafe(const Eigen::Vector2d& p) const {
   return IndexOf(p, &index) && Passable(index);
 }
 
-int OccupancyMap::UnknownCellsNear(int index, double radius_mm) const {
+int OccupancyMap::UnexploredCellsNear(int index, double radius_mm) const {
   const int r = static_cast<int>(std::round(radius_mm / options_.cell_mm));
   const int x0 = std::max(0, XOf(index) - r), y0 = std::max(0, YOf(index) - r);
   const int x1 = std::min(size_, XOf(index) + r + 1), y1 = std::min(size_, YOf(index) + r + 1);
   const int w = size_ + 1;
-  auto at = [&](int x, int y) { return unknown_sum_[static_cast<size_t>(y) * w + x]; };
+  auto at = [&](int x, int y) { return unexplored_sum_[static_cast<size_t>(y) * w + x]; };
   return at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0);
 }
 

@@ -11,7 +11,11 @@
 //              pose's view rays never reach the ring right around the robot; obstacles still win).
 //   free       seen, no obstacle, and (free_support_mm > 0) a floor landmark within free_support_mm: a textured floor
 //              seen there (an object standing there would have hidden it); free_support_mm = 0 lets the view rays
-//              alone mark free space (untextured floors). Cells the robot stood on (MarkFootprint) are free.
+//              alone mark free space (untextured floors). Cells the robot stood on (MarkFootprint) are free. After a
+//              map restart (RememberOldMap) the old map's floor landmarks support free space too, until an obstacle
+//              of a later set lies in their cell.
+//   unexplored unknown, or free only by the old map's floor (not stood on): free to drive through, but not seen by
+//              the current map, whose landmarks the object finder clusters: frontiers lead there (Unexplored*).
 //   unknown    everything else, and the map's border ring. Never driven through.
 // Derived after Update(): distance to the nearest obstacle cell and to the nearest unknown cell (exact Euclidean
 // distance transforms, between cell centres, mm), Traversable = free, >= footprint + safety margin from obstacles
@@ -68,9 +72,12 @@ class OccupancyMap {
   // it to the old one): the obstacle cells so far stay obstacles ("remembered") until a later set has a floor
   // landmark in the cell (the floor visible there: nothing stands on it). An unjoined map lies a few cm off, but an
   // obstacle forgotten is worse than one misplaced (room_04: the approach drove into a crate the new map had not
-  // seen yet, twice).
-  void RememberObstacles();
-  int remembered_cells() const { return remembered_cells_; }
+  // seen yet, twice). The floor landmarks' cells keep supporting free space until a later set has an obstacle in
+  // the cell: without them the free space shrank to the new map's first floor points and a candidate being looked
+  // at had nowhere to be looked at from (room_10: its 4 places used up 0.2 s after a restart). That floor counts as
+  // unexplored, so the search still goes over it again with the new map.
+  void RememberOldMap();
+  int remembered_cells() const { return remembered_cells_; }  // remembered obstacle cells not cleared yet
   void MarkView(const Eigen::Isometry3d& world_from_camera, const CameraIntrinsics& camera);
   void MarkFootprint(const Eigen::Vector2d& position_mm);
   // Recomputes states and distance fields when an input changed since the last call.
@@ -91,6 +98,7 @@ class OccupancyMap {
   State StateOf(int index) const { return state_[index]; }
   double ObstacleDistanceMm(int index) const { return obstacle_distance_[index]; }
   double UnknownDistanceMm(int index) const { return unknown_distance_[index]; }
+  double UnexploredDistanceMm(int index) const { return unexplored_distance_[index]; }
   bool Seen(int index) const { return seen_[index] != 0; }
   double FloorLandmarkDistanceMm(int index) const { return floor_distance_[index]; }  // kept when support > 0
   bool Traversable(int index) const;
@@ -98,8 +106,8 @@ class OccupancyMap {
   double SafeObstacleDistanceMm() const;  // footprint + cell diagonal
   bool TraversableAt(const Eigen::Vector2d& p) const;
   bool FootprintSafe(const Eigen::Vector2d& p) const;
-  // Unknown cells in the square of half side radius_mm around a cell (summed-area table, O(1)).
-  int UnknownCellsNear(int index, double radius_mm) const;
+  // Unexplored cells in the square of half side radius_mm around a cell (summed-area table, O(1)).
+  int UnexploredCellsNear(int index, double radius_mm) const;
 
   int obstacle_cells() const { return obstacle_cells_; }
   int free_cells() const { return free_cells_; }
@@ -111,11 +119,13 @@ class OccupancyMap {
   OccupancyMapOptions options_;
   int size_ = 0;      // cells per side
   double origin_ = 0; // mm, world x (= y) of the map's corner
-  std::vector<uint8_t> seen_, stood_, obstacle_, floor_, remembered_;
+  std::vector<uint8_t> seen_, stood_, obstacle_, floor_, remembered_, remembered_floor_;
+  bool any_remembered_floor_ = false;
   int remembered_cells_ = 0;  // remembered obstacle cells not cleared yet
   std::vector<State> state_;
-  std::vector<float> obstacle_distance_, unknown_distance_, floor_distance_;
-  std::vector<int32_t> unknown_sum_;  // summed-area table of unknown cells, (size+1)^2
+  std::vector<float> obstacle_distance_, unknown_distance_, unexplored_distance_, floor_distance_,
+      remembered_floor_distance_;
+  std::vector<int32_t> unexplored_sum_;  // summed-area table of unexplored cells, (size+1)^2
   bool landmarks_dirty_ = false, seen_dirty_ = false;
   int obstacle_cells_ = 0, free_cells_ = 0, obstacle_landmarks_ = 0, floor_landmarks_ = 0;
   int64_t version_ = 0;

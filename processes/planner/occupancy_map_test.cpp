@@ -169,7 +169,7 @@ TEST(OccupancyMapTest, ShortestPathGoesAroundTheInflatedWall) {
   EXPECT_EQ(field.PathTo(map, goal).size(), path.size());
 }
 
-TEST(OccupancyMapTest, UnknownCellsNearCountsTheSquare) {
+TEST(OccupancyMapTest, UnexploredCellsNearCountsTheSquare) {
   OccupancyMap map(SmallMap());
   std::vector<MapLandmark> l;
   AddFloor(&l, 0, 0, 1000, 1000);
@@ -177,13 +177,13 @@ TEST(OccupancyMapTest, UnknownCellsNearCountsTheSquare) {
   map.Update();
   int index;
   ASSERT_TRUE(map.IndexOf({525, 525}, &index));
-  EXPECT_EQ(map.UnknownCellsNear(index, 200), 0);  // 9 x 9 cells, all seen
+  EXPECT_EQ(map.UnexploredCellsNear(index, 200), 0);  // 9 x 9 cells, all seen
   // Left edge: floor landmarks from x = 0 make the cells from x = -50 on seen; columns -325 ... -75 stay unknown.
   ASSERT_TRUE(map.IndexOf({-125, 525}, &index));
-  EXPECT_EQ(map.UnknownCellsNear(index, 200), 6 * 9);
+  EXPECT_EQ(map.UnexploredCellsNear(index, 200), 6 * 9);
 }
 
-// A restarted map (RememberObstacles, then the new map's landmarks without the box): the box's cells stay
+// A restarted map (RememberOldMap, then the new map's landmarks without the box): the box's cells stay
 // obstacles; a floor landmark of a later set in one of them clears that cell only.
 TEST(OccupancyMapTest, RememberedObstaclesStayUntilTheFloorShowsThere) {
   OccupancyMapOptions o;
@@ -205,7 +205,7 @@ TEST(OccupancyMapTest, RememberedObstaclesStayUntilTheFloorShowsThere) {
   int box;
   ASSERT_TRUE(map.IndexOf({1020, 25}, &box));
   EXPECT_EQ(map.StateOf(box), OccupancyMap::State::kOccupied);
-  map.RememberObstacles();
+  map.RememberOldMap();
   std::vector<MapLandmark> new_map;  // the new map: some floor, the box not seen yet
   for (int x = -500; x <= 500; x += 50) add(&new_map, x + 5, 5, 0);
   map.SetLandmarks(new_map);
@@ -216,6 +216,18 @@ TEST(OccupancyMapTest, RememberedObstaclesStayUntilTheFloorShowsThere) {
   map.SetLandmarks(new_map);
   map.Update();
   EXPECT_NE(map.StateOf(box), OccupancyMap::State::kOccupied);
+  // The old map's floor far from the new one's points (x 1400, y 400) is still free to drive through, but
+  // unexplored (the search goes there again); an object the new map shows there makes it an obstacle.
+  int far_floor, new_floor;
+  ASSERT_TRUE(map.IndexOf({1405, 405}, &far_floor));
+  ASSERT_TRUE(map.IndexOf({5, 5}, &new_floor));
+  EXPECT_EQ(map.StateOf(far_floor), OccupancyMap::State::kFree);
+  EXPECT_EQ(map.UnexploredDistanceMm(far_floor), 0.0);
+  EXPECT_GT(map.UnexploredDistanceMm(new_floor), 300.0);
+  for (int i = 0; i < 5; ++i) add(&new_map, 1400 + 5 * i, 405, 120);  // a new object there
+  map.SetLandmarks(new_map);
+  map.Update();
+  EXPECT_EQ(map.StateOf(far_floor), OccupancyMap::State::kOccupied);
 }
 
 }  // namespace

@@ -146,13 +146,16 @@ bool Planner::AddOdometry(const OdometryReading& reading) {
 // far floor an obstacle (1 deg at 3 m = 52 mm; room_01's early map was 7.6 deg off).
 void Planner::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
   // A set less than half the last one: the pose solver restarted its map without joining it and sends the new one
-  // only; what the old one showed standing stays an obstacle (OccupancyMap::RememberObstacles).
+  // only; what the old one showed standing stays an obstacle, and its floor free but unexplored
+  // (OccupancyMap::RememberOldMap).
   constexpr size_t kMinLandmarksForRestart = 200;
   if (last_landmark_count_ >= kMinLandmarksForRestart && 2 * landmarks.size() < last_landmark_count_) {
-    map_.RememberObstacles();
+    map_.RememberOldMap();
     ++map_restarts_;
+    last_map_change_us_ = now_;
     Event("the sparse map restarted (" + std::to_string(last_landmark_count_) + " -> " +
-          std::to_string(landmarks.size()) + " landmarks): its obstacles are kept until the floor shows there");
+          std::to_string(landmarks.size()) +
+          " landmarks): its obstacles and free floor are kept until the new map shows otherwise");
   }
   last_landmark_count_ = landmarks.size();
   std::vector<Eigen::Vector3d> points;
@@ -197,6 +200,13 @@ void Planner::SetTarget(const TargetObservation& t) {
       if (!have_target_position_ || (target_.centre_mm.head<2>() - xy).norm() > 500) {
         Event("candidate at " + Mm(xy));
         investigate_spots_.clear();
+      } else if (previous == TargetState::kSearching && last_map_change_us_ > spots_reset_for_map_change_us_ &&
+                 now_ - last_map_change_us_ < 30 * kSecond) {
+        // Found again on a new map (once per map change): the places it was looked at from while forgotten, and
+        // before on the old map, do not count against it.
+        Event("candidate found again at " + Mm(xy) + " after the map changed");
+        investigate_spots_.clear();
+        spots_reset_for_map_change_us_ = last_map_change_us_;
       }
       target_ = t;
       have_target_position_ = true;
@@ -596,6 +606,7 @@ bool Planner::UpdateRelocalizing() {
     const double seconds = (now_ - relocalize_start_us_) * 1e-6;
     if (tracked_frames_ >= kPoseBackFrames) {
       relocalizing_ = false;
+      last_map_change_us_ = now_;
       std::snprintf(text, sizeof(text), "pose back after %.1f s retracing the trail", seconds);
       Event(text);
       follower_.Clear();
@@ -658,8 +669,8 @@ bool Planner::ChooseFrontier(const Eigen::Vector2d* near, double within_mm) {
   for (int i = 0; i < map_.num_cells(); ++i) {
     if (!cost_field_.Reachable(i)) continue;
     ++reachable_cells_;
-    if (!map_.Traversable(i) || map_.UnknownDistanceMm(i) > frontier_distance) continue;
-    if (map_.UnknownCellsNear(i, 500) < 10) continue;  // a sliver of unknown is not worth the trip
+    if (!map_.Traversable(i) || map_.UnexploredDistanceMm(i) > frontier_distance) continue;
+    if (map_.UnexploredCellsNear(i, 500) < 10) continue;  // a sliver of unexplored floor is not worth the trip
     const Eigen::Vector2d c = map_.CentreOf(i);
     if (near != nullptr && (c - *near).norm() > within_mm) continue;
     const double cost = cost_field_.CostMm(i);
@@ -725,8 +736,14 @@ Planner::Motion Planner::Investigate() {
   activity_ = "investigate candidate";
   const Eigen::Vector3d centre = TargetCentre();
   if (target_state_ == TargetState::kSearching) {
+    // Given up 5 s after the finder stopped reporting it, but not within 20 s of a map restart or a pose lost and
+    // back: the finder's clusters were the old map's landmarks, and the new map has points on the object only once
+    // it has seen it again (room_10: the target a candidate twice, "gone" at once after each restart, and never
+    // found again once the room was explored).
     if (candidate_missing_since_ < 0) candidate_missing_since_ = now_;
-    if (now_ - candidate_missing_since_ > 5 * kSecond) {
+    int64_t give_up = candidate_missing_since_ + 5 * kSecond;
+    if (last_map_change_us_ >= 0) give_up = std::max(give_up, last_map_change_us_ + 20 * kSecond);
+    if (now_ > give_up) {
       Event("candidate gone: exploring again");
       explore_step_ = ExploreStep::kFrontier;
       have_target_position_ = false;
@@ -735,6 +752,18 @@ Planner::Motion Planner::Investigate() {
     }
   } else {
     candidate_missing_since_ = -1;
+  }
+  // Nowhere to look from a moment ago (the floor around unknown, e.g. just after a map restart: the new map's first
+  // floor points only): the base shuttles on its own trail with the head on the candidate, so the camera translates
+  // and turns about it and the new map gets points on it and on the floor around, before trying again; each such
+  // wait counts as one of the places (room_10: without it the 4 places were used up in 0.2 s after a restart).
+  if (follower_.empty() && now_ < investigate_hold_until_) {
+    if (investigate_shuttle_.back.empty()) return Hold(centre);
+    Motion m;
+    m.velocity = ShuttleStep(&investigate_shuttle_, HeldLongerThan(kSecond), &m.trail);
+    m.aim_point = centre;
+    m.camera_turn_needs_translation = true;
+    return m;
   }
   const bool reached = !follower_.empty() && follower_.Reached(base_, 150);
   if (reached) investigate_spots_.push_back(follower_.goal());
@@ -760,6 +789,12 @@ Planner::Motion Planner::Investigate() {
     }
     if (best < 0) {  // nowhere to look from: turn to it where we are
       investigate_spots_.push_back(base_.position());
+      investigate_hold_until_ = now_ + kInvestigateHoldUs;
+      const bool shuttle = StartShuttle(&investigate_shuttle_, kShuttleLegMm);
+      if (!shuttle) investigate_shuttle_ = TrailShuttle{};
+      Event(std::string("no free place to see the candidate from: ") +
+            (shuttle ? "shuttling on the trail" : "standing") + " with the head on it for 5 s (place " +
+            std::to_string(investigate_spots_.size()) + " of 4)");
       return Hold(centre);
     }
     std::vector<Eigen::Vector2d> path = cost_field_.PathTo(map_, best);

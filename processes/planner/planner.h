@@ -8,7 +8,11 @@
 //                 known): drive to the nearest reachable frontier (free cells next to unknown ones) along the
 //                 shortest path on the inflated map, the head looking at the floor ~1.2 m ahead along the path.
 //                 A CANDIDATE (or LOST, not yet confirmed) target is investigated: the robot drives to points 0.9-1.5 m
-//                 from it with the head on it, so the finder sees it from several places. Ends when the target is
+//                 from it with the head on it, so the finder sees it from several places (4 at most; with no free
+//                 place to go, 5 s shuttling on the trail, head on it, count as one). A candidate the finder stops
+//                 reporting is given up after 5 s, or 20 s after a map restart or a pose regained (the finder's
+//                 clusters were the old map's points), and a candidate found again after such a change starts its
+//                 places afresh. Ends when the target is
 //                 CONFIRMED (-> APPROACH), or after explore_budget_s or with nothing left to explore (-> NO_TARGET).
 //                 Nothing reachable at all (no usable camera pose yet): the look-around starts again.
 //   1 APPROACH    to the nearest reachable free point of the orbit circle (orbit_radius_mm around the target centre),
@@ -314,7 +318,12 @@ class Planner {
   int64_t next_replan_ = 0;
   std::vector<Eigen::Vector2d> visited_goals_;  // frontier goals reached or given up (not chosen again)
   std::vector<Eigen::Vector2d> investigate_spots_;
+  static constexpr int64_t kInvestigateHoldUs = 5000000;  // µs, a candidate with nowhere to look from: look at it
+  int64_t investigate_hold_until_ = -1;  // µs, until then (data time), shuttling on the trail with the head on it
+  TrailShuttle investigate_shuttle_;
   int64_t candidate_missing_since_ = -1;
+  int64_t last_map_change_us_ = -1;  // µs (data time), last map restart or pose back after a loss (-1: none)
+  int64_t spots_reset_for_map_change_us_ = -1;  // last_map_change_us_ whose re-found candidate reset the places
 
   // ORBIT
   bool orbit_started_ = false;

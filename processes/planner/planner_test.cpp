@@ -44,6 +44,7 @@ struct RunLog {
   int64_t look_around_frames = 0;
   bool backed_up = false;
   int64_t longest_push_frames = 0;  // frames in a row the planner drove a base that a solid held
+  std::vector<std::string> events;  // the planner's events, "[seq] text"
 };
 
 PlannerOptions TestOptions() {
@@ -85,8 +86,10 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     const PlannerCommand c = planner.Step(pose);
     const int phase = static_cast<int>(planner.phase());
     if (log.first_seq[phase] < 0) log.first_seq[phase] = world.seq();
-    for (const std::string& e : planner.TakeEvents())
+    for (const std::string& e : planner.TakeEvents()) {
       if (Verbose()) std::printf("[%7.2f s] %s\n", world.utime() * 1e-6, e.c_str());
+      log.events.push_back("[" + std::to_string(world.seq()) + "] " + e);
+    }
     if (!c.stop && planner.phase() == Phase::kExplore &&
         (planner.activity() == "frontier" || planner.activity() == "look around")) {
       const double dt = 1.0 / 30.0;
@@ -196,6 +199,35 @@ TEST(PlannerClosedLoopTest, ExploresFindsOrbitsAddsViewsAndFinishes) {
   // equals the true odometry error within the pose estimate's error (head encoder bias 0.5 deg, 40 mm lever).
   EXPECT_GT(log.summary.max_disagreement.distance_mm, 100.0);
   EXPECT_GE(log.summary.max_disagreement.distance_mm, log.true_disagreement_mm - 2.0);
+}
+
+// A candidate the finder forgets because the sparse map restarted (its cluster was the old map's landmarks; room_10:
+// the target was a candidate twice and "gone" both times right after a restart) is looked at again from where it
+// was, so the new map gets points on it, instead of being given up after 5 s: the candidate comes back and is
+// confirmed without exploring the room again.
+TEST(PlannerClosedLoopTest, ACandidateForgottenAtAMapRestartIsLookedAtAgain) {
+  const PlannerOptions options = TestOptions();
+  toy::ToyWorld world(toy::MakeLivingRoom(true), options.robot);
+  int64_t restart_seq = -1;
+  const RunLog log = RunMission(world, options, 30 * 900, [&](const Planner& planner, toy::ToyWorld& w) {
+    if (restart_seq < 0 && planner.activity() == "investigate candidate") {
+      restart_seq = w.seq() + 15;
+      w.ForceMapRestart(restart_seq);
+    }
+  });
+  ASSERT_GE(restart_seq, 0) << "no candidate was investigated";
+  // The first frame after EXPLORE (APPROACH may last no frame when the robot is already on the circle).
+  int64_t confirmed = -1;
+  for (int p = static_cast<int>(Phase::kApproach); p <= static_cast<int>(Phase::kFinish); ++p)
+    if (log.first_seq[p] >= 0 && (confirmed < 0 || log.first_seq[p] < confirmed)) confirmed = log.first_seq[p];
+  std::printf("restart at frame %lld, explore ended at frame %lld: %.1f s later\n",
+              static_cast<long long>(restart_seq), static_cast<long long>(confirmed), (confirmed - restart_seq) / 30.0);
+  for (const std::string& e : log.events)
+    EXPECT_EQ(e.find("candidate gone"), std::string::npos) << e;
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+  ASSERT_GT(confirmed, restart_seq);
+  EXPECT_LT(confirmed - restart_seq, 30 * 30);  // 8 s in view to find it again, then views from 4 places (24 s here)
+  EXPECT_EQ(log.collisions, 0);
 }
 
 // The living room with the start in a corner: a wall 0.7 m ahead and 0.7 m to the right.
@@ -458,6 +490,38 @@ TEST(PlannerTargetTest, DroppedConfirmedTargetSendsTheRobotExploringAgain) {
   planner.SetTarget(phantom);  // a target confirmed again is taken
   step();
   EXPECT_EQ(planner.phase(), Phase::kApproach);
+}
+
+// A candidate with no free place to look from (no map yet around it, as just after a map restart): the robot looks
+// at it from its trail for 5 s per place instead of using up its 4 places at once (room_10: 0.2 s), and gives up
+// after the 4th with a word.
+TEST(PlannerTargetTest, ACandidateWithNowhereToLookFromIsWatchedForFiveSecondsPerPlace) {
+  toy::ToyWorld world(toy::MakeLivingRoom(true), TestOptions().robot);
+  Planner planner(TestOptions());
+  planner.SetCamera(CameraIntrinsics{});
+  TargetObservation candidate;
+  candidate.state = TargetState::kCandidate;
+  candidate.centre_mm = Eigen::Vector3d(world.truth().x_mm + 1200, world.truth().y_mm, 100);
+  candidate.size_mm = Eigen::Vector3d(150, 150, 150);
+  int holds = 0;
+  double gave_up_s = -1;
+  for (int i = 0; i < 30 * 30 && gave_up_s < 0; ++i) {
+    planner.AddOdometry(world.Odometry());
+    planner.SetTarget(candidate);  // no landmarks: the map stays unknown
+    const PlannerCommand c = planner.Step(world.CameraPose());
+    for (const std::string& e : planner.TakeEvents()) {
+      if (e.find("no free place to see the candidate from") != std::string::npos) ++holds;
+      if (e.find("candidate not confirmed from 4 places") != std::string::npos) gave_up_s = i / 30.0;
+    }
+    if (gave_up_s < 0) {
+      EXPECT_EQ(planner.activity(), "investigate candidate") << "frame " << i;
+    }
+    world.Advance(c);
+  }
+  EXPECT_EQ(holds, 4);
+  EXPECT_GE(gave_up_s, 19.5);
+  EXPECT_LE(gave_up_s, 21.0);
+  EXPECT_EQ(world.collisions(), 0);
 }
 
 }  // namespace

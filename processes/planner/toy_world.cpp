@@ -236,6 +236,12 @@ bool ToyWorld::Landmarks(std::vector<MapLandmark>* landmarks) {
   if (force_restart_at_ >= 0 && seq_ >= force_restart_at_) {
     force_restart_at_ = -1;
     map_.clear();
+    // The finder's clusters were the old map's landmarks: a target not confirmed yet is forgotten, and found again
+    // only once the new map has points on it (kRefindFrames in view).
+    if (!confirmed_) {
+      places_.clear();
+      refind_frames_left_ = kRefindFrames;
+    }
     for (Point& p : points_) {
       p.sightings = 0;
       p.last_camera = Eigen::Vector3d::Constant(1e9);
@@ -270,10 +276,13 @@ TargetObservation ToyWorld::FindTarget() {
   const bool in_view = (camera - centre).norm() <= 3000 &&
                        camera_.Project(world_from_camera.inverse() * centre, &u, &v) && camera_.InImage(u, v, 20) &&
                        !Hidden(camera, centre, target_index_);
-  if (in_view) {
+  if (in_view && refind_frames_left_ > 0) {
+    --refind_frames_left_;
+  } else if (in_view) {
     last_in_view_ = seq_;
     bool known = false;
-    for (const Eigen::Vector2d& p : places_) known = known || (p - base_.position()).norm() < 300;
+    // distinct views as the object finder counts them (min_view_baseline_mm)
+    for (const Eigen::Vector2d& p : places_) known = known || (p - base_.position()).norm() < 150;
     if (!known) places_.push_back(base_.position());
   }
   if (places_.size() >= 3) confirmed_ = true;

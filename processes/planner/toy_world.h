@@ -81,7 +81,8 @@ class ToyWorld {
   // The finder reports SEARCHING from frame `from_seq` on: it dropped the target it had confirmed.
   void ForceDropped(int64_t from_seq) { force_dropped_from_ = from_seq; }
   // The sparse map restarts at frame `at_seq`, as the pose solver's does after a loss it cannot join: the landmark
-  // set starts again from nothing (every point must be seen twice more).
+  // set starts again from nothing (every point must be seen twice more), and the finder forgets a target it has not
+  // confirmed until it has been in view kRefindFrames frames again.
   void ForceMapRestart(int64_t at_seq) { force_restart_at_ = at_seq; }
   // The finder reports LOST for frames in [from, to) (to test re-finding).
   void ForceLost(int64_t from_seq, int64_t to_seq) {
@@ -121,6 +122,8 @@ class ToyWorld {
   bool confirmed_ = false;
   int64_t force_lost_from_ = -1, force_lost_to_ = -1;
   int64_t force_restart_at_ = -1;
+  static constexpr int kRefindFrames = 240;  // frames (8 s) in view a forgotten target needs after a map restart
+  int refind_frames_left_ = 0;
 };
 
 }  // namespace toy
