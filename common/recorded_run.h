@@ -20,6 +20,11 @@
 //                     pan_zero_rad, tilt_zero_rad  encoder readings when the camera looks straight ahead, level
 //                   Frames and meanings as in common/robot_model.h. Unknown or repeated names are errors.
 //
+// A video folder (one video file instead of images/, drivers/camera/README.md) holds the same files, except that
+// timestamps.txt names frames by number: "FRAME_NUMBER UTIME_US", frames numbered from 0 in decoding order, every
+// frame a line. Without timestamps.txt a video's frames take the container's presentation times (0 = its first
+// frame), and odometry.txt must then be on that clock.
+//
 // Errors: the readers return false with *error naming the file and line; nothing here throws or exits.
 #pragma once
 

@@ -74,8 +74,8 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
   parser.Add("status-channel", &o->status_channel, "output channel for process_status_t");
   parser.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
   parser.Add("odometry", &o->odometry,
-             "publish an image folder's odometry.txt (needs robot.cfg and timestamps.txt beside it); false: the "
-             "images alone");
+             "publish an image or video folder's odometry.txt (needs robot.cfg beside it, and timestamps.txt for "
+             "images; a video without it uses the container's times); false: the images alone");
   parser.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
 }
 
@@ -121,7 +121,9 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
   timestamp_rate_ = options_.rate_hz > 0 ? options_.rate_hz : 30.0;
   if (source_->IsLive() && source_->SourceRate() > 0) timestamp_rate_ = source_->SourceRate();
   LogInfo("source: " + source_->Describe());
-  if (source_->kind() == SourceKind::kImageFolder && options_.odometry) LoadRecordedOdometry();
+  const bool folder_source = source_->kind() == SourceKind::kImageFolder ||
+                             (source_->kind() == SourceKind::kVideoFile && std::filesystem::is_directory(options_.source));
+  if (folder_source && options_.odometry) LoadRecordedOdometry();
   if (odometry_.empty()) LogInfo("timestamps at " + std::to_string(timestamp_rate_) + " Hz");
 
   if (!options_.lockstep_channel.empty()) {
@@ -267,7 +269,8 @@ void CameraNode::LoadRecordedOdometry() {
   if (!fs::is_regular_file(robot_path))
     fail("a recorded run needs " + robot_path.string() +
          ", the robot's geometry and head conventions (format in common/recorded_run.h)");
-  if (!fs::is_regular_file(root / kTimestampsFileName))
+  const bool video = source_->kind() == SourceKind::kVideoFile;
+  if (!video && !fs::is_regular_file(root / kTimestampsFileName))
     fail("a recorded run needs " + (root / kTimestampsFileName).string() + ", the time of every image");
   if (!options_.order.empty()) fail("--order cannot reorder a recorded run");
   if (options_.loop) fail("--loop cannot repeat a recorded run");
@@ -280,7 +283,10 @@ void CameraNode::LoadRecordedOdometry() {
   for (const auto& r : readings) odometry_.push_back(robot.ToObjscanConvention(r));
   LogInfo("recorded run: " + std::to_string(odometry_.size()) + " odometry readings, t = " +
           std::to_string(odometry_.front().utime / 1e6) + " .. " + std::to_string(odometry_.back().utime / 1e6) +
-          " s; image times from " + kTimestampsFileName + "; robot from " + robot_path.string());
+          " s; image times from " +
+          (fs::is_regular_file(root / kTimestampsFileName) ? std::string(kTimestampsFileName)
+                                                           : std::string("the video container (0 = its first frame)")) +
+          "; robot from " + robot_path.string());
 }
 
 void CameraNode::PublishOdometryUpTo(int64_t utime) {

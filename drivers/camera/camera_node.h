@@ -15,12 +15,13 @@
 //                       arrived on that channel (seq = bytes 16..23, big-endian, of the raw LCM message: the field
 //                       after utime in image_t / feature_tracks_t / pose_t); after --lockstep-timeout-ms it goes on
 //                       anyway (counted in lockstep_timeouts; 0 = wait forever).
-// A recorded robot run (an image folder with timestamps.txt, odometry.txt and robot.cfg, common/recorded_run.h):
+// A recorded robot run (an image folder with timestamps.txt, odometry.txt and robot.cfg, or a video folder with
+// odometry.txt, robot.cfg and optionally timestamps.txt, else the video container's times; common/recorded_run.h):
 // frame utimes are the recorded ones, and before each frame's CAMERA_INFO the odometry readings up to its time
 // plus the first one after it are published on ROBOT_ODOMETRY (odometry_t, head angles turned into objscan's
 // convention by robot.cfg), so a receiver can interpolate at the frame time as it does live; the rest follow the
-// last frame, before END_OF_STREAM. odometry.txt without robot.cfg or timestamps.txt, or with --order / --loop, is a
-// start-up error (--odometry=false plays the images alone). Frames with no reading within 0.5 s are counted.
+// last frame, before END_OF_STREAM. odometry.txt without robot.cfg (or an image folder's timestamps.txt), or with
+// --order / --loop, is a start-up error (--odometry=false plays the images alone). Frames with no reading within 0.5 s are counted.
 // Bad frames (unreadable or odd-sized files) are logged with their name, counted as rejected in PROCESS_STATUS and
 // skipped. The node never throws after construction. Determinism: the published messages depend only on the source
 // and the options (not on timing), except PROCESS_STATUS.
@@ -64,7 +65,7 @@ struct CameraNodeOptions {
   std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // output channel of the true poses
   std::string control_channel = "OBJSCAN_CONTROL";         // output channel of END_OF_STREAM
   std::string status_channel = "PROCESS_STATUS";           // output channel of process_status_t
-  bool odometry = true;  // an image folder's odometry.txt (with robot.cfg, timestamps.txt) is published
+  bool odometry = true;  // an image or video folder's odometry.txt (with robot.cfg, timestamps.txt) is published
   std::string odometry_channel = "ROBOT_ODOMETRY";         // output channel of odometry_t
   bool exit_when_finished = true;  // Finished() turns true after END_OF_STREAM (the process exits)
 };

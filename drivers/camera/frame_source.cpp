@@ -221,7 +221,15 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
   }
   if (ec) return Fail(error, "cannot list " + image_dir.string() + ": " + ec.message()), nullptr;
   std::sort(names.begin(), names.end());
-  if (names.empty()) return Fail(error, "no images (png jpg jpeg bmp ppm pgm tif) in " + image_dir.string()), nullptr;
+  if (names.empty()) {
+    int videos = 0;
+    for (const auto& item : fs::directory_iterator(root, ec))
+      if (IsVideoFileName(item.path().filename().string())) ++videos;
+    std::string text = "no images (png jpg jpeg bmp ppm pgm tif) in " + image_dir.string();
+    if (videos > 1)
+      text += " and " + std::to_string(videos) + " videos (a video folder holds one): give the video as --source";
+    return Fail(error, text), nullptr;
+  }
 
   std::string calib_path = options.calib_path;
   if (calib_path.empty()) {
@@ -406,8 +414,16 @@ std::unique_ptr<FrameSource> OpenMiddlebury(const FrameSourceOptions& options, s
 
 class CaptureFrameSource final : public FrameSource {
  public:
-  CaptureFrameSource(SourceKind kind, std::string path, PinholeCamera camera, bool rotate_all)
-      : kind_(kind), path_(std::move(path)), camera_(std::move(camera)), rotate_all_(rotate_all) {}
+  // frame_times: µs per frame number (a video folder's timestamps.txt); empty: a video's frames get the container's
+  // presentation times.
+  CaptureFrameSource(SourceKind kind, std::string path, PinholeCamera camera, bool rotate_all,
+                     std::vector<int64_t> frame_times, std::string note)
+      : kind_(kind),
+        path_(std::move(path)),
+        camera_(std::move(camera)),
+        rotate_all_(rotate_all),
+        frame_times_(std::move(frame_times)),
+        note_(std::move(note)) {}
 
   bool Open(int device_width, int device_height, std::string* error) {
     try {
@@ -474,6 +490,9 @@ class CaptureFrameSource final : public FrameSource {
     frame->name = "frame " + std::to_string(index);
     frame->source_index = index;
     frame->rotated_180 = false;
+    frame->recorded_utime = -1;
+    if (kind_ == SourceKind::kVideoFile && !FrameTime(index, &frame->recorded_utime, reason, detail))
+      return ReadResult::kSkipped;
     if (rotate_all_) RotateFrame180(frame);
     return ReadResult::kFrame;
   }
@@ -482,6 +501,7 @@ class CaptureFrameSource final : public FrameSource {
     if (kind_ != SourceKind::kVideoFile) return false;
     capture_.release();
     counter_ = 0;
+    last_container_utime_ = -1;
     try {
       return capture_.open(path_) && capture_.isOpened();
     } catch (const cv::Exception&) {
@@ -496,10 +516,41 @@ class CaptureFrameSource final : public FrameSource {
     std::ostringstream os;
     os << SourceKindName(kind_) << " " << path_ << ": " << SizeText(camera_.width, camera_.height) << ", " << rate_
        << " fps reported";
+    if (kind_ == SourceKind::kVideoFile)
+      os << (frame_times_.empty() ? ", frame times from the container" : ", frame times from timestamps.txt");
+    os << note_;
     return os.str();
   }
 
  private:
+  // The time of video frame `index` (µs): from the folder's timestamps.txt, else the container's presentation time
+  // (must increase; a container without usable times gives index / fps).
+  bool FrameTime(int index, int64_t* utime, std::string* reason, std::string* detail) {
+    if (!frame_times_.empty()) {
+      if (index >= static_cast<int>(frame_times_.size())) {
+        *reason = "frame: no time in timestamps.txt";
+        *detail = path_ + " frame " + std::to_string(index) + " (timestamps.txt has " +
+                  std::to_string(frame_times_.size()) + " frames)";
+        return false;
+      }
+      *utime = frame_times_[index];
+      return true;
+    }
+    double ms = -1;
+    try {
+      ms = capture_.get(cv::CAP_PROP_POS_MSEC);
+    } catch (const cv::Exception&) {
+      ms = -1;
+    }
+    int64_t t = std::isfinite(ms) && ms >= 0 ? std::llround(ms * 1000.0) : -1;
+    if (t <= last_container_utime_)  // no usable container time: the nominal one
+      t = rate_ > 0 ? std::llround(index * 1e6 / rate_) : -1;
+    if (t <= last_container_utime_) t = last_container_utime_ + 1;
+    last_container_utime_ = t;
+    *utime = t;
+    return true;
+  }
+
   SourceKind kind_;
   std::string path_;
   PinholeCamera camera_;
@@ -508,7 +559,34 @@ class CaptureFrameSource final : public FrameSource {
   double rate_ = 0;
   int counter_ = 0;
   int consecutive_failures_ = 0;
+  std::vector<int64_t> frame_times_;  // µs by frame number (empty: container times)
+  std::string note_;
+  int64_t last_container_utime_ = -1;
 };
+
+// A video folder's timestamps.txt: "FRAME_NUMBER UTIME_US" for the frames 0, 1, 2, ... with increasing times.
+bool ReadVideoFrameTimes(const std::string& path, std::vector<int64_t>* times, std::string* error) {
+  std::vector<FrameTime> lines;
+  if (!ReadFrameTimes(path, &lines, error)) return false;
+  std::map<int64_t, int64_t> by_frame;
+  for (const FrameTime& t : lines) {
+    if (!IsAllDigits(t.file_name) || t.file_name.size() > 9)
+      return Fail(error, path + ": '" + t.file_name + "' is not a frame number (a video's timestamps.txt has " +
+                             "FRAME_NUMBER UTIME_US lines, frames numbered from 0)");
+    by_frame[std::stoll(t.file_name)] = t.utime;
+  }
+  times->clear();
+  for (const auto& [frame, utime] : by_frame) {
+    if (frame != static_cast<int64_t>(times->size()))
+      return Fail(error, path + " has no time for frame " + std::to_string(times->size()) +
+                             " (every frame from 0 on needs one)");
+    if (!times->empty() && utime <= times->back())
+      return Fail(error, path + ": the time of frame " + std::to_string(frame) + " does not increase");
+    times->push_back(utime);
+  }
+  if (times->empty()) return Fail(error, path + " holds no frame time");
+  return true;
+}
 
 std::unique_ptr<FrameSource> OpenCapture(SourceKind kind, const FrameSourceOptions& options, std::string* error) {
   if (!Trim(options.order).empty())
@@ -516,15 +594,36 @@ std::unique_ptr<FrameSource> OpenCapture(SourceKind kind, const FrameSourceOptio
   const std::string rotate = Lower(Trim(options.rotate_180));
   if (!rotate.empty() && rotate != "all")
     return Fail(error, std::string("--rotate-180 takes only 'all' for a ") + SourceKindName(kind)), nullptr;
-  if (options.calib_path.empty())
+  // A folder with one video: its calibration, and its timestamps.txt, beside it (common/recorded_run.h).
+  std::string video_path = options.path, calib_path = options.calib_path, note;
+  std::vector<int64_t> frame_times;
+  std::error_code ec;
+  if (kind == SourceKind::kVideoFile && fs::is_directory(options.path, ec)) {
+    const fs::path root(options.path);
+    for (const auto& item : fs::directory_iterator(root, ec))
+      if (item.is_regular_file(ec) && IsVideoFileName(item.path().filename().string()))
+        video_path = item.path().string();
+    if (calib_path.empty())
+      for (const char* candidate : {"calib.yaml", "calib.yml", "calib.xml", "calib.json"})
+        if (fs::is_regular_file(root / candidate, ec)) {
+          calib_path = (root / candidate).string();
+          break;
+        }
+    if (fs::is_regular_file(root / kTimestampsFileName, ec)) {
+      if (!ReadVideoFrameTimes((root / kTimestampsFileName).string(), &frame_times, error)) return nullptr;
+      note = ", " + std::to_string(frame_times.size()) + " frame times";
+    }
+  }
+  if (calib_path.empty())
     return Fail(error, std::string("a ") + SourceKindName(kind) +
                            " needs --calib FILE (OpenCV FileStorage with "
                            "camera_matrix, distortion_coefficients, "
                            "image_width, image_height)"),
            nullptr;
   PinholeCamera camera;
-  if (!ReadCalibrationFile(options.calib_path, options.camera_name, &camera, error)) return nullptr;
-  auto source = std::make_unique<CaptureFrameSource>(kind, options.path, camera, rotate == "all");
+  if (!ReadCalibrationFile(calib_path, options.camera_name, &camera, error)) return nullptr;
+  auto source = std::make_unique<CaptureFrameSource>(kind, video_path, camera, rotate == "all",
+                                                     std::move(frame_times), note);
   if (!source->Open(options.device_width, options.device_height, error)) return nullptr;
   return source;
 }
@@ -543,6 +642,15 @@ const char* SourceKindName(SourceKind kind) {
       return "V4L2 device";
   }
   return "unknown";
+}
+
+bool IsVideoFileName(const std::string& name) {
+  const auto dot = name.find_last_of('.');
+  if (dot == std::string::npos || dot == 0) return false;
+  const std::string ext = Lower(name.substr(dot + 1));
+  for (const char* e : {"avi", "mp4", "mkv", "mov", "webm", "m4v", "mpg", "mpeg"})
+    if (ext == e) return true;
+  return false;
 }
 
 bool IsImageFileName(const std::string& name) {
@@ -564,13 +672,17 @@ bool DetectSourceKind(const std::string& path, SourceKind* kind, std::string* er
   const fs::path p(path);
   if (fs::is_directory(p, ec)) {
     *kind = SourceKind::kImageFolder;
+    int images = 0, videos = 0;
     for (const auto& item : fs::directory_iterator(p, ec)) {
       const std::string name = item.path().filename().string();
       if (name.size() > 8 && name.compare(name.size() - 8, 8, "_par.txt") == 0) {
         *kind = SourceKind::kMiddlebury;
-        break;
+        return true;
       }
+      if (IsImageFileName(name)) ++images;
+      if (IsVideoFileName(name)) ++videos;
     }
+    if (images == 0 && videos == 1 && !fs::is_directory(p / "images", ec)) *kind = SourceKind::kVideoFile;
     return true;
   }
   if (fs::is_regular_file(p, ec)) {

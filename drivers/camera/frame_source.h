@@ -46,7 +46,8 @@ struct SourceFrame {
   bool has_true_pose = false;  // true when world_from_camera holds the dataset's true pose
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();  // mm, true pose (when has_true_pose)
   std::string name;          // file name, or "frame N" for video / device frames
-  int64_t recorded_utime = -1;  // µs, the image's time from an image folder's timestamps.txt (-1: none)
+  int64_t recorded_utime = -1;  // µs, the image's time from a folder's timestamps.txt, or for a video without
+                                // one the container's presentation time (-1: none)
   int source_index = 0;      // 0-based index in the natural order (frame counter for video / device)
   bool rotated_180 = false;  // true when the image was rotated 180 deg in-plane
 };
@@ -73,8 +74,10 @@ class FrameSource {
   virtual std::string Describe() const = 0;
 };
 
-// Detects the kind of a source path: a directory containing *_par.txt or a *_par.txt file -> Middlebury; another
-// directory -> image folder; /dev/video* or a non-negative integer -> V4L2 device; another regular file -> video.
+// Detects the kind of a source path: a directory containing *_par.txt or a *_par.txt file -> Middlebury; a
+// directory with exactly one video file (IsVideoFileName), no images and no images/ -> video (a video folder:
+// calib.yaml and a recorded run's files beside the video, common/recorded_run.h); another directory -> image
+// folder; /dev/video* or a non-negative integer -> V4L2 device; another regular file -> video.
 // Returns false with *error when the path does not exist.
 bool DetectSourceKind(const std::string& path, SourceKind* kind, std::string* error);
 
@@ -126,5 +129,7 @@ void RotateFrame180(SourceFrame* frame);
 
 // True for the image file extensions the folder source reads (png jpg jpeg bmp ppm pgm tif tiff, any case).
 bool IsImageFileName(const std::string& name);
+// True for the video file extensions taken as the video of a folder (avi mp4 mkv mov webm m4v mpg mpeg, any case).
+bool IsVideoFileName(const std::string& name);
 
 }  // namespace objscan

@@ -293,6 +293,9 @@ TEST(FrameSourceTest, DetectsSourceKinds) {
   SourceKind kind;
   std::string error;
   ASSERT_TRUE(DetectSourceKind(dir.path().string(), &kind, &error));
+  EXPECT_EQ(kind, SourceKind::kVideoFile);  // a folder with one video and no images: a video folder
+  std::ofstream(dir.path() / "000000.png") << "x";
+  ASSERT_TRUE(DetectSourceKind(dir.path().string(), &kind, &error));
   EXPECT_EQ(kind, SourceKind::kImageFolder);
   ASSERT_TRUE(DetectSourceKind((dir.path() / "movie.avi").string(), &kind, &error));
   EXPECT_EQ(kind, SourceKind::kVideoFile);
@@ -358,6 +361,61 @@ TEST(FrameSourceTest, VideoFileWithCalibration) {
   ASSERT_TRUE(source->Rewind());
   ASSERT_EQ(source->Next(&frame, &reason, &detail), ReadResult::kFrame);
   EXPECT_EQ(frame.source_index, 0);
+}
+
+// A folder holding one video (a recorded run kept as video): calib.yaml beside it, frame times from its
+// frame-numbered timestamps.txt, else the container's (25 fps: 40 ms apart); a timestamps.txt that misses a frame or
+// does not number frames is refused; a frame beyond its lines is skipped with a reason.
+TEST(FrameSourceTest, VideoFolderTakesCalibrationAndFrameTimesBesideTheVideo) {
+  TempDir dir("video_folder");
+  {
+    cv::VideoWriter writer((dir.path() / "run.avi").string(), cv::CAP_OPENCV_MJPEG,
+                           cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, cv::Size(64, 48));
+    ASSERT_TRUE(writer.isOpened());
+    for (int k = 0; k < 4; ++k) writer.write(TestImage(k * 2));
+  }
+  std::string error;
+  ASSERT_TRUE(WriteCalibrationFile((dir.path() / "calib.yaml").string(), TestCamera(), &error));
+  SourceKind kind;
+  ASSERT_TRUE(DetectSourceKind(dir.path().string(), &kind, &error));
+  EXPECT_EQ(kind, SourceKind::kVideoFile);
+  FrameSourceOptions options;
+  options.path = dir.path().string();
+  auto read_times = [&](std::vector<int64_t>* times, std::string* last_reason) {
+    auto source = OpenFrameSource(options, &error);
+    if (!source) return false;
+    times->clear();
+    SourceFrame frame;
+    std::string reason, detail;
+    for (ReadResult r; (r = source->Next(&frame, &reason, &detail)) != ReadResult::kEnd;) {
+      if (r == ReadResult::kFrame) times->push_back(frame.recorded_utime);
+      if (r == ReadResult::kSkipped) *last_reason = reason;
+    }
+    return true;
+  };
+  std::vector<int64_t> times;
+  std::string reason;
+  ASSERT_TRUE(read_times(&times, &reason)) << error;
+  ASSERT_EQ(times.size(), 4u);
+  for (size_t i = 0; i < times.size(); ++i) EXPECT_NEAR(times[i], 40000.0 * i, 1000.0) << i;
+
+  std::ofstream(dir.path() / "timestamps.txt") << "# frame utime\n0 1000000\n1 1033000\n2 1066000\n";
+  ASSERT_TRUE(read_times(&times, &reason)) << error;
+  EXPECT_EQ(times, (std::vector<int64_t>{1000000, 1033000, 1066000}));
+  EXPECT_EQ(reason, "frame: no time in timestamps.txt");
+
+  std::ofstream(dir.path() / "timestamps.txt") << "0 1000000\n2 1066000\n";
+  EXPECT_FALSE(read_times(&times, &reason));
+  EXPECT_NE(error.find("no time for frame 1"), std::string::npos) << error;
+  std::ofstream(dir.path() / "timestamps.txt") << "000000.png 1000000\n";
+  EXPECT_FALSE(read_times(&times, &reason));
+  EXPECT_NE(error.find("is not a frame number"), std::string::npos) << error;
+
+  // A second video makes it an image folder with no images: refused, not a guess.
+  std::ofstream(dir.path() / "other.mp4") << "x";
+  ASSERT_TRUE(DetectSourceKind(dir.path().string(), &kind, &error));
+  EXPECT_EQ(kind, SourceKind::kImageFolder);
+  EXPECT_FALSE(OpenFrameSource(options, &error));
 }
 
 TEST(FrameSourceTest, OxfordDinosaurNeedsCalibration) {

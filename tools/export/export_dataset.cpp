@@ -8,6 +8,7 @@
 #include <fstream>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common/recorded_run.h"
 
@@ -44,8 +45,49 @@ bool DatasetWriter::Open(const DatasetWriterOptions& options, std::string* error
   if (!ValidateDatasetWriterOptions(options, error)) return false;
   options_ = options;
   std::error_code ec;
-  fs::create_directories(fs::path(options.out_dir) / "images", ec);
-  if (ec) return Fail(error, "cannot create " + (fs::path(options.out_dir) / "images").string() + ": " + ec.message());
+  const fs::path dir = options.video ? fs::path(options.out_dir) : fs::path(options.out_dir) / "images";
+  fs::create_directories(dir, ec);
+  if (ec) return Fail(error, "cannot create " + dir.string() + ": " + ec.message());
+  return true;
+}
+
+bool DatasetWriter::WriteVideoFrame(const ImageFrame& frame, std::string* error) {
+  // Always colour: gray frames (and a log that mixes gray and colour) as BGR.
+  cv::Mat bgr;
+  if (frame.image.channels() == 1)
+    cv::cvtColor(frame.image, bgr, cv::COLOR_GRAY2BGR);
+  else
+    bgr = frame.image;
+  if (!video_ && first_video_frame_.image.empty()) {
+    first_video_frame_ = frame;
+    first_video_frame_.image = bgr.clone();
+    return true;
+  }
+  if (!video_) {
+    const double dt = (frame.utime - first_video_frame_.utime) * 1e-6;
+    const double fps = dt > 0 && dt < 10 ? 1.0 / dt : 30.0;
+    const std::string path = (fs::path(options_.out_dir) / "video.avi").string();
+    video_ = std::make_unique<cv::VideoWriter>();
+    const cv::Size size(first_video_frame_.image.cols, first_video_frame_.image.rows);
+    try {
+      if (!video_->open(path, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps, size, true))
+        return Fail(error, "cannot write " + path);
+      video_->set(cv::VIDEOWRITER_PROP_QUALITY, 95);
+      video_->write(first_video_frame_.image);
+    } catch (const cv::Exception& e) {
+      return Fail(error, "cannot write " + path + ": " + e.what());
+    }
+    video_size_ = first_video_frame_.image.size();
+    first_video_frame_.image.release();
+  }
+  if (bgr.size() != video_size_)
+    return Fail(error, "frame " + std::to_string(frame.seq) + " is " + std::to_string(bgr.cols) + "x" +
+                           std::to_string(bgr.rows) + ": a video's frames all have the first one's size");
+  try {
+    video_->write(bgr);
+  } catch (const cv::Exception& e) {
+    return Fail(error, "cannot write video.avi: " + std::string(e.what()));
+  }
   return true;
 }
 
@@ -66,6 +108,20 @@ DatasetWriter::FrameResult DatasetWriter::AddFrame(const ImageFrame& frame, std:
   if (frame.image.empty() || (frame.image.type() != CV_8UC1 && frame.image.type() != CV_8UC3)) {
     Fail(error, "frame " + std::to_string(frame.seq) + ": image is empty or not 8-bit gray / BGR");
     return FrameResult::kError;
+  }
+  if (options_.video) {
+    if (!written_.empty() && (frame.seq <= written_.back().seq || frame.utime <= written_.back().utime)) {
+      ++summary_.frames_out_of_order;
+      return FrameResult::kNotSelected;
+    }
+    written_.push_back({frame.seq, frame.utime, frame.image.cols, frame.image.rows});
+    if (!WriteVideoFrame(frame, error)) {
+      written_.pop_back();
+      return FrameResult::kError;
+    }
+    written_seqs_.insert(frame.seq);
+    ++summary_.frames_written;
+    return FrameResult::kWritten;
   }
   const fs::path path = fs::path(options_.out_dir) / "images" / DatasetImageName(frame.seq);
   bool ok = false;
@@ -139,7 +195,15 @@ bool DatasetWriter::Finish(std::string* error) {
 
   // The image times, on the clock of the odometry: a recorded robot run replays with its odometry from them.
   std::vector<FrameTime> times;
-  for (const auto& f : frames) times.push_back({DatasetImageName(f.seq), f.utime});
+  for (const auto& f : frames)
+    times.push_back({options_.video ? std::to_string(times.size()) : DatasetImageName(f.seq), f.utime});
+  if (options_.video) {
+    if (video_) {
+      video_->release();
+    } else if (!first_video_frame_.image.empty()) {
+      return Fail(error, "a video needs at least 2 frames (1 given)");
+    }
+  }
   if (!times.empty() && !WriteFrameTimes((root / kTimestampsFileName).string(), times, error)) return false;
 
   if (!odometry_.empty()) {

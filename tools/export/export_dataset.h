@@ -8,6 +8,9 @@
 //                          positions in mm, first line "# units: mm"; one line per written frame that has a true pose
 //                          (matched by seq), in frame order. Written only when at least one true pose was given.
 //   DIR/timestamps.txt     "FILE_NAME UTIME_US" per written frame (the frame's utime), in frame order.
+//   With video = true, a video folder instead of images/: DIR/video.avi (Motion-JPEG, quality 95, colour: gray
+//   frames as BGR; the frames in seq order; a frame whose seq or utime does not increase is left out, counted) and timestamps.txt with
+//   "FRAME_NUMBER UTIME_US" lines (frames numbered from 0).
 //   DIR/odometry.txt       the odometry readings given, in time order (one per utime), with a header naming the
 //                          columns and units. timestamps.txt, odometry.txt and robot.cfg: common/recorded_run.h.
 // Numbers are written with 17 significant digits (t with 6 decimals, i.e. exact µs), so they read back exactly.
@@ -17,6 +20,8 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
+#include <opencv2/videoio.hpp>
 #include <set>
 #include <string>
 #include <vector>
@@ -30,6 +35,7 @@ struct DatasetWriterOptions {
   std::string out_dir;     // output folder (created with images/; files of the same name are overwritten)
   int every = 1;           // keep frames whose seq is a multiple of this (1 = all)
   int64_t max_frames = 0;  // write at most this many frames (0 = no limit)
+  bool video = false;      // a video folder (video.avi) instead of images/
 };
 
 // Checks the options. False with *why on the first problem.
@@ -40,6 +46,7 @@ struct DatasetExportSummary {
   int64_t frames_written = 0;            // PNG files written
   int64_t frames_not_selected = 0;       // skipped by --every or after --max-frames
   int64_t frames_duplicate_seq = 0;      // skipped because a frame with that seq was already written
+  int64_t frames_out_of_order = 0;       // video only: skipped because seq or utime did not increase
   int64_t frames_undecodable = 0;        // counted by CountUndecodable (message did not decode to an image)
   int64_t frames_size_mismatch = 0;      // written frames whose size differs from the calibration
   int64_t calibration_changes = 0;       // calibrations that differ from the first one (calib.yaml keeps the first)
@@ -90,6 +97,11 @@ class DatasetWriter {
   PinholeCamera camera_;
   std::map<int64_t, CameraPoseEstimate> true_poses_;  // by seq
   std::vector<OdometryReading> odometry_;
+  // Video: opened at the second frame (its rate from the first two frames' times); the first frame waits here.
+  bool WriteVideoFrame(const ImageFrame& frame, std::string* error);
+  std::unique_ptr<cv::VideoWriter> video_;
+  ImageFrame first_video_frame_;
+  cv::Size video_size_;
 };
 
 // Image file name of frame seq: 6 digits zero padded ("000042.png"); negative seqs are rejected by AddFrame.

@@ -93,11 +93,13 @@ int ExportLog(int argc, char** argv) {
   const DatasetExportSummary& s = result.dataset;
   std::printf(
       "events_read %lld\nframes_written %lld\nframes_not_selected %lld\nframes_undecodable %lld\n"
-      "frames_duplicate_seq %lld\nframes_size_mismatch %lld\ncalibration %s\ncalibration_changes %lld\n"
+      "frames_duplicate_seq %lld\nframes_out_of_order %lld\nframes_size_mismatch %lld\ncalibration %s\n"
+      "calibration_changes %lld\n"
       "true_poses_written %lld\nframes_without_true_pose %lld\nodometry_written %lld\nodometry_repeated_time %lld\n",
       static_cast<long long>(result.events_read), static_cast<long long>(s.frames_written),
       static_cast<long long>(s.frames_not_selected), static_cast<long long>(s.frames_undecodable),
-      static_cast<long long>(s.frames_duplicate_seq), static_cast<long long>(s.frames_size_mismatch),
+      static_cast<long long>(s.frames_duplicate_seq), static_cast<long long>(s.frames_out_of_order),
+      static_cast<long long>(s.frames_size_mismatch),
       s.has_calibration ? "yes" : "no", static_cast<long long>(s.calibration_changes),
       static_cast<long long>(s.true_poses_written), static_cast<long long>(s.frames_without_true_pose),
       static_cast<long long>(s.odometry_written), static_cast<long long>(s.odometry_repeated_time));

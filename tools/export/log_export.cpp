@@ -35,6 +35,9 @@ void AddLogExportOptions(OptionParser& parser, LogExportOptions* options) {
   parser.Add("odometry-channel", &options->odometry_channel, "channel of odometry_t (-> odometry.txt)");
   parser.Add("every", &options->every, "keep frames whose seq is a multiple of N (1 = all)");
   parser.Add("max-frames", &options->max_frames, "write at most N frames (0 = all)");
+  parser.Add("video", &options->video,
+             "write the frames as DIR/video.avi (Motion-JPEG, quality 95) with a frame-numbered timestamps.txt "
+             "instead of images/ (a recorded run as a video folder)");
   parser.Add("robot-file", &options->robot_file,
              "the robot's robot.cfg (geometry, head conventions; the simulator writes ground_truth/robot.cfg): "
              "checked and copied into the folder, so that it replays with its odometry");
@@ -63,6 +66,7 @@ bool ExportLogToDataset(const LogExportOptions& options, LogExportResult* result
   writer_options.out_dir = options.out_dir;
   writer_options.every = options.every;
   writer_options.max_frames = options.max_frames;
+  writer_options.video = options.video;
   RobotDescription robot;
   if (!options.robot_file.empty() && !ReadRobotFile(options.robot_file, &robot, error)) return false;
   if (!writer.Open(writer_options, error)) return false;

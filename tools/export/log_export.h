@@ -25,6 +25,7 @@ struct LogExportOptions {
   int every = 1;                                           // --every: keep frames whose seq is a multiple of N
   int64_t max_frames = 0;                                  // --max-frames: write at most N frames (0 = all)
   std::string robot_file;  // --robot-file: the robot's robot.cfg (common/recorded_run.h), checked, -> DIR/robot.cfg
+  bool video = false;      // --video: a video folder (video.avi, frame-numbered timestamps.txt) instead of images/
 };
 
 // Registers every LogExportOptions field (names as in the comments).

@@ -8,10 +8,12 @@
 #include <fstream>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "common/adapters.h"
 #include "common/bus.h"
+#include "common/recorded_run.h"
 #include "objscan/camera_info_t.hpp"
 #include "objscan/image_t.hpp"
 #include "objscan/odometry_t.hpp"
@@ -255,6 +257,60 @@ TEST(LogExport, WritesAFolderThatReadsBackExactly) {
   EXPECT_EQ(source->Next(&frame, &reason, &detail), ReadResult::kEnd);
 #else
   GTEST_LOG_(INFO) << "drivers/camera not built: camera driver read-back not checked";
+#endif
+}
+
+// --video: a video folder (video.avi, frame-numbered timestamps.txt) that the camera driver plays with the frames'
+// recorded times; gray and colour frames alike (the video is colour), JPEG-compressed.
+TEST(LogExport, WritesAVideoFolderThatTheCameraDriverPlaysWithItsTimes) {
+  const fs::path dir = TempDir("video");
+  const std::string log_path = (dir / "session.lcmlog").string();
+  const Session session = WriteSession(log_path);
+  LogExportOptions options;
+  options.log_path = log_path;
+  options.out_dir = (dir / "dataset").string();
+  options.video = true;
+  LogExportResult result;
+  std::string error;
+  ASSERT_TRUE(ExportLogToDataset(options, &result, &error)) << error;
+  EXPECT_EQ(result.dataset.frames_written, 4);
+  EXPECT_EQ(result.dataset.frames_out_of_order, 0);
+  EXPECT_TRUE(fs::is_regular_file(dir / "dataset" / "video.avi"));
+  EXPECT_FALSE(fs::exists(dir / "dataset" / "images"));
+  std::vector<FrameTime> times;
+  ASSERT_TRUE(ReadFrameTimes((dir / "dataset" / kTimestampsFileName).string(), &times, &error)) << error;
+  ASSERT_EQ(times.size(), 4u);
+  for (size_t i = 0; i < times.size(); ++i) {
+    EXPECT_EQ(times[i].file_name, std::to_string(i));
+    EXPECT_EQ(times[i].utime, session.frames[i].utime);
+  }
+#ifdef OBJSCAN_HAVE_CAMERA_DRIVER
+  FrameSourceOptions source_options;
+  source_options.path = (dir / "dataset").string();
+  auto source = OpenFrameSource(source_options, &error);
+  ASSERT_TRUE(source) << error;
+  EXPECT_EQ(source->kind(), SourceKind::kVideoFile);
+  for (const auto& expected : session.frames) {
+    SourceFrame frame;
+    std::string reason, detail;
+    ASSERT_EQ(source->Next(&frame, &reason, &detail), ReadResult::kFrame) << reason << " " << detail;
+    EXPECT_EQ(frame.recorded_utime, expected.utime);
+    EXPECT_EQ(frame.camera.fx, TestCamera().fx);
+    ASSERT_EQ(frame.image.size(), expected.image.size());
+    cv::Mat gray_read, gray_expected;
+    cv::cvtColor(frame.image, gray_read, cv::COLOR_BGR2GRAY);
+    if (expected.image.channels() == 3)
+      cv::cvtColor(expected.image, gray_expected, cv::COLOR_BGR2GRAY);
+    else
+      gray_expected = expected.image;
+    cv::Mat blur_read, blur_expected;  // uniform noise: compare 8x8 means, which JPEG keeps
+    cv::blur(gray_read, blur_read, cv::Size(8, 8));
+    cv::blur(gray_expected, blur_expected, cv::Size(8, 8));
+    EXPECT_LT(cv::norm(blur_read, blur_expected, cv::NORM_L1) / blur_read.total(), 3.0) << expected.seq;
+  }
+  SourceFrame frame;
+  std::string reason, detail;
+  EXPECT_EQ(source->Next(&frame, &reason, &detail), ReadResult::kEnd);
 #endif
 }
 
