@@ -9,6 +9,8 @@
 
 #include <stdexcept>
 
+#include "objscan/control_t.hpp"
+
 namespace objscan {
 namespace {
 
@@ -162,6 +164,15 @@ bool RawMessageSeq(const void* data, int size, int64_t* seq) {
   if (data == nullptr || size < 24) return false;
   *seq = ReadBigEndian64(static_cast<const uint8_t*>(data) + 16);
   return true;
+}
+
+bool IsDriverMessage(const std::string& channel, const void* data, int size) {
+  static const std::set<std::string> kDriverChannels = {"CAMERA_IMAGE", "CAMERA_INFO", "ROBOT_ODOMETRY",
+                                                         "GROUND_TRUTH_POSE"};
+  if (kDriverChannels.count(channel)) return true;
+  if (channel != "OBJSCAN_CONTROL") return false;
+  control_t msg;
+  return DecodeMessage(data, size, &msg, nullptr) && msg.command == control_t::COMMAND_END_OF_STREAM;
 }
 
 void BurstPacer::After() {

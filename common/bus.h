@@ -35,6 +35,12 @@ using RawHandler = std::function<void(const RawMessage&)>;
 bool RawMessageUtime(const void* data, int size, int64_t* utime);
 bool RawMessageSeq(const void* data, int size, int64_t* seq);
 
+// What a robot's drivers publish (camera, base, simulator): CAMERA_IMAGE, CAMERA_INFO, ROBOT_ODOMETRY,
+// GROUND_TRUTH_POSE, and on OBJSCAN_CONTROL their end of stream only (the processes' own control messages, such as
+// COMMAND_FINISHED, would end a new run's phases early). What a session log is replayed from, in one process
+// (objscan replay) or into live processes (`objscan log filter --sensors`, then lcm-logplayer).
+bool IsDriverMessage(const std::string& channel, const void* data, int size);
+
 class Bus {
  public:
   virtual ~Bus() = default;

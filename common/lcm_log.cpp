@@ -120,4 +120,68 @@ bool LcmLogReader::Next(LcmLogEvent* event) {
   return false;
 }
 
+LcmLogWriter::~LcmLogWriter() {
+  if (file_) std::fclose(file_);
+}
+
+bool LcmLogWriter::Open(const std::string& path, std::string* error) {
+  file_ = std::fopen(path.c_str(), "wb");
+  if (!file_) {
+    *error = "cannot create log " + path;
+    return false;
+  }
+  path_ = path;
+  events_ = 0;
+  return true;
+}
+
+bool LcmLogWriter::Write(const LcmLogEvent& event, std::string* error) {
+  if (!file_) {
+    *error = "log not open";
+    return false;
+  }
+  if (event.channel.empty() || event.channel.size() > static_cast<size_t>(kMaxChannelBytes) ||
+      event.data.size() > static_cast<size_t>(kMaxDataBytes)) {
+    *error = "event with channel '" + event.channel + "' and " + std::to_string(event.data.size()) +
+             " bytes cannot be written to an LCM log";
+    return false;
+  }
+  uint8_t h[kHeaderBytes];
+  auto put32 = [](uint8_t* p, uint32_t v) {
+    p[0] = static_cast<uint8_t>(v >> 24);
+    p[1] = static_cast<uint8_t>(v >> 16);
+    p[2] = static_cast<uint8_t>(v >> 8);
+    p[3] = static_cast<uint8_t>(v);
+  };
+  auto put64 = [&](uint8_t* p, int64_t v) {
+    put32(p, static_cast<uint32_t>(static_cast<uint64_t>(v) >> 32));
+    put32(p + 4, static_cast<uint32_t>(static_cast<uint64_t>(v)));
+  };
+  put32(h, kMagic);
+  put64(h + 4, events_);
+  put64(h + 12, event.timestamp_us);
+  put32(h + 20, static_cast<uint32_t>(event.channel.size()));
+  put32(h + 24, static_cast<uint32_t>(event.data.size()));
+  if (std::fwrite(h, 1, kHeaderBytes, file_) != static_cast<size_t>(kHeaderBytes) ||
+      std::fwrite(event.channel.data(), 1, event.channel.size(), file_) != event.channel.size() ||
+      (!event.data.empty() && std::fwrite(event.data.data(), 1, event.data.size(), file_) != event.data.size())) {
+    *error = "cannot write to " + path_ + " (disk full?)";
+    return false;
+  }
+  ++events_;
+  return true;
+}
+
+bool LcmLogWriter::Close(std::string* error) {
+  if (!file_) return true;
+  const bool ok = std::fflush(file_) == 0 && std::ferror(file_) == 0;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!ok || !closed) {
+    *error = "cannot write to " + path_ + " (disk full?)";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace objscan

@@ -51,4 +51,25 @@ class LcmLogReader {
   LcmLogDamage damage_;
 };
 
+// Writes an LCM log in the lcm-logger format (what lcm-logplayer, lcm-spy and LcmLogReader read). Events are
+// numbered 0, 1, 2, ... in the order written, as lcm-logger numbers them; their timestamps are written as given.
+// Errors (cannot create, disk full) come back from Write / Close with *error; nothing is retried.
+class LcmLogWriter {
+ public:
+  LcmLogWriter() = default;
+  ~LcmLogWriter();  // closes without reporting: call Close to learn whether everything reached the file
+  LcmLogWriter(const LcmLogWriter&) = delete;
+  LcmLogWriter& operator=(const LcmLogWriter&) = delete;
+
+  bool Open(const std::string& path, std::string* error);  // creates path, or truncates it
+  bool Write(const LcmLogEvent& event, std::string* error);  // event.event_number is ignored (renumbered)
+  bool Close(std::string* error);
+  int64_t events() const { return events_; }
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::string path_;
+  int64_t events_ = 0;
+};
+
 }  // namespace objscan

@@ -122,5 +122,47 @@ TEST_F(LcmLogTest, RefusesFilesThatAreNoLog) {
   EXPECT_NE(error.find("no such file"), std::string::npos) << error;
 }
 
+TEST_F(LcmLogTest, WrittenEventsReadBackByteForByteAndRenumbered) {
+  const std::string path = Write({});
+  LcmLogWriter w;
+  std::string error;
+  ASSERT_TRUE(w.Open(path, &error)) << error;
+  std::vector<LcmLogEvent> written;
+  for (int i = 0; i < 4; ++i) {
+    LcmLogEvent e;
+    e.event_number = 100 + 7 * i;  // ignored: the writer numbers 0, 1, 2, ...
+    e.timestamp_us = 1'700'000'000'000'000 + 33'333 * i;
+    e.channel = i % 2 ? "CAMERA_IMAGE" : "ROBOT_ODOMETRY";
+    for (int b = 0; b < 10 * i; ++b) e.data.push_back(static_cast<uint8_t>(b * 31 + i));
+    ASSERT_TRUE(w.Write(e, &error)) << error;
+    written.push_back(e);
+  }
+  LcmLogEvent nameless;
+  EXPECT_FALSE(w.Write(nameless, &error));
+  EXPECT_NE(error.find("cannot be written"), std::string::npos) << error;
+  EXPECT_EQ(w.events(), 4);
+  ASSERT_TRUE(w.Close(&error)) << error;
+
+  LcmLogReader r;
+  ASSERT_TRUE(r.Open(path, &error)) << error;
+  LcmLogEvent e;
+  for (size_t i = 0; i < written.size(); ++i) {
+    ASSERT_TRUE(r.Next(&e)) << i;
+    EXPECT_EQ(e.event_number, static_cast<int64_t>(i));
+    EXPECT_EQ(e.timestamp_us, written[i].timestamp_us);
+    EXPECT_EQ(e.channel, written[i].channel);
+    EXPECT_EQ(e.data, written[i].data);
+  }
+  EXPECT_FALSE(r.Next(&e));
+  EXPECT_FALSE(r.damage().Any());
+}
+
+TEST_F(LcmLogTest, AWriterThatCannotCreateItsFileSaysSo) {
+  LcmLogWriter w;
+  std::string error;
+  EXPECT_FALSE(w.Open("/nonexistent/dir/out.lcmlog", &error));
+  EXPECT_NE(error.find("cannot create"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace objscan

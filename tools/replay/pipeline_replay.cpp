@@ -45,12 +45,6 @@ class RecordingBus final : public Bus {
   int64_t* count_;
 };
 
-bool IsFeedableControl(const void* data, int size) {
-  control_t msg;
-  if (!DecodeMessage(data, size, &msg, nullptr)) return false;
-  return msg.command == control_t::COMMAND_END_OF_STREAM;
-}
-
 // Applies "--name value ..." (split at white space) to the options that add_options registers; false with *error
 // naming the node on an unknown option or a bad value.
 template <typename NodeOptions, typename AddOptions>
@@ -121,7 +115,8 @@ bool RunPipelineReplay(const PipelineReplayOptions& options, PipelineReplayResul
       ++result->events_read;
       const std::string& channel = event.channel;
       const bool feed = options.input_channels.count(channel) &&
-                        (channel != "OBJSCAN_CONTROL" || IsFeedableControl(event.data.data(), static_cast<int>(event.data.size())));
+                        (channel != "OBJSCAN_CONTROL" ||
+                         IsDriverMessage(channel, event.data.data(), static_cast<int>(event.data.size())));
       if (feed) {
         ++result->events_fed;
         memq->Publish(channel, event.data.data(), static_cast<int>(event.data.size()));
