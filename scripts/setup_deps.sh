@@ -11,6 +11,7 @@ PACKAGES=(
   openjdk-17-jdk-headless libjchart2d-java                # lcm-spy with our types
   libglfw3-dev libimgui-dev libgl-dev xvfb xauth          # viewer, headless screenshots
   iproute2 procps                                         # network namespaces for multicast tests
+  chromium                                                # the run report checked in a headless browser
 )
 
 missing=()
