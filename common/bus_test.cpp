@@ -15,7 +15,7 @@ namespace objscan {
 namespace {
 
 std::string TempPath(const std::string& name) {
-  return "/tmp/objscan_bus_test_" + std::to_string(getpid()) + "_" + name;
+  return ::testing::TempDir() + "objscan_bus_test_" + std::to_string(getpid()) + "_" + name;
 }
 
 TEST(BusTest, MemqDeliversTypedMessagesInOrder) {

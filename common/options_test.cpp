@@ -59,7 +59,7 @@ TEST(OptionsTest, RejectsUnknownAndMalformed) {
 }
 
 TEST(OptionsTest, FileThenCommandLineWins) {
-  const std::string path = "/tmp/objscan_options_test_" + std::to_string(getpid());
+  const std::string path = ::testing::TempDir() + "objscan_options_test_" + std::to_string(getpid());
   {
     std::ofstream out(path);
     out << "# comment\nframes = 99\nrate: 5\nrealtime false\n";

@@ -9,7 +9,7 @@
 namespace objscan {
 namespace {
 
-std::string TempLog(const std::string& name) { return "/tmp/objscan_cp_test_" + std::to_string(getpid()) + name; }
+std::string TempLog(const std::string& name) { return ::testing::TempDir() + "objscan_cp_test_" + std::to_string(getpid()) + name; }
 
 TEST(ChildProcessTest, ReportsExitCodeAndCapturesOutput) {
   ChildProcess p("sh", {"/bin/sh", "-c", "echo hello from child; exit 3"}, TempLog("a.log"));

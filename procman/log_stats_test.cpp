@@ -11,7 +11,7 @@ namespace objscan {
 namespace {
 
 TEST(LogStatsTest, CountsEventsAndDataTimes) {
-  const std::string path = "/tmp/objscan_log_stats_" + std::to_string(getpid()) + ".lcmlog";
+  const std::string path = ::testing::TempDir() + "objscan_log_stats_" + std::to_string(getpid()) + ".lcmlog";
   {
     auto writer = MakeLcmBus("file://" + path + "?mode=w");
     for (int i = 0; i < 7; ++i) {

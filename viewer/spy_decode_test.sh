@@ -8,7 +8,7 @@ command -v java > /dev/null 2>&1 || { echo "java not installed: skipped"; exit 7
 for f in "$writer" "$classes/LogDecodeCheck.class" "$types_jar" "$lcm_jar"; do
   [ -e "$f" ] || { echo "FAIL: missing $f"; exit 1; }
 done
-tmp=$(mktemp -d /tmp/objscan_spy_decode.XXXXXX)
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/objscan_spy_decode.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 cp="$lcm_jar:$types_jar:$classes"
 

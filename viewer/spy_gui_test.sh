@@ -6,7 +6,7 @@ set -u
 spy=$1 build=$2
 command -v java > /dev/null 2>&1 || { echo "java not installed: skipped"; exit 77; }
 command -v xvfb-run > /dev/null 2>&1 || { echo "xvfb-run not installed: skipped"; exit 77; }
-out=$(mktemp /tmp/objscan_spy_gui.XXXXXX)
+out=$(mktemp "${TMPDIR:-/tmp}/objscan_spy_gui.XXXXXX")
 trap 'rm -f "$out"' EXIT
 OBJSCAN_BUILD_DIR="$build" setsid xvfb-run -a -s "-screen 0 1280x800x24" bash "$spy" --lcm-url=memq:// > "$out" 2>&1 &
 pid=$!

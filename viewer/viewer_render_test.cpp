@@ -192,7 +192,7 @@ class ViewerRenderTest : public ::testing::Test {
     const char* viewer = std::getenv("OBJSCAN_VIEWER");
     if (viewer == nullptr) GTEST_SKIP() << "OBJSCAN_VIEWER not set (run through ctest)";
     viewer_ = viewer;
-    prefix_ = "/tmp/objscan_viewer_render_test_" + std::to_string(getpid());
+    prefix_ = ::testing::TempDir() + "objscan_viewer_render_test_" + std::to_string(getpid());
     log_ = prefix_ + ".lcmlog";
     WriteLog(log_);
   }

@@ -345,7 +345,7 @@ TEST(ViewerStateMemqTest, FedFromBusIncludingGarbage) {
 }
 
 TEST(LogPlayerTest, PlaysStepsAndSeeks) {
-  const std::string path = "/tmp/objscan_viewer_state_test_" + std::to_string(getpid()) + ".lcmlog";
+  const std::string path = ::testing::TempDir() + "objscan_viewer_state_test_" + std::to_string(getpid()) + ".lcmlog";
   {
     auto writer = MakeLcmBus("datalog://" + path);
     for (int i = 0; i < 30; ++i) ASSERT_TRUE(writer->PublishMessage("CAMERA_POSE", MakePose(i, i, 0, 0)));

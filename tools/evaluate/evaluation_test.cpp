@@ -9,7 +9,7 @@
 namespace objscan {
 namespace {
 
-std::string Temp(const std::string& name) { return "/tmp/objscan_eval_" + std::to_string(getpid()) + name; }
+std::string Temp(const std::string& name) { return ::testing::TempDir() + "objscan_eval_" + std::to_string(getpid()) + name; }
 
 std::vector<Eigen::Vector3d> SpherePoints(double radius, int n, const Eigen::Vector3d& centre) {
   std::vector<Eigen::Vector3d> out;

@@ -10,7 +10,7 @@
 namespace objscan {
 namespace {
 
-std::string Temp(const std::string& name) { return "/tmp/objscan_logcmp_" + std::to_string(getpid()) + name; }
+std::string Temp(const std::string& name) { return ::testing::TempDir() + "objscan_logcmp_" + std::to_string(getpid()) + name; }
 
 void WriteTracksLog(const std::string& path, float shift, bool skip_frame_2, int64_t status_utime) {
   auto bus = MakeLcmBus("file://" + path + "?mode=w");
