@@ -394,6 +394,24 @@ void ObjectFinderNode::LogChanges(const FinderResult& r) {
     logged_state_ = r.state;
     logged_track_ = r.track_id;
   }
+  // While searching, every 20 updates: the biggest clusters of plausible size and why the rule rejects them, so that
+  // a run that never finds its target says what the map held (a target seen but "too large" or "not isolated").
+  if (r.state == TargetState::kSearching && ++searching_updates_ % 20 == 0) {
+    std::vector<const ClusterReport*> rejected;
+    for (const auto& c : r.clusters)
+      if (!c.passes && std::max(c.box.size_mm.x(), c.box.size_mm.y()) <= 3 * options_.finder.target_max_size_mm)
+        rejected.push_back(&c);
+    std::sort(rejected.begin(), rejected.end(),
+              [](const ClusterReport* a, const ClusterReport* b) { return a->box.points > b->box.points; });
+    std::string text = "searching: " + std::to_string(r.clusters.size()) + " clusters above the floor";
+    for (size_t i = 0; i < rejected.size() && i < 3; ++i)
+      text += std::string(i ? "; " : ", not a target: ") +
+              Format("(%.0f, %.0f) mm %.0fx%.0fx%.0f mm %.0f points ", rejected[i]->box.centre_mm.x(),
+                     rejected[i]->box.centre_mm.y(), rejected[i]->box.size_mm.x(), rejected[i]->box.size_mm.y(),
+                     rejected[i]->box.size_mm.z(), static_cast<double>(rejected[i]->box.points)) +
+              rejected[i]->rejection;
+    LogInfo(text + at);
+  }
   std::vector<int> others;
   for (const auto& c : r.other_candidates) others.push_back(c.track_id);
   if (others != logged_others_ && !others.empty()) {
