@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <regex>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -226,6 +228,28 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
 
 // The final phase moved the frames since the confirmation rigidly (a joined or re-chained map restart: room_07's
 // target.json was 117 mm off trajectory.txt's frame): target.json follows them into the final poses' frame.
+TEST_F(ObjectFinderNodeTest, WhileSearchingTheLogSaysWhyTheClustersAreNoTarget) {
+  options_.finder.target_max_size_mm = 100;  // the 150 x 120 x 140 mm box is now too big to be the target
+  Start();
+  PublishInfo();
+  Drain();
+  ::testing::internal::CaptureStderr();
+  for (int k = 0; k < 20; ++k) {
+    PublishKeyframe(k);
+    Drain();
+  }
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  ASSERT_FALSE(targets_.empty());
+  EXPECT_EQ(static_cast<int>(targets_.back().state), static_cast<int>(target_t::STATE_SEARCHING));
+  // Every 20 updates: the biggest plausible clusters and the rule's reason, the box first.
+  const auto line = log.find("searching: ");
+  ASSERT_NE(line, std::string::npos) << log;
+  const std::string text = log.substr(line, log.find('\n', line) - line);
+  // The box (centre 400, -200) is named first, with the rule's first failing check (height 140 > 100 * 1.15).
+  EXPECT_TRUE(std::regex_search(text, std::regex(R"(not a target: \((39\d|40\d), -(19\d|20\d)\) mm [0-9x]+ mm \d+ points too high;)")))
+      << text;
+}
+
 TEST_F(ObjectFinderNodeTest, TargetJsonFollowsTheFinalPoses) {
   Start();
   PublishInfo();
