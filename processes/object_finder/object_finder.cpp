@@ -49,6 +49,8 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
   positive(o.floor_inlier_mm, "floor-inlier-distance");
   if (!(o.floor_max_tilt_deg > 0 && o.floor_max_tilt_deg < 90)) e << "floor-max-tilt must be in (0, 90); ";
   if (o.min_floor_points < 3) e << "min-floor-points must be >= 3; ";
+  if (!(o.look_closer_beyond_mm >= 0) || !std::isfinite(o.look_closer_beyond_mm)) e << "look-closer-beyond must be >= 0; ";
+  if (!(o.look_closer_margin >= 0 && o.look_closer_margin <= 1)) e << "look-closer-margin must be in [0, 1]; ";
   if (o.min_observations < 0) e << "min-observations must be >= 0; ";
   positive(o.max_reprojection_error_px, "max-reprojection-error");
   if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min-height must be >= 0; ";
@@ -205,9 +207,15 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     Cluster& c = clusters[k];
     c.box = FitClusterBox(floor_points, groups[k], floor_);
     c.rejection = CheckRule(c.box);
-    if (c.rejection.empty() && CountNeighbours(floor_points, label, static_cast<int>(k), c.box) >
-                                   std::max<double>(3, kNeighbourFraction * groups[k].size()))
-      c.rejection = "not isolated";
+    const bool size_only = (c.rejection == "too large" || c.rejection == "too high") &&
+                           CheckRule(c.box, 1 + options_.look_closer_margin).empty();
+    if ((c.rejection.empty() || size_only) &&
+        CountNeighbours(floor_points, label, static_cast<int>(k), c.box) >
+            std::max<double>(3, kNeighbourFraction * groups[k].size())) {
+      if (c.rejection.empty()) c.rejection = "not isolated";
+    } else {
+      c.near_miss = size_only;
+    }
   }
   std::vector<std::vector<int>> members = groups;
   MergeFragments(floor_points, &label, &members, &clusters);
@@ -293,9 +301,9 @@ void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_poin
   *members = std::move(kept_members);
 }
 
-std::string ObjectFinder::CheckRule(const ClusterBox& box) const {
+std::string ObjectFinder::CheckRule(const ClusterBox& box, double size_scale) const {
   const double low = options_.target_min_size_mm * (1 - options_.size_tolerance);
-  const double high = options_.target_max_size_mm * (1 + options_.size_tolerance);
+  const double high = options_.target_max_size_mm * (1 + options_.size_tolerance) * size_scale;
   const double horizontal = std::max(box.size_mm.x(), box.size_mm.y());
   if (box.size_mm.z() > high) return "too high";
   if (horizontal > high) return "too large";
@@ -369,12 +377,15 @@ void ObjectFinder::UpdateTracks(const FinderInput& input, const std::vector<Clus
     t.seen = t.matched && clusters[t.cluster].observed;
     if (!t.matched) {
       t.passes = false;
+      t.look_closer = false;
       ++t.unmatched_updates;
     } else {
       const Cluster& c = clusters[t.cluster];
       t.box = c.box;
       t.passes = c.rejection.empty();
       t.unmatched_updates = 0;
+      if (t.seen) t.nearest_seen_mm = std::min(t.nearest_seen_mm, (camera - c.box.centre_mm).norm());
+      t.look_closer = !t.passes && c.near_miss && t.nearest_seen_mm > options_.look_closer_beyond_mm;
       if (t.passes) t.passing_box = c.box;
       if (t.seen && c.in_view && t.passes) {
         t.rejected_run = 0;
@@ -406,11 +417,12 @@ void ObjectFinder::UpdateTracks(const FinderInput& input, const std::vector<Clus
 }
 
 bool ObjectFinder::IsCandidate(const Track& t) const {
-  return t.matched && t.passes && !t.views.empty() && t.missed_run < options_.lost_after_updates;
+  return t.matched && ((t.passes && !t.views.empty()) || t.look_closer) &&
+         t.missed_run < options_.lost_after_updates;
 }
 
 bool ObjectFinder::IsConfirmable(const Track& t) const {
-  if (!IsCandidate(t) || static_cast<int>(t.views.size()) < options_.min_views ||
+  if (!IsCandidate(t) || !t.passes || static_cast<int>(t.views.size()) < options_.min_views ||
       static_cast<int>(t.recent_centres.size()) < options_.min_views)
     return false;
   for (const auto& c : t.recent_centres)

@@ -31,7 +31,7 @@
 //     from a direction >= min_view_bearing_deg apart. A track is "missed" in an update in which its box is in view
 //     within max_view_distance_mm but its cluster is not observed (or gone).
 //  6. Candidate: a track whose cluster passes the rule now, with >= 1 view and missed fewer than lost_after_updates
-//     times in a row. Confirmable: a candidate with >= min_views views whose centre moved <= max_centre_motion_mm over
+//     times in a row; or, seen only from afar, fails only the size limits by a little (look closer, options). Confirmable: a candidate with >= min_views views whose centre moved <= max_centre_motion_mm over
 //     its last min_views passing views. Among several, the nearest to the robot (robot_xy_mm) wins, without a robot
 //     position the most views (then most points, then oldest track).
 //  7. States: SEARCHING (no candidate), CANDIDATE (the chosen candidate), CONFIRMED (latched: the track keeps
@@ -46,6 +46,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -88,6 +89,12 @@ struct ObjectFinderOptions {
   int lost_after_updates = 5;              // missed in-view updates before LOST (and before a candidate is dropped)
   double max_view_distance_mm = 3000.0;    // mm, farther targets are not expected to be seen (not missed)
   int drop_after_rejections = 5;           // observed in-view updates failing the rule that drop a confirmed target
+  // look closer: landmarks triangulated only from afar make an object look larger (room_05: a 258 x 218 mm box
+  // measured 359 x 250 mm from 2-3 m, its landmarks 20-30 mm outside its faces). An isolated cluster that fails
+  // only the size limits, by at most look_closer_margin, and was never observed from nearer than
+  // look_closer_beyond_mm is a candidate without views: the robot goes to look, and the rule decides from there.
+  double look_closer_beyond_mm = 1500.0;  // mm
+  double look_closer_margin = 0.25;       // fraction beyond the size range's upper end (after size_tolerance)
 };
 
 // True when usable; otherwise false with *why (all problems, "; "-separated).
@@ -206,12 +213,15 @@ class ObjectFinder {
     std::string last_rejection;  // the rule's reason in the latest of those updates ("too large", ...)
     std::vector<View> views;
     std::vector<Eigen::Vector3d> recent_centres;  // centres of the last min_views passing views
+    double nearest_seen_mm = std::numeric_limits<double>::infinity();  // nearest camera that observed it
+    bool look_closer = false;  // fails only the size limits by a little and was only seen from afar (options)
   };
   struct Cluster {
     ClusterBox box;
     std::string rejection;
     bool in_view = false;
     bool observed = false;
+    bool near_miss = false;  // isolated, fails only the size limits, by at most look_closer_margin
   };
 
   std::vector<char> CollectLandmarks(const FinderInput& input, std::vector<int>* valid);
@@ -220,7 +230,8 @@ class ObjectFinder {
                                     const std::vector<char>& fresh);
   void MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
                       std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const;
-  std::string CheckRule(const ClusterBox& box) const;
+  // The rule's first failing check ("" when it passes); size_scale widens the upper size limit.
+  std::string CheckRule(const ClusterBox& box, double size_scale = 1.0) const;
   // Clustered points outside `members` within clearance_mm of the box (floor frame).
   int CountNeighbours(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& label, int cluster,
                       const ClusterBox& box) const;

@@ -79,6 +79,10 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.Add("target-min-size", &f->target_min_size_mm, "mm, smallest target (largest horizontal extent and height)");
   p.Add("target-max-size", &f->target_max_size_mm, "mm, largest target (largest horizontal extent and height)");
   p.Add("size-tolerance", &f->size_tolerance, "fraction the measured size may leave the size range by, [0, 1)");
+  p.Add("look-closer-beyond", &f->look_closer_beyond_mm,
+        "mm: a cluster only seen from farther that fails just the size limits (by <= look-closer-margin) is a "
+        "candidate to look at closer (far views make objects look larger)");
+  p.Add("look-closer-margin", &f->look_closer_margin, "fraction beyond the size range a look-closer cluster may be, [0, 1]");
   p.Add("floor-contact", &f->floor_contact_mm, "mm, max height of a target's lowest landmark above the floor");
   p.Add("clearance", &f->clearance_mm, "mm, free space around a target (other landmarks there reject it)");
   p.Add("min-texture-density", &f->min_texture_density, "landmarks per 100 cm^2 of visible side area a target needs");
