@@ -1,5 +1,8 @@
 #include "common/options.h"
 
+#include <cctype>
+#include <cmath>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +31,15 @@ bool ParseInteger(const std::string& text, T* out) {
 }
 
 }  // namespace
+
+bool ParseFiniteNumber(const std::string& text, double* value) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (*end != '\0' || !std::isfinite(v)) return false;
+  *value = v;
+  return true;
+}
 
 OptionParser::OptionParser(std::string program, std::string description)
     : program_(std::move(program)), description_(std::move(description)) {}

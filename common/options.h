@@ -10,6 +10,10 @@
 
 namespace objscan {
 
+// A whole, finite number: strtod consumed every character ("2mm", "abc", "", "nan", "inf" are refused instead of
+// read as 2, 0 or NaN). For positional arguments of the tools; options go through OptionParser.
+bool ParseFiniteNumber(const std::string& text, double* value);
+
 class OptionParser {
  public:
   OptionParser(std::string program, std::string description);

@@ -87,4 +87,17 @@ TEST(OptionsTest, UsageAndEffectiveListEveryOption) {
 }
 
 }  // namespace
+TEST(ParseFiniteNumberTest, WholeFiniteNumbersOnly) {
+  double v = -1;
+  EXPECT_TRUE(ParseFiniteNumber("2.5", &v));
+  EXPECT_EQ(v, 2.5);
+  EXPECT_TRUE(ParseFiniteNumber("-1e-3", &v));
+  EXPECT_EQ(v, -1e-3);
+  for (const char* bad : {"", "2mm", "abc", "nan", "inf", " 1", "1 "}) {
+    v = 7;
+    EXPECT_FALSE(ParseFiniteNumber(bad, &v)) << bad;
+    EXPECT_EQ(v, 7) << bad;  // untouched
+  }
+}
+
 }  // namespace objscan

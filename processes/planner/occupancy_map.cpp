@@ -271,17 +271,16 @@ void OccupancyMap::Update() {
   const size_t n = state_.size();
   const double cell = options_.cell_mm;
   std::vector<float> squared;
+  // Distance (mm) from every cell to the nearest cell set in `sites` (kFar when none).
+  auto distance_to = [&](const std::vector<uint8_t>& sites, std::vector<float>* out) {
+    SquaredDistanceToSites(sites, size_, size_, &squared);
+    for (size_t i = 0; i < n; ++i) (*out)[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+  };
   if (landmarks_dirty_) {
-    SquaredDistanceToSites(obstacle_, size_, size_, &squared);
-    for (size_t i = 0; i < n; ++i) obstacle_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
+    distance_to(obstacle_, &obstacle_distance_);
     if (options_.free_support_mm > 0) {
-      SquaredDistanceToSites(floor_, size_, size_, &squared);
-      for (size_t i = 0; i < n; ++i) floor_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
-      if (any_remembered_floor_) {
-        SquaredDistanceToSites(remembered_floor_, size_, size_, &squared);
-        for (size_t i = 0; i < n; ++i)
-          remembered_floor_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
-      }
+      distance_to(floor_, &floor_distance_);
+      if (any_remembered_floor_) distance_to(remembered_floor_, &remembered_floor_distance_);
     }
   }
   std::vector<uint8_t> unknown(n, 0), unexplored(n, 0);
@@ -305,15 +304,11 @@ void OccupancyMap::Update() {
       unexplored[i] = 1;
     }
   }
-  SquaredDistanceToSites(unknown, size_, size_, &squared);
-  for (size_t i = 0; i < n; ++i) unknown_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
-  if (any_remembered_floor_) {
-    SquaredDistanceToSites(unexplored, size_, size_, &squared);
-    for (size_t i = 0; i < n; ++i)
-      unexplored_distance_[i] = squared[i] >= kFar ? kFar : std::sqrt(squared[i]) * cell;
-  } else {
+  distance_to(unknown, &unknown_distance_);
+  if (any_remembered_floor_)
+    distance_to(unexplored, &unexplored_distance_);
+  else
     unexplored_distance_ = unknown_distance_;
-  }
   const int w = size_ + 1;
   for (int y = 0; y < size_; ++y) {
     int32_t row = 0;

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "common/options.h"
 #include "tools/evaluate/evaluation.h"
 
 namespace {
@@ -68,15 +69,6 @@ bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& point
 }
 }  // namespace
 
-namespace {
-// A whole, finite number (strtod consumed every character), else false: "--threshold 2mm" or "abc" is refused
-// instead of read as 2 or 0.
-bool ParseNumberArg(const char* text, double* value) {
-  char* end = nullptr;
-  *value = std::strtod(text, &end);
-  return end != text && *end == '\0' && std::isfinite(*value);
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace objscan;
@@ -99,7 +91,7 @@ int main(int argc, char** argv) {
       if (a == "--no-scale")
         with_scale = false;
       else if (a == "--max-dt" && i + 1 < argc) {
-        if (!ParseNumberArg(argv[++i], &max_dt) || max_dt < 0) return Fail("--max-dt wants seconds >= 0, got " + std::string(argv[i]));
+        if (!ParseFiniteNumber(argv[++i], &max_dt) || max_dt < 0) return Fail("--max-dt wants seconds >= 0, got " + std::string(argv[i]));
       }
       else
         return Fail("unknown option " + a);
@@ -124,16 +116,16 @@ int main(int argc, char** argv) {
     for (int i = 4; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--threshold" && i + 1 < argc) {
-        if (!ParseNumberArg(argv[++i], &threshold) || !(threshold > 0))
+        if (!ParseFiniteNumber(argv[++i], &threshold) || !(threshold > 0))
           return Fail("--threshold wants a distance in mm > 0, got " + std::string(argv[i]));
       } else if (a == "--min-z" && i + 1 < argc) {
-        if (!ParseNumberArg(argv[++i], &min_z)) return Fail("--min-z wants a height in mm, got " + std::string(argv[i]));
+        if (!ParseFiniteNumber(argv[++i], &min_z)) return Fail("--min-z wants a height in mm, got " + std::string(argv[i]));
       }
       else if (a == "--visible-from" && i + 1 < argc)
         visible_from = argv[++i];
       else if (a == "--min-views" && i + 1 < argc) {
         double v = 0;
-        if (!ParseNumberArg(argv[++i], &v) || v < 1 || v != std::floor(v) || v > 1e6)
+        if (!ParseFiniteNumber(argv[++i], &v) || v < 1 || v != std::floor(v) || v > 1e6)
           return Fail("--min-views wants a whole number >= 1, got " + std::string(argv[i]));
         min_views = static_cast<int>(v);
       }

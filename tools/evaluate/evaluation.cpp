@@ -66,6 +66,7 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
   std::vector<StampedPose> sorted_truth = truth;
   std::sort(sorted_truth.begin(), sorted_truth.end(), [](auto& a, auto& b) { return a.t < b.t; });
   std::vector<Eigen::Isometry3d> est, tru;
+  std::vector<double> matched_t;
   for (const auto& e : estimated) {
     auto it = std::lower_bound(sorted_truth.begin(), sorted_truth.end(), e.t,
                                [](const StampedPose& p, double t) { return p.t < t; });
@@ -76,6 +77,7 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
     if (best && std::abs(best->t - e.t) <= max_dt_s) {
       est.push_back(e.world_from_camera);
       tru.push_back(best->world_from_camera);
+      matched_t.push_back(e.t);
     }
   }
   TrajectoryEvaluation r;
@@ -87,6 +89,9 @@ bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const st
     *error = "fewer than 3 matched poses, or degenerate (collinear) positions";
     return false;
   }
+  r.matched_t_s = std::move(matched_t);
+  for (size_t i = 0; i < est.size(); ++i)
+    r.matched_error.push_back((r.error.alignment * est[i].translation() - tru[i].translation()).norm());
   *out = r;
   return true;
 }

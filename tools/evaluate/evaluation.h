@@ -30,6 +30,8 @@ struct TrajectoryEvaluation {
   int num_matched = 0;             // estimated poses with a true pose within max_dt
   double registered_fraction = 0;  // num_matched / num_truth
   TrajectoryError error;           // after Sim(3) (or SE(3)) alignment of the matched poses
+  std::vector<double> matched_t_s;       // s, time of each matched estimated pose, in the estimate's order
+  std::vector<double> matched_error;     // position error of that pose after the alignment (input unit)
 };
 
 // Pairs poses by timestamp (nearest, |dt| <= max_dt_s) and evaluates them.

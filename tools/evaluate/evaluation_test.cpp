@@ -1,6 +1,8 @@
 #include "tools/evaluate/evaluation.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <unistd.h>
 
 #include <fstream>
@@ -52,6 +54,11 @@ TEST(EvaluationTest, TumRoundTripAndTimestampMatching) {
   // Without scale the halved trajectory cannot fit.
   ASSERT_TRUE(EvaluateTumTrajectories(est, read, false, 0.005, &e, &error));
   EXPECT_GT(e.error.ate_rmse, 100);
+  // Per matched pose: its time and its error after the alignment, whose largest is ate_max.
+  ASSERT_EQ(e.matched_t_s.size(), 25u);
+  ASSERT_EQ(e.matched_error.size(), 25u);
+  EXPECT_NEAR(e.matched_t_s[3], est[3].t, 1e-12);
+  EXPECT_NEAR(*std::max_element(e.matched_error.begin(), e.matched_error.end()), e.error.ate_max, 1e-6);
   std::remove(Temp("t.txt").c_str());
 }
 

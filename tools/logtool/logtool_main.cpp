@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "common/bus.h"
+#include "common/options.h"
 #include "procman/log_stats.h"
 #include "tools/logtool/log_compare.h"
 #include "tools/logtool/log_edit.h"
@@ -38,9 +39,8 @@ int Usage(const std::string& why) {
 }
 
 bool ParseSeconds(const std::string& text, double* out) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v < 0) return false;
+  double v = 0;
+  if (!objscan::ParseFiniteNumber(text, &v) || v < 0) return false;
   *out = v;
   return true;
 }
@@ -177,9 +177,8 @@ int main(int argc, char** argv) {
   }
   if (command == "compare-tracks" && argc >= 5) {
     objscan::TracksComparison r;
-    char* end = nullptr;
-    const double tolerance_px = std::strtod(argv[4], &end);
-    if (end == argv[4] || *end != '\0' || !(tolerance_px >= 0) || !std::isfinite(tolerance_px)) {
+    double tolerance_px = 0;
+    if (!objscan::ParseFiniteNumber(argv[4], &tolerance_px) || tolerance_px < 0) {
       std::fprintf(stderr, "error: compare-tracks: TOLERANCE_PX must be a number of pixels >= 0, got '%s'\n", argv[4]);
       return 2;
     }

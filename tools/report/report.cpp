@@ -167,19 +167,8 @@ ReportTrajectoryFigures AlignForReport(const std::vector<StampedPose>& estimate,
   f.scale = evaluation.error.scale;
   f.registered_fraction = evaluation.registered_fraction;
   for (auto& p : *aligned) p.world_from_camera = evaluation.error.alignment.Apply(p.world_from_camera);
-  // Per pose: the nearest true pose in time (truth sorted by time).
-  for (const auto& p : *aligned) {
-    auto it = std::lower_bound(truth.begin(), truth.end(), p.t,
-                               [](const StampedPose& q, double t) { return q.t < t; });
-    const StampedPose* best = nullptr;
-    for (auto c : {it, it == truth.begin() ? it : it - 1})
-      if (c != truth.end() && std::abs(c->t - p.t) <= kPairMaxDtS &&
-          (!best || std::abs(c->t - p.t) < std::abs(best->t - p.t)))
-        best = &*c;
-    if (!best) continue;
-    f.t_s.push_back(p.t);
-    f.error_mm.push_back((p.world_from_camera.translation() - best->world_from_camera.translation()).norm());
-  }
+  f.t_s = evaluation.matched_t_s;
+  f.error_mm = evaluation.matched_error;
   return f;
 }
 
