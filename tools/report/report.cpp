@@ -205,7 +205,9 @@ std::string RenderReportHtml(const ReportInputs& in) {
     rows.push_back({name + " scale to the truth", Num(f.scale, 5)});
     rows.push_back({name + " registered fraction", Num(f.registered_fraction, 4)});
   }
-  if (in.truth.empty()) rows.push_back({"ground truth", "none (not a simulator run): no errors shown"});
+  rows.push_back({"ground truth", in.truth.empty() ? "none: no errors shown"
+                                                  : std::to_string(in.truth.size()) + " poses from " +
+                                                        (in.truth_source.empty() ? "the run" : in.truth_source)});
   o << FigureTable(rows) << "\n";
   for (const auto& [caption, lines] : in.figures) o << "<h3>" << HtmlEscape(caption) << "</h3>" << FigureTable(lines);
 

@@ -28,7 +28,8 @@ struct ReportInputs {
   std::string status;                        // summary.json "status" ("" when unknown)
   std::vector<StampedPose> final_poses;      // trajectory.txt (TUM, mm)
   std::vector<StampedPose> online_poses;     // trajectory_online.txt
-  std::vector<StampedPose> truth;            // ground_truth/poses_gt.txt (simulator), empty otherwise
+  std::vector<StampedPose> truth;            // true poses (simulator, or a dataset's), empty when there are none
+  std::string truth_source;                  // where they came from, shown in the report
   FrameSeries frames;
   // Figures from other tools (objscan_evaluate's "key value" lines), shown as tables: {caption, lines}.
   std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> figures;

@@ -3,14 +3,18 @@
 #include <cmath>
 #include <map>
 
+#include "common/adapters.h"
 #include "common/bus.h"
 #include "common/lcm_log.h"
 #include "objscan/feature_tracks_t.hpp"
+#include "objscan/pose_t.hpp"
 
 namespace objscan {
 
-bool ReadFrameSeries(const std::string& log_path, FrameSeries* frames, std::string* damage, std::string* error) {
+bool ReadFrameSeries(const std::string& log_path, FrameSeries* frames, std::vector<StampedPose>* truth,
+                     std::string* damage, std::string* error) {
   *frames = FrameSeries{};
+  if (truth) truth->clear();
   LcmLogReader log;
   if (!log.Open(log_path, error)) return false;
   struct Frame {
@@ -35,6 +39,12 @@ bool ReadFrameSeries(const std::string& log_path, FrameSeries* frames, std::stri
       if (!DecodeMessage(e.data.data(), size, &msg, nullptr)) continue;
       it->second.tracks = msg.num_tracks;
       it->second.tracks_logged_us = e.timestamp_us;
+    } else if (e.channel == "GROUND_TRUTH_POSE" && truth) {
+      pose_t msg;
+      CameraPoseEstimate pose;
+      std::string why;
+      if (DecodeMessage(e.data.data(), size, &msg, nullptr) && PoseFromMessage(msg, &pose, &why))
+        truth->push_back({utime * 1e-6, pose.world_from_camera});
     } else if (e.channel == "CAMERA_POSE") {
       auto it = by_seq.find(seq);
       if (it != by_seq.end() && it->second.pose_logged_us < 0) it->second.pose_logged_us = e.timestamp_us;

@@ -132,7 +132,10 @@ int main(int argc, char** argv) {
   };
   trajectory("trajectory.txt", &in.final_poses);
   trajectory("trajectory_online.txt", &in.online_poses);
-  if (Exists(dir + "/ground_truth/poses_gt.txt")) trajectory("ground_truth/poses_gt.txt", &in.truth);
+  if (Exists(dir + "/ground_truth/poses_gt.txt")) {
+    trajectory("ground_truth/poses_gt.txt", &in.truth);
+    in.truth_source = "ground_truth/poses_gt.txt";
+  }
   if (Exists(dir + "/summary.json")) {
     in.summary_json = ReadText(dir + "/summary.json");
     in.status = SummaryStatus(in.summary_json);
@@ -143,11 +146,20 @@ int main(int argc, char** argv) {
   const std::string log = dir + "/session.lcmlog";
   if (Exists(log)) {
     std::string damage;
-    if (!objscan::ReadFrameSeries(log, &in.frames, &damage, &error)) {
+    std::vector<StampedPose> logged_truth;
+    if (!objscan::ReadFrameSeries(log, &in.frames, &logged_truth, &damage, &error)) {
       in.missing.push_back("session.lcmlog (unreadable: " + error + ")");
     } else {
       ++found;
       if (!damage.empty()) in.missing.push_back("part of session.lcmlog (damaged: " + damage + ")");
+      // No ground_truth/ folder (not the simulator): the true poses the driver published, e.g. a dataset's
+      // calibrated views.
+      if (in.truth.empty() && logged_truth.size() >= 3) {
+        std::sort(logged_truth.begin(), logged_truth.end(),
+                  [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+        in.truth = std::move(logged_truth);
+        in.truth_source = "GROUND_TRUTH_POSE in session.lcmlog";
+      }
     }
   } else {
     in.missing.push_back("session.lcmlog");

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <random>
 
+#include "common/adapters.h"
 #include "common/lcm_log.h"
 #include "objscan/feature_tracks_t.hpp"
 #include "objscan/image_t.hpp"
@@ -123,6 +124,12 @@ TEST(ReportTest, FrameSeriesComeFromTheSessionLog) {
     image.utime = utime;
     image.seq = i;
     put("CAMERA_IMAGE", logged, image);
+    CameraPoseEstimate truth_pose;
+    truth_pose.seq = i;
+    truth_pose.utime = utime;
+    truth_pose.world_from_camera.translation() = Eigen::Vector3d(100.0 * i, 0, 400);
+    pose_t truth_msg = PoseToMessage(truth_pose);
+    put("GROUND_TRUTH_POSE", logged, truth_msg);
     if (i == 2) continue;  // frame 2: no tracks, no pose
     feature_tracks_t tracks{};
     tracks.utime = utime;
@@ -141,7 +148,8 @@ TEST(ReportTest, FrameSeriesComeFromTheSessionLog) {
   ASSERT_TRUE(w.Close(&error)) << error;
   FrameSeries frames;
   std::string damage;
-  ASSERT_TRUE(ReadFrameSeries(path, &frames, &damage, &error)) << error;
+  std::vector<StampedPose> truth;
+  ASSERT_TRUE(ReadFrameSeries(path, &frames, &truth, &damage, &error)) << error;
   std::remove(path.c_str());
   EXPECT_EQ(damage, "");
   ASSERT_EQ(frames.t_s.size(), 5u);
@@ -151,6 +159,10 @@ TEST(ReportTest, FrameSeriesComeFromTheSessionLog) {
   EXPECT_NEAR(frames.tracks_latency_ms[4], 7.0, 1e-9);
   EXPECT_NEAR(frames.pose_latency_ms[4], 21.0, 1e-9);
   EXPECT_TRUE(std::isnan(frames.pose_latency_ms[2]));
+  // The driver's true poses (a dataset's calibrated views), stamped with their frame's time.
+  ASSERT_EQ(truth.size(), 5u);
+  EXPECT_NEAR(truth[3].t, 1.099999, 1e-6);
+  EXPECT_NEAR(truth[3].world_from_camera.translation().x(), 300.0, 1e-9);
 }
 
 }  // namespace
