@@ -38,7 +38,7 @@ class PointGrid {
   }
 
   // Nearest distance, searching rings up to max_rings cells away; +inf if nothing found. Cost grows with
-  // max_rings^4: keep it small and use NearestExact for points that may be far.
+  // max_rings^4: keep it small (common/kd_tree.h answers at any distance).
   double Nearest(const Eigen::Vector3d& q, int max_rings) const {
     const Eigen::Vector3i c = Cell(q);
     double best = std::numeric_limits<double>::infinity();
@@ -54,17 +54,6 @@ class PointGrid {
       if (best <= r * cell_) break;  // nothing in a further ring can be closer
     }
     return best;
-  }
-
-  // Exact nearest distance: the ring search near the query, then every point when nothing was found close by
-  // (far-off points, e.g. a model that is not aligned to the truth).
-  double NearestExact(const Eigen::Vector3d& q) const {
-    constexpr int kRings = 8;
-    const double near = Nearest(q, kRings);
-    if (near <= kRings * cell_) return near;
-    double best = std::numeric_limits<double>::infinity();
-    for (const auto& p : points_) best = std::min(best, (p - q).squaredNorm());
-    return std::sqrt(best);
   }
 
  private:

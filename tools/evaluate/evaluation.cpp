@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/kd_tree.h"
 #include "common/point_grid.h"
 #include "common/statistics.h"
 
@@ -535,9 +536,9 @@ SurfaceEvaluation EvaluateSurface(const std::vector<Eigen::Vector3d>& model,
                                   const std::vector<Eigen::Vector3d>& accuracy_truth,
                                   const std::vector<Eigen::Vector3d>& completeness_truth, double completeness_threshold,
                                   std::vector<double>* distances) {
-  const PointGrid truth_grid(accuracy_truth, std::max(completeness_threshold, 1e-9));
-  return Evaluate(model, completeness_truth, completeness_threshold, accuracy_truth.empty(), distances,
-                  [&](const Eigen::Vector3d& p) { return truth_grid.NearestExact(p); });
+  const KdTree truth_tree(accuracy_truth);
+  return Evaluate(model, completeness_truth, completeness_threshold, truth_tree.empty(), distances,
+                  [&](const Eigen::Vector3d& p) { return truth_tree.NearestDistance(p); });
 }
 
 bool JsonNumbers(const std::string& json_text, const std::string& key, int n, std::vector<double>* values) {
