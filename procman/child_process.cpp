@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <fstream>
@@ -66,6 +67,25 @@ bool ChildProcess::Start(std::string* error) {
   std::vector<char*> args;
   for (auto& a : argv_) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The environment is built before fork (no allocation in the child): ours, with env_'s keys replaced or added.
+  std::vector<std::string> environment;
+  for (char** e = environ; e != nullptr && *e != nullptr; ++e) {
+    const std::string entry(*e);
+    const std::string key = entry.substr(0, entry.find('='));
+    const bool replaced = std::any_of(env_.begin(), env_.end(),
+                                      [&](const std::string& v) { return v.compare(0, key.size() + 1, key + "=") == 0; });
+    if (!replaced) environment.push_back(entry);
+  }
+  environment.insert(environment.end(), env_.begin(), env_.end());
+  std::vector<char*> envp;
+  for (auto& e : environment) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+  const char* cwd = cwd_.empty() ? nullptr : cwd_.c_str();
+  if (cwd != nullptr && access(cwd, X_OK) != 0) {
+    close(log_fd);
+    *error = name_ + ": the working directory " + cwd_ + " does not exist or cannot be entered";
+    return false;
+  }
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
@@ -84,7 +104,11 @@ bool ChildProcess::Start(std::string* error) {
     if (devnull >= 0) dup2(devnull, STDIN_FILENO);
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
-    execvp(args[0], args.data());
+    if (cwd != nullptr && chdir(cwd) != 0) {
+      dprintf(STDERR_FILENO, "%s: cannot change to the working directory %s\n", name_.c_str(), cwd);
+      _exit(126);
+    }
+    execvpe(args[0], args.data(), envp.data());
     _exit(127);
   }
   setpgid(pid, pid);
@@ -118,6 +142,11 @@ std::string ChildProcess::DescribeExit() const {
   if (term_signal_ != 0)
     return "was killed by signal " + std::to_string(term_signal_) + " (" + SignalName(term_signal_) + ")";
   return "exited with code " + std::to_string(exit_code_);
+}
+
+bool ChildProcess::Signal(int sig) {
+  if (!Running()) return false;
+  return kill(-pid_, sig) == 0;
 }
 
 bool ChildProcess::StopWith(int sig, int timeout_ms) {

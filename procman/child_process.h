@@ -21,6 +21,9 @@ class ChildProcess {
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
 
+  // Before Start: the working directory ("" = this process's) and KEY=VALUE variables added to the environment.
+  void SetWorkingDirectory(std::string dir) { cwd_ = std::move(dir); }
+  void SetEnvironment(std::vector<std::string> env) { env_ = std::move(env); }
   // Starts the process. Returns false with *error when it cannot be started (fork failure, or the executable does
   // not exist / is not executable: checked before fork so the error is clear).
   bool Start(std::string* error);
@@ -28,6 +31,8 @@ class ChildProcess {
   bool Running();
   // Sends `signal` to the process group, waits up to timeout_ms for it to exit. Returns true once exited.
   bool StopWith(int signal, int timeout_ms);
+  // Sends `signal` to the process group without waiting. False when it is not running.
+  bool Signal(int signal);
   // SIGINT, then SIGTERM, then SIGKILL, each with the grace period.
   void Stop(int grace_ms);
 
@@ -48,6 +53,8 @@ class ChildProcess {
   std::string name_;
   std::vector<std::string> argv_;
   std::string log_path_;
+  std::string cwd_;
+  std::vector<std::string> env_;
   pid_t pid_ = -1;
   bool exited_ = false;
   int exit_code_ = -1;

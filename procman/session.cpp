@@ -1,5 +1,7 @@
 #include "procman/session.h"
 
+#include "procman/config.h"
+
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -212,34 +214,11 @@ bool ParseProcessList(const std::string& text, std::vector<SessionProcess>* proc
   while (std::getline(in, line)) {
     ++line_number;
     std::vector<std::string> words;
-    std::string word;
-    char quote = 0;
-    bool in_word = false;
-    for (char ch : line) {
-      if (quote) {
-        if (ch == quote)
-          quote = 0;
-        else
-          word += ch;
-      } else if (ch == '\'' || ch == '"') {
-        quote = ch;
-        in_word = true;
-      } else if (ch == '#' && !in_word) {
-        break;
-      } else if (ch == ' ' || ch == '\t') {
-        if (in_word) words.push_back(word);
-        word.clear();
-        in_word = false;
-      } else {
-        word += ch;
-        in_word = true;
-      }
-    }
-    if (quote) {
-      *error = "line " + std::to_string(line_number) + ": unterminated quote";
+    std::string split_error;
+    if (!SplitWords(line, &words, &split_error)) {
+      *error = "line " + std::to_string(line_number) + ": " + split_error;
       return false;
     }
-    if (in_word) words.push_back(word);
     if (words.empty()) continue;
     if (words.size() < 3 || (words[1] != "driver" && words[1] != "processor")) {
       *error = "line " + std::to_string(line_number) + ": expected 'NAME driver|processor COMMAND ARGS...'";
