@@ -7,6 +7,8 @@
 #include "objscan/image_t.hpp"
 #include "objscan/landmarks_t.hpp"
 #include "objscan/process_status_t.hpp"
+#include "objscan/procman_deputy_t.hpp"
+#include "objscan/procman_orders_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 
 namespace objscan {
@@ -146,6 +148,39 @@ bool CheckProcessStatusMessageSize(const void* data, int size, std::string* why)
   // dropped_inputs, latency_p50_ms, latency_p99_ms
   if (!r.Skip(3 * 8)) return Fail(why, "truncated");
   if (!Count(r, "value", &values, why) || !Strings(r, values, 8, "values", size, why)) return false;
+  if (r.remaining() != 0) return Fail(why, std::to_string(r.remaining()) + " bytes after the message");
+  return true;
+}
+
+bool CheckProcmanOrdersMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != procman_orders_t::getHash()) return Fail(why, "wrong type");
+  // utime, seq, sheriff, host, config_hash
+  if (!r.Skip(8 + 8) || !r.String() || !r.String() || !r.String()) return Fail(why, "truncated");
+  int32_t n = 0;
+  // name[n], then run (1), run_id (4), follow_output (1) per process
+  if (!Count(r, "process", &n, why) || !Strings(r, n, 1 + 4 + 1, "processes", size, why)) return false;
+  if (r.remaining() != 0) return Fail(why, std::to_string(r.remaining()) + " bytes after the message");
+  return true;
+}
+
+bool CheckProcmanDeputyMessageSize(const void* data, int size, std::string* why) {
+  WireReader r(data, size);
+  int64_t hash = 0;
+  if (!r.Int64(&hash)) return Fail(why, "truncated");
+  if (hash != procman_deputy_t::getHash()) return Fail(why, "wrong type");
+  // utime, seq, host, config_hash, orders_accepted, orders_refused, last_refusal
+  if (!r.Skip(8 + 8) || !r.String() || !r.String() || !r.Skip(8 + 8) || !r.String()) return Fail(why, "truncated");
+  int32_t n = 0;
+  if (!Count(r, "process", &n, why)) return false;
+  if (n > r.remaining() / 12)  // three strings of at least 4 bytes each per process
+    return Fail(why, "declared " + std::to_string(n) + " processes in " + std::to_string(size) + " bytes");
+  // name, group, message; then state 1, desired_run 1, desired_run_id, run_id, pid, exit_code, exit_signal,
+  // restarts 4 each, cpu_percent 4, rss_kb 8, uptime_s 4
+  if (!Strings(r, 3 * n, 0, "process strings", size, why)) return false;
+  if (!r.Skip(int64_t{42} * n)) return Fail(why, "truncated");
   if (r.remaining() != 0) return Fail(why, std::to_string(r.remaining()) + " bytes after the message");
   return true;
 }

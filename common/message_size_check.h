@@ -18,6 +18,8 @@ class feature_tracks_t;
 class image_t;
 class landmarks_t;
 class process_status_t;
+class procman_deputy_t;
+class procman_orders_t;
 class voxel_map_t;
 
 // landmarks_t: hash, utime, seq, frame, num_landmarks n >= 0, then exactly 31 * n bytes (id 8, position 12,
@@ -43,6 +45,12 @@ bool CheckImageMessageSize(const void* data, int size, std::string* why);
 // fields, num_values m >= 0 with m strings and 8 * m bytes, and nothing after.
 bool CheckProcessStatusMessageSize(const void* data, int size, std::string* why);
 
+// procman_orders_t: hash, utime, seq, 3 strings, num_processes n >= 0, n strings, then exactly 6 * n bytes.
+bool CheckProcmanOrdersMessageSize(const void* data, int size, std::string* why);
+// procman_deputy_t: hash, utime, seq, 2 strings, 2 counters, 1 string, num_processes n >= 0, 3 * n strings, then
+// exactly 42 * n bytes.
+bool CheckProcmanDeputyMessageSize(const void* data, int size, std::string* why);
+
 // The check of a type: the ones above, none (true) for types without variable-length arrays.
 template <class Msg>
 bool CheckMessageSize(const Msg*, const void*, int, std::string*) {
@@ -65,6 +73,13 @@ inline bool CheckMessageSize(const image_t*, const void* d, int n, std::string* 
 }
 inline bool CheckMessageSize(const process_status_t*, const void* d, int n, std::string* w) {
   return CheckProcessStatusMessageSize(d, n, w);
+}
+
+inline bool CheckMessageSize(const procman_orders_t*, const void* d, int n, std::string* w) {
+  return CheckProcmanOrdersMessageSize(d, n, w);
+}
+inline bool CheckMessageSize(const procman_deputy_t*, const void* d, int n, std::string* w) {
+  return CheckProcmanDeputyMessageSize(d, n, w);
 }
 
 // Decodes a whole message of type Msg after its size check; false with *why (may be null) otherwise.

@@ -11,6 +11,8 @@
 #include "objscan/landmarks_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/process_status_t.hpp"
+#include "objscan/procman_deputy_t.hpp"
+#include "objscan/procman_orders_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 
 namespace objscan {
@@ -128,6 +130,65 @@ TEST(MessageSizeCheck, ProcessStatusStringArraysMustFit) {
   EXPECT_NE(why.find("declared 268435456 values"), std::string::npos) << why;
   process_status_t out;
   EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &out, &why));
+}
+
+// The procman's orders and reports: a forged process count is refused before any allocation.
+TEST(MessageSizeCheck, ProcmanOrdersAndReportsCountsMustFit) {
+  procman_orders_t o{};
+  o.sheriff = "s";
+  o.host = "robot";
+  o.config_hash = "0123456789abcdef";
+  o.num_processes = 2;
+  o.name = {"tracker", "robot_sim"};
+  o.run = {1, 0};
+  o.run_id = {3, 4};
+  o.follow_output = {0, 1};
+  std::vector<uint8_t> b = Encode(o);
+  std::string why;
+  procman_orders_t decoded;
+  EXPECT_TRUE(DecodeMessage(b.data(), static_cast<int>(b.size()), &decoded, &why)) << why;
+  EXPECT_EQ(decoded.name[1], "robot_sim");
+  const size_t count_at = 8 + 16 + (4 + 2) + (4 + 6) + (4 + 17);
+  Poke32(&b, count_at, 1 << 29);
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &decoded, &why));
+  EXPECT_NE(why.find("declared 536870912 processes"), std::string::npos) << why;
+  Poke32(&b, count_at, -1);
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &decoded, &why));
+  EXPECT_NE(why.find("negative process count"), std::string::npos) << why;
+
+  procman_deputy_t d{};
+  d.host = "robot";
+  d.config_hash = "0123456789abcdef";
+  d.last_refusal = "";
+  d.num_processes = 1;
+  d.name = {"tracker"};
+  d.group = {"robot"};
+  d.message = {"started run 3"};
+  d.state = {1};
+  d.desired_run = {1};
+  d.desired_run_id = {3};
+  d.run_id = {3};
+  d.pid = {4242};
+  d.exit_code = {0};
+  d.exit_signal = {0};
+  d.restarts = {0};
+  d.cpu_percent = {12.5f};
+  d.rss_kb = {20480};
+  d.uptime_s = {1.5f};
+  b = Encode(d);
+  procman_deputy_t report;
+  EXPECT_TRUE(DecodeMessage(b.data(), static_cast<int>(b.size()), &report, &why)) << why;
+  EXPECT_EQ(report.pid[0], 4242);
+  const size_t n_at = 8 + 16 + (4 + 6) + (4 + 17) + 16 + (4 + 1);
+  Poke32(&b, n_at, 1 << 28);
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &report, &why));
+  EXPECT_NE(why.find("declared 268435456 processes"), std::string::npos) << why;
+  Poke32(&b, n_at, 2);  // more than the bytes hold
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &report, &why));
+  b = Encode(d);
+  b.push_back(0);
+  EXPECT_FALSE(DecodeMessage(b.data(), static_cast<int>(b.size()), &report, &why));
+  EXPECT_NE(why.find("1 bytes after the message"), std::string::npos) << why;
 }
 
 // Bus::SubscribeMessage decodes through DecodeMessage: a forged message reaches on_malformed with the reason.

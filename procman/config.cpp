@@ -262,7 +262,7 @@ bool ResolveCommand(const ProcmanEntry& entry, const std::map<std::string, std::
   std::string missing, text;
   auto undefined = [&](const std::string& field) {
     *error = "process " + entry.name + " (line " + std::to_string(entry.line) + "): " + field + " uses ${" + missing +
-             "}, which this deputy was not given (--var " + missing + "=...)";
+             "}, which this deputy was not given (add " + missing + "=... to its command line)";
     if (missing.rfind("${", 0) == 0)
       *error = "process " + entry.name + " (line " + std::to_string(entry.line) + "): " + field + ": " + missing;
     return false;

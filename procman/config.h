@@ -13,9 +13,10 @@
 //     stop_signal = SIGINT       the signal that asks it to stop: SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1,
 //                                SIGUSR2 or SIGKILL (default SIGINT)
 //     grace_s = 5                s between the stop signal and SIGKILL (0.1 to 600, default 5)
-//     after = NAME...            start only once these processes have published PROCESS_STATUS (the sheriff waits)
+//     after = NAME...            start only once these have published PROCESS_STATUS since their start (the
+//                                sheriff waits; name only objscan processes: lcm-logger publishes none)
 // ${NAME} in command, cwd and env is replaced when the entry is resolved on its host (ResolveCommand) by the
-// variables that host's deputy was given (e.g. ${BIN}, ${LCM_URL}, ${OUT}): paths may differ per host, the file and
+// variables that host's deputy was given as KEY=VALUE (e.g. ${BIN}, ${LCM_URL}, ${OUT}): paths may differ per host, the file and
 // its hash do not.
 #pragma once
 

@@ -69,7 +69,7 @@ TEST(ProcmanConfig, ResolvesVariablesPerHostAndNamesAMissingOne) {
   EXPECT_FALSE(ResolveCommand(*c.Find("tracker"), {{"BIN", "/b"}}, &r, &error));
   EXPECT_NE(error.find("${LCM_URL}"), std::string::npos) << error;
   EXPECT_NE(error.find("line 7"), std::string::npos) << error;
-  EXPECT_NE(error.find("--var LCM_URL="), std::string::npos) << error;
+  EXPECT_NE(error.find("add LCM_URL=... to its command line"), std::string::npos) << error;
 }
 
 TEST(ProcmanConfig, BadFilesGiveTheLineAndWhatIsWrong) {
