@@ -119,6 +119,8 @@ class KltTracker {
 
   // Drops every track (ids keep counting up; they are never reused).
   void Reset();
+  // Before the first frame: the first track id (a tracker restarted mid-session starts above its predecessor's ids).
+  void set_first_id(int64_t first_id) { next_id_ = first_id; }
 
   // Reference template of a track (opaque here; defined and used in the .cpp).
   struct Anchor;

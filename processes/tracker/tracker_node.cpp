@@ -184,6 +184,14 @@ void TrackerNode::OnImage(const image_t& msg) {
     expected_width_ = frame.image.cols;
     expected_height_ = frame.image.rows;
   }
+  if (frames_tracked_ == 0 && msg.seq > 0) {
+    // Joining a stream under way (a restarted tracker, a log cut): track ids from seq << 32, above every id a
+    // tracker that started at an earlier frame can have given (it would need 2^32 tracks per frame between), so
+    // the pose solver never takes a new track for an old one. A stream from seq 0 keeps ids 0, 1, 2, ...
+    tracker_.set_first_id(msg.seq << 32);
+    LogInfo("first frame seq " + std::to_string(msg.seq) + ": joining a stream under way, track ids from " +
+            std::to_string(msg.seq << 32));
+  }
   TrackFrame tracks;
   const int64_t track_start_us = MonotonicMicros();
   try {

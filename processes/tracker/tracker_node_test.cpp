@@ -155,6 +155,31 @@ TEST_F(TrackerNodeTest, TracksFramesAndAnswersEndOfStream) {
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 
+// A tracker restarted mid-session (its first frame has seq > 0) gives ids its predecessor cannot have given.
+TEST_F(TrackerNodeTest, ATrackerJoiningAStreamUnderWayGivesIdsAboveAnyEarlierOnes) {
+  Start();
+  PublishInfo(kW, kH);
+  for (int64_t s = 0; s < 3; ++s) Publish(Frame(s));
+  Drain();
+  ASSERT_EQ(tracks_.size(), 3u);
+  int64_t earlier_max = 0;
+  for (const auto& t : tracks_)
+    for (int64_t id : t.track_id) earlier_max = std::max(earlier_max, id);
+  EXPECT_LT(earlier_max, 1000);  // from seq 0: ids 0, 1, 2, ...
+  // The restarted tracker: a new process (a new node on a new bus), first frame 40.
+  node_.reset();
+  tracks_.clear();
+  SetUp();
+  Start();
+  PublishInfo(kW, kH);
+  Publish(Frame(40));
+  Publish(Frame(41));
+  Drain();
+  ASSERT_EQ(tracks_.size(), 2u);
+  for (const auto& t : tracks_)
+    for (int64_t id : t.track_id) EXPECT_GE(id, int64_t{40} << 32);
+}
+
 TEST_F(TrackerNodeTest, EndOfStreamWithoutExitKeepsRunning) {
   options_.exit_when_finished = false;
   Start();

@@ -11,6 +11,7 @@
 //   compare-tracks A B TOL_PX                FEATURE_TRACKS of B against reference A; prints figures
 // Exit status: 0 done; 1 an error, or an input was damaged (the output then holds every readable event and the
 // damage is printed), or nothing was selected; 2 a usage error.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,6 +23,7 @@
 #include "procman/log_stats.h"
 #include "tools/logtool/log_compare.h"
 #include "tools/logtool/log_edit.h"
+#include "tools/report/report_log.h"
 
 namespace {
 
@@ -31,6 +33,8 @@ const char* const kUsage =
     "           --sensors: what the drivers published, to play into live processes with lcm-logplayer)\n"
     "       objscan log cut IN OUT [--from S] [--to S]             (seconds from the log's first event)\n"
     "       objscan log merge OUT IN...\n"
+    "       objscan log latency LOG   (camera image -> tracks and -> pose, per frame, as the logger received them:\n"
+    "           p50 / p90 / p99 / max ms; across hosts, log on the host that sees the poses)\n"
     "       objscan log count LOG | compare-bytes A B [SKIP_CHANNELS] | compare-tracks A B TOLERANCE_PX\n";
 
 int Usage(const std::string& why) {
@@ -142,6 +146,38 @@ int main(int argc, char** argv) {
   if (command == "filter" || command == "cut") return FilterOrCut(argc, argv);
   if (command == "merge") return Merge(argc, argv);
   std::string error;
+  if (command == "latency") {
+    if (argc != 3) return Usage("latency takes one log");
+    objscan::FrameSeries frames;
+    std::string damage;
+    if (!objscan::ReadFrameSeries(argv[2], &frames, nullptr, &damage, &error)) {
+      std::fprintf(stderr, "error: %s\n", error.c_str());
+      return 1;
+    }
+    if (!damage.empty()) std::fprintf(stderr, "warning: %s: %s (latencies of the readable part)\n", argv[2], damage.c_str());
+    const size_t images = frames.t_s.size();
+    int with_any = 0;
+    for (const auto* series : {&frames.tracks_latency_ms, &frames.pose_latency_ms}) {
+      std::vector<double> v;
+      for (double ms : *series)
+        if (std::isfinite(ms)) v.push_back(ms);
+      const char* name = series == &frames.tracks_latency_ms ? "image_to_tracks" : "image_to_pose";
+      if (v.empty()) {
+        std::printf("%-16s frames 0 of %zu\n", name, images);
+        continue;
+      }
+      ++with_any;
+      std::sort(v.begin(), v.end());
+      auto q = [&](double f) { return v[std::min(v.size() - 1, static_cast<size_t>(f * static_cast<double>(v.size())))]; };
+      std::printf("%-16s frames %zu of %zu  p50 %.1f  p90 %.1f  p99 %.1f  max %.1f ms\n", name, v.size(), images, q(0.5),
+                  q(0.9), q(0.99), v.back());
+    }
+    if (images == 0) {
+      std::fprintf(stderr, "error: %s has no CAMERA_IMAGE\n", argv[2]);
+      return 1;
+    }
+    return with_any > 0 ? 0 : 1;
+  }
   if (command == "count") {
     std::map<std::string, objscan::ChannelStats> stats;
     if (!objscan::ReadLogStats(argv[2], &stats, &error)) {
