@@ -3,13 +3,21 @@
 # (issue 24) to stdout and to OUT/rooms.md: per room the target, the outcome, when it was confirmed, the centre
 # error against the truth (after the trajectory's Sim(3)), collisions, path, frames, wall time, and the model against
 # the target's whole surface above 10 mm, aligned on the whole trajectory (the issue's figure) and on the modeling
-# segment alone. Usage: scripts/rooms_table.sh [--score-only] [OUT [ROOM...]] (default out/rooms, all 10);
-# --score-only scores the runs already in OUT again without running them.
+# segment alone. Usage: scripts/rooms_table.sh [--score-only] [--keep-logs] [OUT [ROOM...]] (default out/rooms, all
+# 10); --score-only scores the runs already in OUT again without running them; each room's session.lcmlog (4-6 GB)
+# is deleted once the room is scored (its report.html is written already) unless --keep-logs.
 # Each room runs live in its own network namespace (root), as fast as the pipeline goes (--fast), 9000-frame budget.
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-SCORE_ONLY=0
-if [ "${1:-}" = "--score-only" ]; then SCORE_ONLY=1; shift; fi
+SCORE_ONLY=0 KEEP_LOGS=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --score-only) SCORE_ONLY=1; shift ;;
+    --keep-logs) KEEP_LOGS=1; shift ;;
+    -*) echo "rooms_table.sh: unknown option $1 (usage: [--score-only] [--keep-logs] [OUT [ROOM...]])" >&2; exit 2 ;;
+    *) break ;;
+  esac
+done
 OUT="${1:-$ROOT/out/rooms}"; shift || true
 ROOMS=("$@")
 [ ${#ROOMS[@]} -gt 0 ] || ROOMS=($(cd "$ROOT/drivers/robot_sim/scenes/rooms" && ls room_*.scene | sed 's/\.scene$//'))
@@ -98,5 +106,6 @@ for room in "${ROOMS[@]}"; do
   ip netns delete "$ns"
   echo "$wall" > "$d/.wall_s"
   score "$room" "$wall"
+  [ "$KEEP_LOGS" = 1 ] || rm -f "$d/session.lcmlog"
 done
 echo "table: $table"
