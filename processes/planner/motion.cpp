@@ -129,14 +129,24 @@ bool SweepSafe(const OccupancyMap& map, const BasePose& base, const Velocity& v,
   const double dt = horizon_s / steps;
   BasePose pose = base;
   double previous = Margin(map, base.position());
+  auto obstacle_distance = [&](const Eigen::Vector2d& p) {
+    int index;
+    return map.IndexOf(p, &index) ? map.ObstacleDistanceMm(index) : -1e9;
+  };
+  double previous_obstacle = obstacle_distance(base.position());
   for (int i = 0; i < steps; ++i) {
     pose = Integrate(pose, v, dt);
     if (start_safe) {
       if (!map.FootprintSafe(pose.position())) return false;
     } else {
-      const double m = Margin(map, pose.position());  // leaving an unsafe spot: never closer
+      // Leaving an unsafe spot: never closer to what makes it unsafe, and never closer to an obstacle within the
+      // footprint's reach (the margin alone may be the unknown floor's, which moving toward an obstacle the base
+      // is touching does not change: the toy room's base pushed 9 s against a box it had felt).
+      const double m = Margin(map, pose.position()), o = obstacle_distance(pose.position());
       if (m < previous) return false;
+      if (o < previous_obstacle && o < map.SafeObstacleDistanceMm()) return false;
       previous = m;
+      previous_obstacle = o;
     }
   }
   return true;

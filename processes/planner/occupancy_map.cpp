@@ -99,6 +99,7 @@ OccupancyMap::OccupancyMap(const OccupancyMapOptions& options) : options_(option
   stood_.assign(n, 0);
   obstacle_.assign(n, 0);
   remembered_.assign(n, 0);
+  felt_.assign(n, 0);
   remembered_floor_.assign(n, 0);
   floor_.assign(n, 0);
   state_.assign(n, State::kUnknown);
@@ -200,6 +201,17 @@ void OccupancyMap::SetLandmarks(const std::vector<MapLandmark>& landmarks) {
       if (!obstacle_[i]) obstacle_[i] = 1;
     }
   }
+  for (size_t i = 0; i < felt_.size() && felt_cells_ > 0; ++i)
+    if (felt_[i] && !obstacle_[i]) obstacle_[i] = 1;
+  landmarks_dirty_ = true;
+}
+
+void OccupancyMap::MarkFelt(const Eigen::Vector2d& p) {
+  int index;
+  if (!IndexOf(p, &index) || felt_[index]) return;
+  felt_[index] = 1;
+  ++felt_cells_;
+  if (!obstacle_[index]) obstacle_[index] = 1;
   landmarks_dirty_ = true;
 }
 

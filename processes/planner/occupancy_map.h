@@ -80,6 +80,10 @@ class OccupancyMap {
   int remembered_cells() const { return remembered_cells_; }  // remembered obstacle cells not cleared yet
   void MarkView(const Eigen::Isometry3d& world_from_camera, const CameraIntrinsics& camera);
   void MarkFootprint(const Eigen::Vector2d& position_mm);
+  // The base touched something here that the landmarks do not show (an untextured object has none): the cell is an
+  // obstacle for the rest of the mission (no later landmark set clears it). Ignored outside the map.
+  void MarkFelt(const Eigen::Vector2d& position_mm);
+  int felt_cells() const { return felt_cells_; }
   // Recomputes states and distance fields when an input changed since the last call.
   void Update();
 
@@ -119,7 +123,8 @@ class OccupancyMap {
   OccupancyMapOptions options_;
   int size_ = 0;      // cells per side
   double origin_ = 0; // mm, world x (= y) of the map's corner
-  std::vector<uint8_t> seen_, stood_, obstacle_, floor_, remembered_, remembered_floor_;
+  std::vector<uint8_t> seen_, stood_, obstacle_, floor_, remembered_, remembered_floor_, felt_;
+  int felt_cells_ = 0;
   bool any_remembered_floor_ = false;
   int remembered_cells_ = 0;  // remembered obstacle cells not cleared yet
   std::vector<State> state_;

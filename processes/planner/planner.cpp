@@ -250,6 +250,44 @@ std::vector<std::string> Planner::TakeEvents() {
   return out;
 }
 
+// A base driven for a second whose odometry moved under a quarter of what was asked (and under 20 mm) stands against
+// something: the simulator stops a base that touches an object, a real one stalls or its bumper stops it. What it
+// touched is not in the landmarks (an untextured object has none: room_05's base touched a plain cylinder 6 times,
+// room_02's a plain sphere), so the cell ahead of the footprint (behind it when reversing) is marked felt: an
+// obstacle for the rest of the mission, which paths and the safety check then keep clear of.
+void Planner::CheckContact(double dt) {
+  if (!have_odometry_base_ || !have_base_) return;
+  const bool driving = std::abs(commanded_v_mm_s_) > 20;
+  const double moved = (odometry_base_.position() - contact_check_position_).norm();
+  if (!driving || contact_check_utime_ < 0 || moved >= 20) {
+    contact_check_position_ = odometry_base_.position();
+    contact_check_utime_ = now_;
+    contact_expected_mm_ = 0;
+    return;
+  }
+  contact_expected_mm_ += std::abs(commanded_v_mm_s_) * dt;
+  if (now_ - contact_check_utime_ < kSecond || moved >= 0.25 * contact_expected_mm_) return;
+  const double sign = commanded_v_mm_s_ > 0 ? 1.0 : -1.0;
+  const double reach = options_.map.footprint_radius_mm + 0.5 * options_.map.cell_mm;
+  const Eigen::Vector2d ahead = sign * Eigen::Vector2d(std::cos(base_.theta_rad), std::sin(base_.theta_rad));
+  const Eigen::Vector2d at = base_.position() + reach * ahead;
+  // Where on the front the footprint touched is unknown: the arc of +-40 deg ahead (about 300 mm wide) is marked,
+  // or the robot slides along and touches the same object a cell further (toy room: 11 contacts with one cell each).
+  for (double a = -40 * kDeg; a <= 40 * kDeg + 1e-9; a += 10 * kDeg)
+    map_.MarkFelt(base_.position() + reach * Eigen::Vector2d(std::cos(a) * ahead.x() - std::sin(a) * ahead.y(),
+                                                             std::sin(a) * ahead.x() + std::cos(a) * ahead.y()));
+  ++contacts_;
+  char text[200];
+  std::snprintf(text, sizeof(text),
+                "contact (%s): driven %.0f mm in %.1f s, moved %.0f mm: something the map does not show at (%.0f, "
+                "%.0f) mm, marked as an obstacle",
+                activity_.c_str(), contact_expected_mm_, (now_ - contact_check_utime_) * 1e-6, moved, at.x(), at.y());
+  Event(text);
+  contact_check_position_ = odometry_base_.position();
+  contact_check_utime_ = now_;
+  contact_expected_mm_ = 0;
+}
+
 bool Planner::HeldLongerThan(int64_t us) const { return blocked_since_ >= 0 && now_ - blocked_since_ > us; }
 
 bool Planner::Stuck() const {
@@ -326,6 +364,7 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
     }
   }
   map_.MarkFootprint(base_.position());
+  CheckContact(dt);
   map_.Update();
   if (confirmed_ && frames_ % 30 == 0) coverage_.Update();  // ~1 Hz for the status
   dt_ = dt;
@@ -477,7 +516,8 @@ Planner::Motion Planner::StartArc() {
     has_fixation_ = true;
   }
   const double travelled = (base_.position() - start_position_).norm();
-  if (travelled >= 0.8 * options_.start_free_mm || PhaseSeconds() > 3 * options_.start_free_mm / kStartArcSpeed) {
+  if (travelled >= 0.8 * options_.start_free_mm || PhaseSeconds() > 3 * options_.start_free_mm / kStartArcSpeed ||
+      contacts_ > 0) {  // the floor ahead of the start was not free after all
     explore_step_ = ExploreStep::kFrontier;
     return Frontier();
   }
@@ -1214,6 +1254,7 @@ PlanSummary Planner::Summary() const {
   s.target = target_;
   s.confirmed_seq = confirmed_seq_;
   s.safety_stops = safety_stops_;
+  s.contacts = contacts_;
   s.orbit_glances = glances_;
   s.relocalizations = relocalizations_;
   s.map_restarts = map_restarts_;

@@ -134,6 +134,7 @@ struct PlanSummary {
   int orbit_glances = 0;              // ORBIT looked at a blocked arc ahead (target out of view meanwhile)
   int relocalizations = 0;            // times the base retraced its trail for a new map after the pose was lost
   int map_restarts = 0;               // landmark sets under half the one before (a restarted, unjoined map)
+  int contacts = 0;                   // times the base was driven but its odometry stood: obstacles felt, not seen
 };
 
 class Planner {
@@ -282,6 +283,13 @@ class Planner {
   Eigen::Vector2d progress_position_ = Eigen::Vector2d::Zero();
   int64_t progress_utime_ = 0;
   double commanded_v_mm_s_ = 0;
+  // Contact: the odometry stood still while the base was driven (CheckContact). Odometry position when the current
+  // check began, its time, and the distance the commands asked for since.
+  Eigen::Vector2d contact_check_position_ = Eigen::Vector2d::Zero();
+  int64_t contact_check_utime_ = -1;
+  double contact_expected_mm_ = 0;
+  int contacts_ = 0;
+  void CheckContact(double dt);
   double last_step_ms_ = 0, last_next_view_ms_ = 0;
 
   // target

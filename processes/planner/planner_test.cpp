@@ -201,6 +201,38 @@ TEST(PlannerClosedLoopTest, ExploresFindsOrbitsAddsViewsAndFinishes) {
   EXPECT_GE(log.summary.max_disagreement.distance_mm, log.true_disagreement_mm - 2.0);
 }
 
+// An object the sparse map never sees (no landmarks at all, as a plain untextured one) stands in the robot's way:
+// the base is stopped against it (the simulator's contact), the planner feels it (odometry still while driving),
+// marks it as an obstacle and goes around it instead of pushing again and again (room_05: 6 contacts with a plain
+// cylinder, room_02: a plain sphere).
+TEST(PlannerClosedLoopTest, AnObstacleTheMapCannotSeeIsFeltOnceAndAvoided) {
+  const PlannerOptions options = TestOptions();
+  toy::Room room = toy::MakeLivingRoom(true);
+  const toy::ToyWorld probe(room, options.robot);
+  const BasePose start = probe.truth();
+  for (double ahead : {650.0, 1600.0}) {  // two invisible boxes on the start heading
+    toy::Solid s;
+    s.name = "plain_box_" + std::to_string(static_cast<int>(ahead));
+    s.kind = toy::Solid::kBox;
+    s.centre_mm = start.position() + ahead * Eigen::Vector2d(std::cos(start.theta_rad), std::sin(start.theta_rad));
+    s.size_mm = Eigen::Vector3d(300, 300, 300);
+    s.textured = false;
+    s.invisible = true;
+    room.solids.push_back(s);
+  }
+  toy::ToyWorld world(room, options.robot);
+  const RunLog log = RunMission(world, options, 30 * 900);
+  int contact_events = 0;
+  for (const auto& e : log.events) contact_events += e.find("contact (") != std::string::npos;
+  std::printf("contacts %d, blocked frames %d, end phase %s\n", log.summary.contacts, log.collisions,
+              PhaseName(log.end_phase));
+  EXPECT_GE(log.summary.contacts, 1);  // it was hit: nothing shows it before
+  EXPECT_EQ(contact_events, log.summary.contacts);
+  EXPECT_LE(log.summary.contacts, 6);           // each felt side is avoided afterwards
+  EXPECT_LE(log.collisions, 30 * 2 * log.summary.contacts);  // about a second per contact, not pushing on
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+}
+
 // A candidate the finder forgets because the sparse map restarted (its cluster was the old map's landmarks; room_10:
 // the target was a candidate twice and "gone" both times right after a restart) is looked at again from where it
 // was, so the new map gets points on it, instead of being given up after 5 s: the candidate comes back and is

@@ -170,7 +170,7 @@ ToyWorld::ToyWorld(const Room& room, const RobotGeometry& robot, uint64_t seed) 
     if (s.is_target) target_index_ = i;
     std::vector<Eigen::Vector3d> positions, normals;
     const bool wall = s.name.rfind("wall", 0) == 0;
-    SampleSurface(s, s.drivable ? 100 : (wall ? 80 : 60), !s.textured, &positions, &normals);
+    if (!s.invisible) SampleSurface(s, s.drivable ? 100 : (wall ? 80 : 60), !s.textured, &positions, &normals);
     for (size_t k = 0; k < positions.size(); ++k) points_.emplace_back(positions[k], normals[k], i);
     if (s.is_target) {
       positions.clear();

@@ -39,6 +39,7 @@ struct Solid {
   double yaw_rad = 0;
   bool drivable = false;  // a rug: no collision, its top counts as floor
   bool textured = true;   // untextured: landmarks on the edges only
+  bool invisible = false; // no landmarks at all (a plain object the sparse map never sees): felt, not seen
   bool is_target = false;
 };
 
