@@ -37,13 +37,7 @@ DeputyNode::DeputyNode(Bus& bus, ProcmanConfig config, DeputyOptions options)
   LogInfo("deputy of host " + deputy_->host() + ": " + (names.empty() ? "no process of this host in the config" : names));
 }
 
-void DeputyNode::Warn(const std::string& why) {
-  const double now = MonotonicSeconds();
-  auto it = warned_at_s_.find(why);
-  if (it != warned_at_s_.end() && now - it->second < 10.0) return;
-  warned_at_s_[why] = now;
-  LogWarning(why);
-}
+void DeputyNode::Warn(const std::string& why) { warnings_.Warn(why, MonotonicSeconds()); }
 
 void DeputyNode::Tick(int64_t wall_utime) {
   const double now = MonotonicSeconds();

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "common/bus.h"
+#include "common/log.h"
 #include "common/node.h"
 #include "procman/deputy.h"
 
@@ -30,7 +31,7 @@ class DeputyNode : public Node {
   std::unique_ptr<Deputy> deputy_;
   int64_t report_seq_ = 0, output_seq_ = 0, malformed_ = 0;
   double next_report_s_ = 0;
-  std::map<std::string, double> warned_at_s_;
+  WarningLimiter warnings_;
 };
 
 // Monotonic seconds (the deputy's and sheriff's own clock).

@@ -26,6 +26,13 @@ bool Sheriff::Select(const std::string& target, std::vector<const ProcmanEntry*>
   return true;
 }
 
+void Sheriff::NewRun(Desired* d, double now_s) {
+  d->wanted = true;
+  d->run_id = std::max(next_run_id_, d->report.run_id + 1);  // above every run id seen (a previous sheriff's too)
+  next_run_id_ = d->run_id + 1;
+  d->started_s = now_s;
+}
+
 bool Sheriff::Start(const std::string& target, double now_s, std::string* error) {
   std::vector<const ProcmanEntry*> entries;
   if (!Select(target, &entries, error)) return false;
@@ -33,12 +40,8 @@ bool Sheriff::Start(const std::string& target, double now_s, std::string* error)
     Desired& d = desired_[e->name];
     const bool running = d.has_report && d.report.state == ProcessState::kRunning && d.report.run_id == d.run_id &&
                          d.wanted;
+    if (!running) NewRun(&d, now_s);
     d.wanted = true;
-    if (!running) {
-      d.run_id = std::max(next_run_id_, d.report.run_id + 1);
-      next_run_id_ = d.run_id + 1;
-      d.started_s = now_s;
-    }
   }
   return true;
 }
@@ -46,13 +49,7 @@ bool Sheriff::Start(const std::string& target, double now_s, std::string* error)
 bool Sheriff::Restart(const std::string& target, double now_s, std::string* error) {
   std::vector<const ProcmanEntry*> entries;
   if (!Select(target, &entries, error)) return false;
-  for (const ProcmanEntry* e : entries) {
-    Desired& d = desired_[e->name];
-    d.wanted = true;
-    d.run_id = std::max(next_run_id_, d.report.run_id + 1);
-    next_run_id_ = d.run_id + 1;
-    d.started_s = now_s;
-  }
+  for (const ProcmanEntry* e : entries) NewRun(&desired_[e->name], now_s);
   return true;
 }
 

@@ -89,6 +89,7 @@ class Sheriff {
   };
   bool Select(const std::string& target, std::vector<const ProcmanEntry*>* entries, std::string* error) const;
   bool Ready(const ProcmanEntry& entry) const;  // its 'after' processes have reported
+  void NewRun(Desired* d, double now_s);        // wanted, with a run id above every one seen
   ProcmanConfig config_;
   SheriffOptions options_;
   std::map<std::string, Desired> desired_;

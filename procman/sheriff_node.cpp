@@ -56,13 +56,7 @@ SheriffNode::SheriffNode(Bus& bus, ProcmanConfig config, SheriffOptions sheriff_
       });
 }
 
-void SheriffNode::Warn(const std::string& why) {
-  const double now = MonotonicSeconds();
-  auto it = warned_at_s_.find(why);
-  if (it != warned_at_s_.end() && now - it->second < 10.0) return;
-  warned_at_s_[why] = now;
-  LogWarning(why);
-}
+void SheriffNode::Warn(const std::string& why) { warnings_.Warn(why, MonotonicSeconds()); }
 
 bool SheriffNode::Command(const std::string& line, std::string* error) {
   std::vector<SheriffStep> steps;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/bus.h"
+#include "common/log.h"
 #include "common/node.h"
 #include "procman/sheriff.h"
 
@@ -48,7 +49,7 @@ class SheriffNode : public Node {
   size_t step_ = 0;
   double step_started_s_ = -1;
   bool finished_ = false, script_failed_ = false;
-  std::map<std::string, double> warned_at_s_;
+  WarningLimiter warnings_;
   std::string typed_;  // stdin bytes not yet ending a line
 };
 

@@ -14,6 +14,9 @@
 #include "objscan/odometry_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/process_status_t.hpp"
+#include "objscan/procman_deputy_t.hpp"
+#include "objscan/procman_orders_t.hpp"
+#include "objscan/procman_output_t.hpp"
 #include "objscan/robot_command_t.hpp"
 #include "objscan/target_t.hpp"
 #include "objscan/voxel_map_t.hpp"
@@ -112,6 +115,44 @@ int main(int argc, char** argv) {
     voxels.votes = {4};
     voxels.rgb = {{5, 6, 7}};
     ok &= bus->PublishMessage("VOXEL_MAP_T", voxels);
+    procman_orders_t orders{};
+    orders.utime = 13;
+    orders.sheriff = "sheriff";
+    orders.host = "robot";
+    orders.config_hash = "0123456789abcdef";
+    orders.num_processes = 1;
+    orders.name = {"tracker"};
+    orders.run = {1};
+    orders.run_id = {1};
+    orders.follow_output = {0};
+    ok &= bus->PublishMessage("PROCMAN_ORDERS_T", orders);
+    procman_deputy_t deputy{};
+    deputy.utime = 14;
+    deputy.host = "robot";
+    deputy.config_hash = "0123456789abcdef";
+    deputy.last_refusal = "";
+    deputy.num_processes = 1;
+    deputy.name = {"tracker"};
+    deputy.group = {"robot"};
+    deputy.message = {"started run 1"};
+    deputy.state = {static_cast<int8_t>(procman_deputy_t::STATE_RUNNING)};
+    deputy.desired_run = {1};
+    deputy.desired_run_id = {1};
+    deputy.run_id = {1};
+    deputy.pid = {4242};
+    deputy.exit_code = {0};
+    deputy.exit_signal = {0};
+    deputy.restarts = {0};
+    deputy.cpu_percent = {1.5f};
+    deputy.rss_kb = {2048};
+    deputy.uptime_s = {3.0f};
+    ok &= bus->PublishMessage("PROCMAN_DEPUTY_T", deputy);
+    procman_output_t output{};
+    output.utime = 15;
+    output.host = "robot";
+    output.name = "tracker";
+    output.text = "hello\n";
+    ok &= bus->PublishMessage("PROCMAN_OUTPUT_T", output);
     if (garbage) {
       const char junk[] = "0123456789abcdef: not an objscan message";
       ok &= bus->Publish("GARBAGE", junk, sizeof(junk));

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "processes/planner/motion.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -45,17 +47,23 @@ class PlannerNodeTest : public ::testing::Test {
     }
   }
   static int64_t Utime(int64_t seq) { return seq * 1000000 / 30; }
-  // Odometry and camera pose of frame seq for a robot standing at the origin, head at pan 0, tilt 20 deg.
+  // Odometry and camera pose of frame seq for a robot that starts at the origin and drives as the last command said
+  // (a base that stood still while driven would be a contact), head at pan 0, tilt 20 deg.
   void Frame(int64_t seq, int8_t status = pose_t::STATUS_TRACKING) {
+    if (!commands_.empty())
+      base_ = Integrate(base_, Velocity{commands_.back().v_mm_s, commands_.back().omega_rad_s}, 1.0 / 30.0);
     OdometryReading r;
     r.utime = Utime(seq) + 15000;
     r.seq = seq;
+    r.x_mm = base_.x_mm;
+    r.y_mm = base_.y_mm;
+    r.theta_rad = base_.theta_rad;
     r.tilt_rad = 20 * kDeg;
     ASSERT_TRUE(bus_->PublishMessage("ROBOT_ODOMETRY", OdometryToMessage(r)));
     CameraPoseEstimate p;
     p.utime = Utime(seq);
     p.seq = seq;
-    p.world_from_camera = WorldFromCamera(RobotGeometry{}, BasePose{}, 0, 20 * kDeg);
+    p.world_from_camera = WorldFromCamera(RobotGeometry{}, base_, 0, 20 * kDeg);
     p.status = static_cast<PoseStatus>(status);
     ASSERT_TRUE(bus_->PublishMessage("CAMERA_POSE", PoseToMessage(p)));
     Drain();
@@ -78,6 +86,7 @@ class PlannerNodeTest : public ::testing::Test {
   std::vector<control_t> controls_;
   std::vector<process_status_t> statuses_;
   std::vector<std::string> order_;
+  BasePose base_;
 };
 
 TEST_F(PlannerNodeTest, OneCommandPerPoseWithItsSeqAndUtime) {
