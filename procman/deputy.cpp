@@ -54,7 +54,7 @@ struct Deputy::Managed {
   const ProcmanEntry* entry = nullptr;
   std::unique_ptr<ChildProcess> child;
   ProcessReport report;
-  bool follow = false;
+  bool follow = false;  // ordered: forward its output
   double started_s = 0, stop_deadline_s = 0, respawn_at_s = 0;
   double respawn_delay_s = 0;
   bool killed = false;              // SIGKILL sent after the grace time
@@ -72,8 +72,6 @@ Deputy::Deputy(ProcmanConfig config, DeputyOptions options) : config_(std::move(
     m->report.group = e.group;
     m->respawn_delay_s = options_.first_respawn_delay_s;
     m->log_path = (options_.log_dir.empty() ? std::string(".") : options_.log_dir) + "/" + e.name + ".log";
-    struct stat st {};
-    if (stat(m->log_path.c_str(), &st) == 0) m->output_offset = st.st_size;  // forward only what is new
     managed_.push_back(std::move(m));
   }
 }
@@ -115,6 +113,10 @@ bool Deputy::HandleOrders(const DeputyOrders& orders, double /*now_s*/, std::str
     Managed* m = targets[i];
     m->report.desired_run = orders.processes[i].run;
     m->report.desired_run_id = orders.processes[i].run_id;
+    if (orders.processes[i].follow_output && !m->follow) {  // following starts with what comes next
+      struct stat st {};
+      m->output_offset = stat(m->log_path.c_str(), &st) == 0 ? st.st_size : 0;
+    }
     m->follow = orders.processes[i].follow_output;
   }
   ++orders_accepted_;
@@ -251,15 +253,12 @@ DeputyReport Deputy::Report(double now_s) {
 std::vector<std::pair<std::string, std::string>> Deputy::TakeOutput(size_t max_bytes) {
   std::vector<std::pair<std::string, std::string>> out;
   for (auto& m : managed_) {
+    if (!m->follow) continue;  // only followed logs are read (this runs every tick)
     std::ifstream in(m->log_path, std::ios::binary);
     if (!in) continue;
     in.seekg(0, std::ios::end);
     const std::streamoff size = in.tellg();
     if (size < m->output_offset) m->output_offset = 0;  // the log was replaced
-    if (!m->follow) {
-      m->output_offset = size;  // following starts with what comes next
-      continue;
-    }
     if (size == m->output_offset) continue;
     const std::streamoff n = std::min<std::streamoff>(size - m->output_offset, static_cast<std::streamoff>(max_bytes));
     std::string text(static_cast<size_t>(n), '\0');

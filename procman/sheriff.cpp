@@ -6,6 +6,12 @@
 #include <sstream>
 
 namespace objscan {
+namespace {
+// A process, a group or "all".
+bool Matches(const ProcmanEntry& e, const std::string& target) {
+  return target == "all" || e.name == target || e.group == target;
+}
+}  // namespace
 
 Sheriff::Sheriff(ProcmanConfig config, SheriffOptions options)
     : config_(std::move(config)), options_(std::move(options)) {
@@ -15,7 +21,7 @@ Sheriff::Sheriff(ProcmanConfig config, SheriffOptions options)
 bool Sheriff::Select(const std::string& target, std::vector<const ProcmanEntry*>* entries, std::string* error) const {
   entries->clear();
   for (const auto& e : config_.entries)
-    if (target == "all" || e.name == target || e.group == target) entries->push_back(&e);
+    if (Matches(e, target)) entries->push_back(&e);
   if (entries->empty()) {
     std::string names;
     for (const auto& g : config_.Groups())
@@ -187,7 +193,7 @@ std::vector<SheriffDeputyView> Sheriff::Deputies(double now_s) const {
 
 bool Sheriff::Running(const std::string& target) const {
   for (const auto& e : config_.entries) {
-    if (!(target == "all" || e.name == target || e.group == target)) continue;
+    if (!Matches(e, target)) continue;
     const Desired& d = desired_.at(e.name);
     if (!d.has_report || d.report.state != ProcessState::kRunning || d.report.run_id != d.run_id) return false;
   }
@@ -196,7 +202,7 @@ bool Sheriff::Running(const std::string& target) const {
 
 bool Sheriff::StatusSeen(const std::string& target) const {
   for (const auto& e : config_.entries) {
-    if (!(target == "all" || e.name == target || e.group == target)) continue;
+    if (!Matches(e, target)) continue;
     const Desired& d = desired_.at(e.name);
     if (d.status_at_s < 0 || d.status_at_s < d.started_s) return false;
   }
@@ -205,7 +211,7 @@ bool Sheriff::StatusSeen(const std::string& target) const {
 
 bool Sheriff::Ended(const std::string& target) const {
   for (const auto& e : config_.entries) {
-    if (!(target == "all" || e.name == target || e.group == target)) continue;
+    if (!Matches(e, target)) continue;
     const Desired& d = desired_.at(e.name);
     if (!d.has_report) return false;
     const ProcessState s = d.report.state;

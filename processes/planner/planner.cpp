@@ -274,8 +274,7 @@ void Planner::CheckContact(double dt) {
   // Where on the front the footprint touched is unknown: the arc of +-40 deg ahead (about 300 mm wide) is marked,
   // or the robot slides along and touches the same object a cell further (toy room: 11 contacts with one cell each).
   for (double a = -40 * kDeg; a <= 40 * kDeg + 1e-9; a += 10 * kDeg)
-    map_.MarkFelt(base_.position() + reach * Eigen::Vector2d(std::cos(a) * ahead.x() - std::sin(a) * ahead.y(),
-                                                             std::sin(a) * ahead.x() + std::cos(a) * ahead.y()));
+    map_.MarkFelt(base_.position() + reach * (Eigen::Rotation2Dd(a) * ahead));
   ++contacts_;
   char text[200];
   std::snprintf(text, sizeof(text),

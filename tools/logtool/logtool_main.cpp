@@ -20,6 +20,7 @@
 
 #include "common/bus.h"
 #include "common/options.h"
+#include "common/statistics.h"
 #include "procman/log_stats.h"
 #include "tools/logtool/log_compare.h"
 #include "tools/logtool/log_edit.h"
@@ -167,10 +168,9 @@ int main(int argc, char** argv) {
         continue;
       }
       ++with_any;
-      std::sort(v.begin(), v.end());
-      auto q = [&](double f) { return v[std::min(v.size() - 1, static_cast<size_t>(f * static_cast<double>(v.size())))]; };
-      std::printf("%-16s frames %zu of %zu  p50 %.1f  p90 %.1f  p99 %.1f  max %.1f ms\n", name, v.size(), images, q(0.5),
-                  q(0.9), q(0.99), v.back());
+      std::printf("%-16s frames %zu of %zu  p50 %.1f  p90 %.1f  p99 %.1f  max %.1f ms\n", name, v.size(), images,
+                  objscan::Percentile(v, 0.5), objscan::Percentile(v, 0.9), objscan::Percentile(v, 0.99),
+                  *std::max_element(v.begin(), v.end()));
     }
     if (images == 0) {
       std::fprintf(stderr, "error: %s has no CAMERA_IMAGE\n", argv[2]);
