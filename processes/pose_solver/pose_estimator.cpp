@@ -260,7 +260,11 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
       recovering_ = true;
       fuse_pending_.clear();
       init_start_ = f + 1;
+      const std::string why = last_message_;
       last_message_ = "lost: restarting the preliminary phase at frame " + std::to_string(f + 1);
+      notice_ = "pose lost at frame " + std::to_string(frames_[f].seq) + " after " + std::to_string(lost_count_) +
+                " frames without one (" + (why.empty() ? std::string("no reason given") : why) + ", " +
+                std::to_string(frames_[f].ids.size()) + " tracks): a new map starts";
     }
   }
   result.pose = Estimate(f);
@@ -750,8 +754,11 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
     const Eigen::Isometry3d& b = frames_[f - 1].world_from_camera;
     prior = b * (a.inverse() * b);
   }
-  if (!PoseFromMap(f, last_good_ >= 0 ? &prior : nullptr, &last_message_)) {
+  std::string pnp_why;
+  if (!PoseFromMap(f, last_good_ >= 0 ? &prior : nullptr, &pnp_why)) {
+    last_message_ = "PnP: " + pnp_why;
     if (TwoViewPose(f)) return true;
+    if (last_message_.rfind("PnP: ", 0) != 0) last_message_ = "PnP: " + pnp_why + "; " + last_message_;
     fr.status = PoseStatus::kLost;
     if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
     phase_ = Phase::kLost;
@@ -778,8 +785,13 @@ bool PoseEstimator::PoseFromMap(int f, const Eigen::Isometry3d* prior, std::stri
   PnpOptions po = options_.pnp;
   po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
   PnpResult r;
-  if (static_cast<int>(pts.size()) < po.min_inliers || !SolvePnp(camera_, options_.robot, pts, px, prior, po, &r, why))
+  if (static_cast<int>(pts.size()) < po.min_inliers) {
+    if (why)
+      *why = std::to_string(pts.size()) + " of " + std::to_string(fr.ids.size()) + " tracks on landmarks (need " +
+             std::to_string(po.min_inliers) + ")";
     return false;
+  }
+  if (!SolvePnp(camera_, options_.robot, pts, px, prior, po, &r, why)) return false;
   std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
   std::vector<uint8_t> is_inlier(pts.size(), 0);
   for (int i : r.inliers) is_inlier[i] = 1;
