@@ -28,6 +28,9 @@ int64_t MonotonicMicros() {
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<int64_t>(ts.tv_sec) * 1000000 + ts.tv_nsec / 1000;
 }
+// While a restart after a loss waits for its new map, each frame up to this many after the last pose tries to find
+// the old map again by position (RelocalizeByProjection): 15 s at 30 Hz, the odometry's drift stays within the search.
+constexpr int kRelocalizeDuringRestartFrames = 450;
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -67,6 +70,7 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& o, std::string* wh
   if (!(o.join_search_mm >= 0)) e << "join search mm must be >= 0; ";
   if (o.join_search_mm > 0 && o.join_search_mm < 8) e << "join search mm must be 0 or >= 8; ";
   if (o.join_search_mm > 0 && !(o.join_max_mm > 0 && o.join_max_mm <= 2.5)) e << "join max mm must be in (0, 2.5]; ";
+  if (!(o.relocalize_search_px >= 0) || o.relocalize_search_px > 200) e << "relocalize search must be in [0, 200] px; ";
   if (o.join_search_mm > 0 && o.join_min_landmarks < 3) e << "join min landmarks must be >= 3; ";
   if (o.observations_kept_frames < 0) e << "observations kept frames must be >= 0; ";
   if (o.max_active_keyframes < 0 ||
@@ -228,7 +232,16 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
   frames_.push_back(std::move(fr));
 
   FrameResult result;
-  if (phase_ == Phase::kInitializing) {
+  std::string reloc_why;
+  if (phase_ == Phase::kInitializing && recovering_ && last_good_ >= 0 &&
+      f - last_good_ <= kRelocalizeDuringRestartFrames && RelocalizeByProjection(f, PredictFromLastGood(f), &reloc_why)) {
+    // The old map is seen again before the new one started: it goes on (the restart is dropped).
+    frames_[f].status = PoseStatus::kRelocalized;
+    phase_ = Phase::kTracking;
+    recovering_ = false;
+    lost_count_ = 0;
+    last_good_ = f;
+  } else if (phase_ == Phase::kInitializing) {
     const int window_start = init_start_;
     if (TryInitialize(f)) {
       result.initialized_now = true;
@@ -264,7 +277,8 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
       last_message_ = "lost: restarting the preliminary phase at frame " + std::to_string(f + 1);
       notice_ = "pose lost at frame " + std::to_string(frames_[f].seq) + " after " + std::to_string(lost_count_) +
                 " frames without one (" + (why.empty() ? std::string("no reason given") : why) + ", " +
-                std::to_string(frames_[f].ids.size()) + " tracks): a new map starts";
+                std::to_string(frames_[f].ids.size()) + " tracks): a new map starts" +
+                (options_.relocalize_search_px > 0 ? " (the old one is looked for by position meanwhile)" : "");
     }
   }
   result.pose = Estimate(f);
@@ -759,6 +773,14 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
     last_message_ = "PnP: " + pnp_why;
     if (TwoViewPose(f)) return true;
     if (last_message_.rfind("PnP: ", 0) != 0) last_message_ = "PnP: " + pnp_why + "; " + last_message_;
+    std::string reloc_why;
+    if (last_good_ >= 0 && RelocalizeByProjection(f, PredictFromLastGood(f), &reloc_why)) {
+      fr.status = PoseStatus::kRelocalized;
+      phase_ = Phase::kTracking;
+      last_good_ = f;
+      return true;
+    }
+    if (!reloc_why.empty()) last_message_ += "; " + reloc_why;
     fr.status = PoseStatus::kLost;
     if (last_good_ >= 0) fr.world_from_camera = frames_[last_good_].world_from_camera;
     phase_ = Phase::kLost;
@@ -801,6 +823,133 @@ bool PoseEstimator::PoseFromMap(int f, const Eigen::Isometry3d* prior, std::stri
   fr.world_from_camera = r.world_from_camera;
   fr.inliers = static_cast<int>(r.inliers.size());
   fr.rms = r.rms_px;
+  return true;
+}
+
+Eigen::Isometry3d PoseEstimator::PredictFromLastGood(int f) const {
+  const Frame& good = frames_[last_good_];
+  const Frame& fr = frames_[f];
+  if (!good.has_odometry || !fr.has_odometry) return good.world_from_camera;
+  return good.world_from_camera * (good.odometry_world_from_camera.inverse() * fr.odometry_world_from_camera);
+}
+
+namespace {
+constexpr double kRelocMatchPx = 2.5;    // px, track to shifted landmark projection
+constexpr int kRelocMinInliers = 30;     // PnP inliers to accept a relocalization
+}  // namespace
+
+bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why) {
+  if (!(options_.relocalize_search_px > 0)) return false;
+  Frame& fr = frames_[f];
+  // Tracks of f without a landmark (a track observing one is PoseFromMap's).
+  std::vector<int> tracks;
+  for (size_t i = 0; i < fr.ids.size(); ++i)
+    if (!points_.count(fr.ids[i])) tracks.push_back(static_cast<int>(i));
+  if (static_cast<int>(tracks.size()) < kRelocMinInliers) {
+    if (why) *why = "relocalization: " + std::to_string(tracks.size()) + " new tracks";
+    return false;
+  }
+  const std::unordered_set<int64_t> in_frame(fr.ids.begin(), fr.ids.end());
+  // Pairs (feature index, landmark id) from pose `from`, the shift searched within `search` px.
+  auto pair_up = [&](const Eigen::Isometry3d& from, double search, std::vector<std::pair<int, int64_t>>* pairs) {
+    pairs->clear();
+    const Eigen::Isometry3d cw = from.inverse();
+    std::vector<Eigen::Vector3d> projected;  // (u, v, 0)
+    std::vector<int64_t> ids;
+    for (const auto& [id, p] : points_) {
+      if (in_frame.count(id)) continue;
+      Eigen::Vector2d uv;
+      if (!ProjectIdeal(camera_, cw * p.x, &uv)) continue;
+      if (uv.x() < -search || uv.y() < -search || uv.x() > camera_.width + search || uv.y() > camera_.height + search)
+        continue;
+      projected.emplace_back(uv.x(), uv.y(), 0.0);
+      ids.push_back(id);
+    }
+    if (projected.empty()) return;
+    const PointGrid grid(projected, std::max(search, 2 * kRelocMatchPx) / 2);
+    // The shift (track - projection) most pairs agree on: 2 px bins, then the mean of the votes near the peak.
+    Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+    if (search > 2 * kRelocMatchPx) {
+      const int bins = static_cast<int>(std::ceil(search / 2)) * 2 + 1, half = bins / 2;
+      std::vector<int> votes(static_cast<size_t>(bins * bins), 0);
+      for (int i : tracks) {
+        const Eigen::Vector3d q(fr.pixels[i].x(), fr.pixels[i].y(), 0.0);
+        grid.ForEachWithin(q, search, [&](int k) {
+          const int bx = static_cast<int>(std::lround((q.x() - projected[k].x()) / 2)) + half;
+          const int by = static_cast<int>(std::lround((q.y() - projected[k].y()) / 2)) + half;
+          if (bx >= 0 && by >= 0 && bx < bins && by < bins) ++votes[static_cast<size_t>(by * bins + bx)];
+        });
+      }
+      const size_t best = static_cast<size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+      shift = Eigen::Vector2d((static_cast<int>(best % bins) - half) * 2.0, (static_cast<int>(best / bins) - half) * 2.0);
+    }
+    std::unordered_map<int64_t, int> claims;  // landmark -> pairs claiming it
+    std::vector<std::pair<int, int64_t>> candidates;
+    for (int i : tracks) {
+      const Eigen::Vector3d q(fr.pixels[i].x() - shift.x(), fr.pixels[i].y() - shift.y(), 0.0);
+      double d1 = std::numeric_limits<double>::infinity(), d2 = d1;
+      int nearest = -1;
+      grid.ForEachWithin(q, 2 * kRelocMatchPx, [&](int k) {
+        const double d = (projected[k] - q).norm();
+        if (d < d1) {
+          d2 = d1;
+          d1 = d;
+          nearest = k;
+        } else if (d < d2) {
+          d2 = d;
+        }
+      });
+      if (nearest < 0 || d1 > kRelocMatchPx || d2 < 2 * d1) continue;
+      candidates.emplace_back(i, ids[nearest]);
+      ++claims[ids[nearest]];
+    }
+    for (const auto& c : candidates)
+      if (claims[c.second] == 1) pairs->push_back(c);
+  };
+  auto solve = [&](const std::vector<std::pair<int, int64_t>>& pairs, const Eigen::Isometry3d& prior,
+                   PnpResult* r) {
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<Eigen::Vector2d> px;
+    for (const auto& [i, id] : pairs) {
+      pts.push_back(points_.at(id).x);
+      px.push_back(fr.pixels[i]);
+    }
+    PnpOptions po = options_.pnp;
+    po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
+    po.min_inliers = std::max(po.min_inliers, kRelocMinInliers);
+    return static_cast<int>(pairs.size()) >= po.min_inliers && SolvePnp(camera_, options_.robot, pts, px, &prior, po, r) &&
+           2 * r->inliers.size() >= pairs.size();
+  };
+  std::vector<std::pair<int, int64_t>> pairs;
+  pair_up(predicted, options_.relocalize_search_px, &pairs);
+  PnpResult first;
+  if (!solve(pairs, predicted, &first)) {
+    if (why)
+      *why = "relocalization: " + std::to_string(pairs.size()) + " track-landmark pairs by position from the " +
+             "predicted pose, no pose with " + std::to_string(kRelocMinInliers) + " inliers and half of them";
+    return false;
+  }
+  pair_up(first.world_from_camera, 2 * kRelocMatchPx, &pairs);
+  PnpResult r;
+  if (!solve(pairs, first.world_from_camera, &r)) {
+    if (why) *why = "relocalization: the pose from " + std::to_string(first.inliers.size()) + " pairs did not hold";
+    return false;
+  }
+  std::vector<std::pair<int64_t, int64_t>> merges;
+  for (int k : r.inliers) merges.emplace_back(fr.ids[pairs[k].first], pairs[k].second);
+  for (const auto& [track, landmark] : merges) MergeLandmark(track, landmark, f);
+  const Eigen::Isometry3d pose = r.world_from_camera;
+  std::string pnp_why;
+  if (!PoseFromMap(f, &pose, &pnp_why)) {  // cannot fail with those inliers; keep the frame consistent anyway
+    if (why) *why = "relocalization: " + pnp_why;
+    return false;
+  }
+  std::ostringstream m;
+  m << "relocalized frame " << fr.seq << " by position: " << merges.size() << " new tracks observe landmarks again ("
+    << (predicted.translation() - fr.world_from_camera.translation()).norm() << " mm, "
+    << Eigen::AngleAxisd(predicted.linear().transpose() * fr.world_from_camera.linear()).angle() * 180 / M_PI
+    << " deg from the prediction, " << f - last_good_ << " frames after the last pose)";
+  notice_ = m.str();
   return true;
 }
 

@@ -122,6 +122,10 @@ struct PoseEstimatorOptions {
   int online_scale_frames = 100;               // kSixDof: at keyframes within this many frames of the map start,
                                                // rescale the map by odometry / visual path length (0 = off)
   int relocalize_after_lost_frames = 10;       // lost frames before the preliminary phase restarts
+  double relocalize_search_px = 40.0;          // px: a lost frame (and, for 15 s, each frame of a restart still
+                                               // without a map) is relocalized by position: new tracks paired with
+                                               // landmarks projected from the last pose moved by the odometry,
+                                               // searching a shift up to this (RelocalizeByProjection); 0 = off
   bool fuse_landmarks = false;                 // loop closure by re-association: a new landmark whose track sees
                                                // an older landmark (its track ended, never seen in the same frame)
                                                // within fuse_max_px in every held view becomes that landmark; the
@@ -324,6 +328,17 @@ class PoseEstimator {
   // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
   // its outlier flags set. False (frame untouched) otherwise.
   bool RegisterAgainstMap(int f, const Eigen::Isometry3d& prior);
+  // Relocalization by position (KLT ids never come back: a corner found again after the head or the base turned away
+  // and back is a new track). Projects the landmarks into frame f from `predicted`, finds the image shift most
+  // track/landmark pairs within relocalize_search_px agree on (the prediction's error is mostly a shift), pairs each track
+  // without a landmark with the landmark nearest its shifted projection (within kRelocMatchPx, the second nearest at
+  // least twice as far, each landmark once), runs PnP over the pairs, then pairs again from that pose and runs PnP
+  // once more. Success needs kRelocMinInliers inliers and half of the pairs: the inlier tracks observe their
+  // landmarks from then on (MergeLandmark) and f is posed (status untouched). False with *why (frame untouched).
+  bool RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why);
+  // Frame f's pose predicted from the last good frame: moved by the odometry between the two when both have it,
+  // else the last good pose itself. Needs last_good_ >= 0.
+  Eigen::Isometry3d PredictFromLastGood(int f) const;
   // two_view_min_matches > 0: poses frame f relative to the last good frame from the essential matrix of their common
   // tracks, with the step's scale from the landmarks f sees (see the option). False (frame untouched) otherwise.
   bool TwoViewPose(int f);
