@@ -935,6 +935,14 @@ bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predi
     if (why) *why = "relocalization: the pose from " + std::to_string(first.inliers.size()) + " pairs did not hold";
     return false;
   }
+  // The shift searched bounds the prediction's rotation error: a pose turned much further is a wrong pairing.
+  const double turned_deg =
+      Eigen::AngleAxisd(predicted.linear().transpose() * r.world_from_camera.linear()).angle() * 180 / M_PI;
+  const double max_turn_deg = 2 * std::atan(options_.relocalize_search_px / camera_.fx) * 180 / M_PI + 2;
+  if (turned_deg > max_turn_deg) {
+    if (why) *why = "relocalization: the pose turned " + std::to_string(turned_deg) + " deg from the prediction";
+    return false;
+  }
   std::vector<std::pair<int64_t, int64_t>> merges;
   for (int k : r.inliers) merges.emplace_back(fr.ids[pairs[k].first], pairs[k].second);
   for (const auto& [track, landmark] : merges) MergeLandmark(track, landmark, f);

@@ -30,8 +30,10 @@
 //     scale from the landmarks it sees; the keyframe rules then apply as after PnP. Off by default.
 //  3. Lost: fewer than min_inliers PnP inliers -> the frame is reported with status LOST, num_inliers 0 and the LAST
 //     GOOD pose (not a made-up one: consumers must ignore the pose of LOST frames). Every later frame tries PnP against
-//     all landmarks (relocalization works when track ids reappear). After relocalize_after_lost_frames lost frames the
-//     preliminary phase restarts; the new map is chained to the old one through the odometry motion between the
+//     all landmarks, then relocalization by position (RelocalizeByProjection: KLT ids do not reappear, so new tracks
+//     are paired with the landmarks projected from the last pose moved by the odometry). After
+//     relocalize_after_lost_frames lost frames the preliminary phase restarts, and until its new map starts (at most
+//     15 s) each frame still tries relocalization by position, which drops the restart when it succeeds; the new map is chained to the old one through the odometry motion between the
 //     last good frame and the new span, then joined to it by the landmarks both saw (KLT ids do not reappear, so by
 //     position), after the new span's BA in the final camera model: the offset most new-old landmark pairs within
 //     join_search_mm agree on, then the least-squares Sim(3) (kFourDof: x, y and yaw only, the robot model fixes
