@@ -3,18 +3,20 @@
 # (issue 24) to stdout and to OUT/rooms.md: per room the target, the outcome, when it was confirmed, the centre
 # error against the truth (after the trajectory's Sim(3)), collisions, path, frames, wall time, and the model against
 # the target's whole surface above 10 mm, aligned on the whole trajectory (the issue's figure) and on the modeling
-# segment alone. Usage: scripts/rooms_table.sh [--score-only] [--keep-logs] [OUT [ROOM...]] (default out/rooms, all
+# segment alone. Usage: scripts/rooms_table.sh [--score-only] [--keep-logs] [--circle] [OUT [ROOM...]] (default out/rooms, all
 # 10); --score-only scores the runs already in OUT again without running them; each room's session.lcmlog (4-6 GB)
 # is deleted once the room is scored (its report.html is written already) unless --keep-logs.
+# --circle: the plain circle (objscan run --next-views 0), for the next-best-view comparison.
 # Each room runs live in its own network namespace (root), as fast as the pipeline goes (--fast), 9000-frame budget.
 set -uo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-SCORE_ONLY=0 KEEP_LOGS=0
+SCORE_ONLY=0 KEEP_LOGS=0 RUN_EXTRA=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --score-only) SCORE_ONLY=1; shift ;;
     --keep-logs) KEEP_LOGS=1; shift ;;
-    -*) echo "rooms_table.sh: unknown option $1 (usage: [--score-only] [--keep-logs] [OUT [ROOM...]])" >&2; exit 2 ;;
+    --circle) RUN_EXTRA=(--next-views 0); shift ;;
+    -*) echo "rooms_table.sh: unknown option $1 (usage: [--score-only] [--keep-logs] [--circle] [OUT [ROOM...]])" >&2; exit 2 ;;
     *) break ;;
   esac
 done
@@ -100,7 +102,7 @@ for room in "${ROOMS[@]}"; do
     ip -n "$ns" route add 224.0.0.0/4 dev lo || { echo "cannot create a network namespace (root needed)"; exit 2; }
   d="$OUT/$room"; rm -rf "$d"
   start=$(date +%s)
-  ip netns exec "$ns" "$ROOT/objscan" run --sim --closed-loop --scene "$room" --out "$d" --fast \
+  ip netns exec "$ns" "$ROOT/objscan" run --sim --closed-loop --scene "$room" --out "$d" --fast "${RUN_EXTRA[@]}" \
     --lcm-url "udpm://239.255.76.67:$port?ttl=0&recv_buf_size=4194304" > "$OUT/$room.out" 2>&1
   wall=$(( $(date +%s) - start ))
   ip netns delete "$ns"
