@@ -351,7 +351,19 @@ void ObjectFinder::MatchTracks(const std::vector<Cluster>& clusters) {
       const double d = HorizontalDistance(tracks_[ti].box.centre_mm, clusters[ci].box.centre_mm);
       if (d <= options_.track_match_distance_mm) pairs.emplace_back(d, static_cast<int>(ti), static_cast<int>(ci));
     }
-  std::sort(pairs.begin(), pairs.end());
+  // The confirmed target's track first (its nearest observed cluster, else its nearest), then the others nearest
+  // first: when the map drops the target's landmarks and the object is a cluster nearer to another track (room_03:
+  // the target's own cluster went stale, the object was a second track's cluster 78 mm away), the target keeps the
+  // object instead of being left unmatched, missed and lost for good.
+  std::sort(pairs.begin(), pairs.end(), [this, &clusters](const auto& a, const auto& b) {
+    const bool ta = tracks_[std::get<1>(a)].id == target_id_, tb = tracks_[std::get<1>(b)].id == target_id_;
+    if (ta != tb) return ta;
+    if (ta) {
+      const bool oa = clusters[std::get<2>(a)].observed, ob = clusters[std::get<2>(b)].observed;
+      if (oa != ob) return oa;
+    }
+    return a < b;
+  });
   std::vector<char> cluster_taken(clusters.size(), 0);
   for (const auto& [d, ti, ci] : pairs) {
     if (tracks_[ti].matched || cluster_taken[ci]) continue;

@@ -23,7 +23,8 @@
 //     isolated, too few points, too small, too low or not on the floor are linked again at 2 * cluster_distance_mm
 //     (with the points of no cluster): a group of two or more pieces that passes the rule and is isolated replaces
 //     them (a sparsely seen target falls apart; walls' pieces merge into something too large and stay rejected).
-//  5. Tracks follow clusters over updates (greedy one-to-one by horizontal centre distance <= track_match_distance_mm).
+//  5. Tracks follow clusters over updates (greedy one-to-one by horizontal centre distance <= track_match_distance_mm,
+//     the confirmed target's track first, preferring an observed cluster).
 //     A cluster is "in view" when its centre projects into the image in front of the camera, "observed" when at
 //     least max(3, min(20, 10 %)) of its members are fresh (a large cluster seen again after the camera looked
 //     away gets tens of new landmarks, its old tracks ended). A track records a view when its cluster passes the rule, is in
