@@ -234,7 +234,7 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
   FrameResult result;
   std::string reloc_why;
   if (phase_ == Phase::kInitializing && recovering_ && last_good_ >= 0 &&
-      f - last_good_ <= kRelocalizeDuringRestartFrames && RelocalizeByProjection(f, PredictFromLastGood(f), &reloc_why)) {
+      f - last_good_ <= kRelocalizeDuringRestartFrames && RelocalizeByProjectionTimed(f, PredictFromLastGood(f), &reloc_why)) {
     // The old map is seen again before the new one started: it goes on (the restart is dropped).
     frames_[f].status = PoseStatus::kRelocalized;
     phase_ = Phase::kTracking;
@@ -774,7 +774,7 @@ bool PoseEstimator::Track(int f, FrameResult* result) {
     if (TwoViewPose(f)) return true;
     if (last_message_.rfind("PnP: ", 0) != 0) last_message_ = "PnP: " + pnp_why + "; " + last_message_;
     std::string reloc_why;
-    if (last_good_ >= 0 && RelocalizeByProjection(f, PredictFromLastGood(f), &reloc_why)) {
+    if (last_good_ >= 0 && RelocalizeByProjectionTimed(f, PredictFromLastGood(f), &reloc_why)) {
       fr.status = PoseStatus::kRelocalized;
       phase_ = Phase::kTracking;
       last_good_ = f;
@@ -837,6 +837,16 @@ namespace {
 constexpr double kRelocMatchPx = 2.5;    // px, track to shifted landmark projection
 constexpr int kRelocMinInliers = 30;     // PnP inliers to accept a relocalization
 }  // namespace
+
+bool PoseEstimator::RelocalizeByProjectionTimed(int f, const Eigen::Isometry3d& predicted, std::string* why) {
+  if (!(options_.relocalize_search_px > 0)) return false;
+  const int64_t t0 = MonotonicMicros();
+  const bool ok = RelocalizeByProjection(f, predicted, why);
+  reloc_ms_ += (MonotonicMicros() - t0) * 1e-3;
+  ++reloc_attempts_;
+  reloc_successes_ += ok ? 1 : 0;
+  return ok;
+}
 
 bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why) {
   if (!(options_.relocalize_search_px > 0)) return false;

@@ -249,6 +249,10 @@ class PoseEstimator {
   double pnp_ms_total() const { return pnp_ms_; }
   double triangulation_ms_total() const { return tri_ms_; }
   double local_ba_ms_total() const { return lba_ms_; }
+  // Relocalization by position: attempts, successes and their accumulated thread CPU ms.
+  int relocalization_attempts() const { return reloc_attempts_; }
+  int relocalizations() const { return reloc_successes_; }
+  double relocalization_ms_total() const { return reloc_ms_; }
 
  private:
   struct Frame {
@@ -338,6 +342,7 @@ class PoseEstimator {
   // once more. Success needs kRelocMinInliers inliers and half of the pairs: the inlier tracks observe their
   // landmarks from then on (MergeLandmark) and f is posed (status untouched). False with *why (frame untouched).
   bool RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why);
+  bool RelocalizeByProjectionTimed(int f, const Eigen::Isometry3d& predicted, std::string* why);  // counts, CPU time
   // Frame f's pose predicted from the last good frame: moved by the odometry between the two when both have it,
   // else the last good pose itself. Needs last_good_ >= 0.
   Eigen::Isometry3d PredictFromLastGood(int f) const;
@@ -399,7 +404,8 @@ class PoseEstimator {
   std::vector<int> old_uncompacted_;  // queued frames still unposed (compacted once posed)
   ScaleSource scale_source_ = ScaleSource::kNone;
   double init_ms_ = 0, final_ba_ms_ = 0;
-  double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0;
+  double pnp_ms_ = 0, tri_ms_ = 0, lba_ms_ = 0, reloc_ms_ = 0;
+  int reloc_attempts_ = 0, reloc_successes_ = 0;
   std::string last_message_;
   std::string notice_;  // a later event worth a log line (TakeNotice)
   std::string init_wait_reason_;  // why the latest preliminary-phase attempt did not start a map

@@ -91,7 +91,30 @@ void BM_FourDof(benchmark::State& state) { RunEstimator(state, MotionModel::kFou
 void BM_SixDofKeepAllObservations(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, 0, 0); }
 // 12 active keyframes (the orbit has 40): memory per frame once keyframes are frozen.
 void BM_SixDofTwelveActiveKeyframes(benchmark::State& state) { RunEstimator(state, MotionModel::kSixDof, -1, 12); }
+// Features vanish for 15 frames (80..94), then every track is new: the estimator relocalizes by position. Counters:
+// reloc_attempts, relocalizations, reloc_ms_per_attempt (CPU), seq_ms_per_frame as above.
+void BM_SixDofLostAndRelocalized(benchmark::State& state) {
+  static const SyntheticOrbit s = [] {
+    SyntheticOrbitOptions o;
+    o.num_sphere_points = 1100;
+    o.num_floor_points = 1000;
+    o.floor_max_radius_mm = 420;
+    o.lost_begin = 80;
+    o.lost_end = 95;
+    return MakeSyntheticOrbit(o);
+  }();
+  for (auto _ : state) {
+    PoseEstimator est(s.camera, PoseEstimatorOptions());
+    for (size_t f = 0; f < s.frames.size(); ++f) est.AddFrame(s.frames[f], &s.odometry[f]);
+    state.counters["reloc_attempts"] = est.relocalization_attempts();
+    state.counters["relocalizations"] = est.relocalizations();
+    state.counters["reloc_ms_per_attempt"] =
+        est.relocalization_attempts() > 0 ? est.relocalization_ms_total() / est.relocalization_attempts() : 0;
+  }
+}
+
 BENCHMARK(BM_SixDof)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SixDofLostAndRelocalized)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FourDof)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SixDofKeepAllObservations)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SixDofTwelveActiveKeyframes)->Iterations(1)->Unit(benchmark::kMillisecond);

@@ -193,9 +193,10 @@ SyntheticOrbitOptions SimLikeOdometryErrors() {
   return so;
 }
 
-// Features vanish for 15 frames: the estimator reports LOST (num_inliers 0, last good pose), restarts the
-// preliminary phase when features return (every track has a new id), chains the new map through odometry, joins it
-// to the old one by the landmarks both saw (Sim(3)) and reports RELOCALIZED. Returns the final ATE (mm).
+// Features vanish for 15 frames: the estimator reports LOST (num_inliers 0, last good pose); when features return
+// (every track has a new id) it finds the old map by position (relocalize_search_px > 0), or else restarts the
+// preliminary phase, chains the new map through odometry and joins it to the old one by the landmarks both saw
+// (Sim(3)); either way it reports RELOCALIZED. Returns the final ATE (mm).
 double RunLostOrbit(const PoseEstimatorOptions& o, std::string* notices = nullptr) {
   SyntheticOrbitOptions so = SimLikeOdometryErrors();
   so.lost_begin = 80;
