@@ -848,101 +848,98 @@ bool PoseEstimator::RelocalizeByProjectionTimed(int f, const Eigen::Isometry3d& 
   return ok;
 }
 
-bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why) {
-  if (!(options_.relocalize_search_px > 0)) return false;
-  Frame& fr = frames_[f];
-  // Tracks of f without a landmark (a track observing one is PoseFromMap's).
-  std::vector<int> tracks;
-  for (size_t i = 0; i < fr.ids.size(); ++i)
-    if (!points_.count(fr.ids[i])) tracks.push_back(static_cast<int>(i));
-  if (static_cast<int>(tracks.size()) < kRelocMinInliers) {
-    if (why) *why = "relocalization: " + std::to_string(tracks.size()) + " new tracks";
-    return false;
+void PoseEstimator::PairByProjection(int f, const std::vector<int>& tracks, const std::vector<int64_t>& landmark_ids,
+                                     const Eigen::Isometry3d& from, double search_px,
+                                     std::vector<std::pair<int, int64_t>>* pairs) const {
+  pairs->clear();
+  const Frame& fr = frames_[f];
+  const Eigen::Isometry3d cw = from.inverse();
+  std::vector<Eigen::Vector3d> projected;  // (u, v, 0)
+  std::vector<int64_t> ids;
+  for (int64_t id : landmark_ids) {
+    const auto it = points_.find(id);
+    if (it == points_.end()) continue;
+    Eigen::Vector2d uv;
+    if (!ProjectIdeal(camera_, cw * it->second.x, &uv)) continue;
+    if (uv.x() < -search_px || uv.y() < -search_px || uv.x() > camera_.width + search_px ||
+        uv.y() > camera_.height + search_px)
+      continue;
+    projected.emplace_back(uv.x(), uv.y(), 0.0);
+    ids.push_back(id);
   }
-  const std::unordered_set<int64_t> in_frame(fr.ids.begin(), fr.ids.end());
-  // Pairs (feature index, landmark id) from pose `from`, the shift searched within `search` px.
-  auto pair_up = [&](const Eigen::Isometry3d& from, double search, std::vector<std::pair<int, int64_t>>* pairs) {
-    pairs->clear();
-    const Eigen::Isometry3d cw = from.inverse();
-    std::vector<Eigen::Vector3d> projected;  // (u, v, 0)
-    std::vector<int64_t> ids;
-    for (const auto& [id, p] : points_) {
-      if (in_frame.count(id)) continue;
-      Eigen::Vector2d uv;
-      if (!ProjectIdeal(camera_, cw * p.x, &uv)) continue;
-      if (uv.x() < -search || uv.y() < -search || uv.x() > camera_.width + search || uv.y() > camera_.height + search)
-        continue;
-      projected.emplace_back(uv.x(), uv.y(), 0.0);
-      ids.push_back(id);
-    }
-    if (projected.empty()) return;
-    const PointGrid grid(projected, std::max(search, 2 * kRelocMatchPx) / 2);
-    // The shift (track - projection) most pairs agree on: 2 px bins, then the mean of the votes near the peak.
-    Eigen::Vector2d shift = Eigen::Vector2d::Zero();
-    if (search > 2 * kRelocMatchPx) {
-      const int bins = static_cast<int>(std::ceil(search / 2)) * 2 + 1, half = bins / 2;
-      std::vector<int> votes(static_cast<size_t>(bins * bins), 0);
-      for (int i : tracks) {
-        const Eigen::Vector3d q(fr.pixels[i].x(), fr.pixels[i].y(), 0.0);
-        grid.ForEachWithin(q, search, [&](int k) {
-          const int bx = static_cast<int>(std::lround((q.x() - projected[k].x()) / 2)) + half;
-          const int by = static_cast<int>(std::lround((q.y() - projected[k].y()) / 2)) + half;
-          if (bx >= 0 && by >= 0 && bx < bins && by < bins) ++votes[static_cast<size_t>(by * bins + bx)];
-        });
-      }
-      const size_t best = static_cast<size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
-      shift = Eigen::Vector2d((static_cast<int>(best % bins) - half) * 2.0, (static_cast<int>(best / bins) - half) * 2.0);
-    }
-    std::unordered_map<int64_t, int> claims;  // landmark -> pairs claiming it
-    std::vector<std::pair<int, int64_t>> candidates;
+  if (projected.empty() || tracks.empty()) return;
+  const PointGrid grid(projected, std::max(search_px, 2 * kRelocMatchPx) / 2);
+  // The shift (track - projection) most pairs agree on: 2 px bins.
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+  if (search_px > 2 * kRelocMatchPx) {
+    const int bins = static_cast<int>(std::ceil(search_px / 2)) * 2 + 1, half = bins / 2;
+    std::vector<int> votes(static_cast<size_t>(bins * bins), 0);
     for (int i : tracks) {
-      const Eigen::Vector3d q(fr.pixels[i].x() - shift.x(), fr.pixels[i].y() - shift.y(), 0.0);
-      double d1 = std::numeric_limits<double>::infinity(), d2 = d1;
-      int nearest = -1;
-      grid.ForEachWithin(q, 2 * kRelocMatchPx, [&](int k) {
-        const double d = (projected[k] - q).norm();
-        if (d < d1) {
-          d2 = d1;
-          d1 = d;
-          nearest = k;
-        } else if (d < d2) {
-          d2 = d;
-        }
+      const Eigen::Vector3d q(fr.pixels[i].x(), fr.pixels[i].y(), 0.0);
+      grid.ForEachWithin(q, search_px, [&](int k) {
+        const int bx = static_cast<int>(std::lround((q.x() - projected[k].x()) / 2)) + half;
+        const int by = static_cast<int>(std::lround((q.y() - projected[k].y()) / 2)) + half;
+        if (bx >= 0 && by >= 0 && bx < bins && by < bins) ++votes[static_cast<size_t>(by * bins + bx)];
       });
-      if (nearest < 0 || d1 > kRelocMatchPx || d2 < 2 * d1) continue;
-      candidates.emplace_back(i, ids[nearest]);
-      ++claims[ids[nearest]];
     }
-    for (const auto& c : candidates)
-      if (claims[c.second] == 1) pairs->push_back(c);
-  };
-  auto solve = [&](const std::vector<std::pair<int, int64_t>>& pairs, const Eigen::Isometry3d& prior,
-                   PnpResult* r) {
-    std::vector<Eigen::Vector3d> pts;
-    std::vector<Eigen::Vector2d> px;
-    for (const auto& [i, id] : pairs) {
-      pts.push_back(points_.at(id).x);
-      px.push_back(fr.pixels[i]);
-    }
-    PnpOptions po = options_.pnp;
-    po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
-    po.min_inliers = std::max(po.min_inliers, kRelocMinInliers);
-    return static_cast<int>(pairs.size()) >= po.min_inliers && SolvePnp(camera_, options_.robot, pts, px, &prior, po, r) &&
-           2 * r->inliers.size() >= pairs.size();
-  };
+    const size_t best = static_cast<size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    shift = Eigen::Vector2d((static_cast<int>(best % bins) - half) * 2.0, (static_cast<int>(best / bins) - half) * 2.0);
+  }
+  std::unordered_map<int64_t, int> claims;  // landmark -> pairs claiming it
+  std::vector<std::pair<int, int64_t>> candidates;
+  for (int i : tracks) {
+    const Eigen::Vector3d q(fr.pixels[i].x() - shift.x(), fr.pixels[i].y() - shift.y(), 0.0);
+    double d1 = std::numeric_limits<double>::infinity(), d2 = d1;
+    int nearest = -1;
+    grid.ForEachWithin(q, 2 * kRelocMatchPx, [&](int k) {
+      const double d = (projected[k] - q).norm();
+      if (d < d1) {
+        d2 = d1;
+        d1 = d;
+        nearest = k;
+      } else if (d < d2) {
+        d2 = d;
+      }
+    });
+    if (nearest < 0 || d1 > kRelocMatchPx || d2 < 2 * d1) continue;
+    candidates.emplace_back(i, ids[nearest]);
+    ++claims[ids[nearest]];
+  }
+  for (const auto& c : candidates)
+    if (claims[c.second] == 1) pairs->push_back(c);
+}
+
+bool PoseEstimator::PoseFromPairs(int f, const std::vector<std::pair<int, int64_t>>& pairs,
+                                  const Eigen::Isometry3d& prior, PnpResult* r) const {
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Eigen::Vector2d> px;
+  for (const auto& [i, id] : pairs) {
+    pts.push_back(points_.at(id).x);
+    px.push_back(frames_[f].pixels[i]);
+  }
+  PnpOptions po = options_.pnp;
+  po.seed = static_cast<uint64_t>(options_.seed) + static_cast<uint64_t>(f);
+  po.min_inliers = std::max(po.min_inliers, kRelocMinInliers);
+  return static_cast<int>(pairs.size()) >= po.min_inliers && SolvePnp(camera_, options_.robot, pts, px, &prior, po, r) &&
+         2 * r->inliers.size() >= pairs.size();
+}
+
+bool PoseEstimator::MatchByProjection(int f, const std::vector<int>& tracks, const std::vector<int64_t>& landmark_ids,
+                                      const Eigen::Isometry3d& predicted, std::vector<std::pair<int64_t, int64_t>>* merges,
+                                      Eigen::Isometry3d* pose, std::string* why) const {
   std::vector<std::pair<int, int64_t>> pairs;
-  pair_up(predicted, options_.relocalize_search_px, &pairs);
+  PairByProjection(f, tracks, landmark_ids, predicted, options_.relocalize_search_px, &pairs);
   PnpResult first;
-  if (!solve(pairs, predicted, &first)) {
+  if (!PoseFromPairs(f, pairs, predicted, &first)) {
     if (why)
-      *why = "relocalization: " + std::to_string(pairs.size()) + " track-landmark pairs by position from the " +
-             "predicted pose, no pose with " + std::to_string(kRelocMinInliers) + " inliers and half of them";
+      *why = std::to_string(pairs.size()) + " track-landmark pairs by position from the predicted pose, no pose with " +
+             std::to_string(kRelocMinInliers) + " inliers and half of them";
     return false;
   }
-  pair_up(first.world_from_camera, 2 * kRelocMatchPx, &pairs);
+  PairByProjection(f, tracks, landmark_ids, first.world_from_camera, 2 * kRelocMatchPx, &pairs);
   PnpResult r;
-  if (!solve(pairs, first.world_from_camera, &r)) {
-    if (why) *why = "relocalization: the pose from " + std::to_string(first.inliers.size()) + " pairs did not hold";
+  if (!PoseFromPairs(f, pairs, first.world_from_camera, &r)) {
+    if (why) *why = "the pose from " + std::to_string(first.inliers.size()) + " pairs did not hold";
     return false;
   }
   // The shift searched bounds the prediction's rotation error: a pose turned much further is a wrong pairing.
@@ -950,13 +947,38 @@ bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predi
       Eigen::AngleAxisd(predicted.linear().transpose() * r.world_from_camera.linear()).angle() * 180 / M_PI;
   const double max_turn_deg = 2 * std::atan(options_.relocalize_search_px / camera_.fx) * 180 / M_PI + 2;
   if (turned_deg > max_turn_deg) {
-    if (why) *why = "relocalization: the pose turned " + std::to_string(turned_deg) + " deg from the prediction";
+    if (why) *why = "the pose turned " + std::to_string(turned_deg) + " deg from the prediction";
     return false;
   }
+  merges->clear();
+  for (int k : r.inliers) merges->emplace_back(frames_[f].ids[pairs[k].first], pairs[k].second);
+  *pose = r.world_from_camera;
+  return true;
+}
+
+bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why) {
+  if (!(options_.relocalize_search_px > 0)) return false;
+  Frame& fr = frames_[f];
+  // Tracks of f without a landmark (a track observing one is PoseFromMap's), against every landmark not in f.
+  std::vector<int> tracks;
+  for (size_t i = 0; i < fr.ids.size(); ++i)
+    if (!points_.count(fr.ids[i])) tracks.push_back(static_cast<int>(i));
+  if (static_cast<int>(tracks.size()) < kRelocMinInliers) {
+    if (why) *why = "relocalization: " + std::to_string(tracks.size()) + " new tracks";
+    return false;
+  }
+  std::vector<int64_t> landmarks;
+  landmarks.reserve(points_.size());
+  for (const auto& [id, p] : points_)
+    if (fr.Find(id) < 0) landmarks.push_back(id);
   std::vector<std::pair<int64_t, int64_t>> merges;
-  for (int k : r.inliers) merges.emplace_back(fr.ids[pairs[k].first], pairs[k].second);
+  Eigen::Isometry3d pose;
+  std::string match_why;
+  if (!MatchByProjection(f, tracks, landmarks, predicted, &merges, &pose, &match_why)) {
+    if (why) *why = "relocalization: " + match_why;
+    return false;
+  }
   for (const auto& [track, landmark] : merges) MergeLandmark(track, landmark, f);
-  const Eigen::Isometry3d pose = r.world_from_camera;
   std::string pnp_why;
   if (!PoseFromMap(f, &pose, &pnp_why)) {  // cannot fail with those inliers; keep the frame consistent anyway
     if (why) *why = "relocalization: " + pnp_why;
@@ -1263,13 +1285,14 @@ void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   int pairs = 0;
   std::string message;
   if (!JoinToOldMap(unjoined_first_, f, unjoined_points_, &pairs, &message)) return;
+  message += " at frame " + std::to_string(frames_[f].seq);
   segment_floor_first_ = -1;  // joined: the old map's scale
   segment_floor_points_.clear();
   join_first_frame_ = unjoined_first_;
   const int fused = FuseLandmarks(f, unjoined_points_);
   std::ostringstream m;
-  m << "map restarted at frame " << frames_[unjoined_first_].seq << " " << message << " at frame " << frames_[f].seq
-    << ", " << fused << " landmarks fused";
+  m << "map restarted at frame " << frames_[unjoined_first_].seq << " " << message << ", " << fused
+    << " landmarks fused";
   notice_ = m.str();
   unjoined_first_ = -1;
   unjoined_points_.clear();

@@ -342,6 +342,19 @@ class PoseEstimator {
   // once more. Success needs kRelocMinInliers inliers and half of the pairs: the inlier tracks observe their
   // landmarks from then on (MergeLandmark) and f is posed (status untouched). False with *why (frame untouched).
   bool RelocalizeByProjection(int f, const Eigen::Isometry3d& predicted, std::string* why);
+  // Pairs (feature index in f, landmark id) of the features `tracks` of frame f and the landmarks `landmark_ids`
+  // projected from `from`, the shift searched within search_px (see RelocalizeByProjection).
+  void PairByProjection(int f, const std::vector<int>& tracks, const std::vector<int64_t>& landmark_ids,
+                        const Eigen::Isometry3d& from, double search_px,
+                        std::vector<std::pair<int, int64_t>>* pairs) const;
+  // PnP of frame f over `pairs` from `prior`: kRelocMinInliers inliers and half of the pairs, else false.
+  bool PoseFromPairs(int f, const std::vector<std::pair<int, int64_t>>& pairs, const Eigen::Isometry3d& prior,
+                     PnpResult* result) const;
+  // The two rounds of pairing and PnP of RelocalizeByProjection: on success the inlier (track id, landmark id) pairs
+  // and f's pose against those landmarks; nothing is changed.
+  bool MatchByProjection(int f, const std::vector<int>& tracks, const std::vector<int64_t>& landmark_ids,
+                         const Eigen::Isometry3d& predicted, std::vector<std::pair<int64_t, int64_t>>* merges,
+                         Eigen::Isometry3d* pose, std::string* why) const;
   bool RelocalizeByProjectionTimed(int f, const Eigen::Isometry3d& predicted, std::string* why);  // counts, CPU time
   // Frame f's pose predicted from the last good frame: moved by the odometry between the two when both have it,
   // else the last good pose itself. Needs last_good_ >= 0.
