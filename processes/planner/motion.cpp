@@ -254,4 +254,26 @@ bool StaysOnTrail(const std::vector<Eigen::Vector2d>& trail, const BasePose& bas
   return true;
 }
 
+bool ContactDetector::Update(double commanded_v_mm_s, double heading_rad, const Eigen::Vector2d& odometry_mm,
+                             double dt_s, int64_t now_us) {
+  const bool driving = std::abs(commanded_v_mm_s) > 20;
+  const double moved = (odometry_mm - start_).norm();
+  if (!driving || start_us_ < 0 || moved >= 20) {
+    start_ = odometry_mm;
+    start_us_ = now_us;
+    expected_.setZero();
+    return false;
+  }
+  expected_ += commanded_v_mm_s * dt_s * Eigen::Vector2d(std::cos(heading_rad), std::sin(heading_rad));
+  const double expected = expected_.norm();
+  if (now_us - start_us_ < 1000000 || expected < 20 || moved >= 0.25 * expected) return false;
+  expected_mm_ = expected;
+  moved_mm_ = moved;
+  window_s_ = (now_us - start_us_) * 1e-6;
+  start_ = odometry_mm;
+  start_us_ = now_us;
+  expected_.setZero();
+  return true;
+}
+
 }  // namespace objscan

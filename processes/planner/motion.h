@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "processes/planner/occupancy_map.h"
@@ -77,5 +78,30 @@ BasePose Integrate(const BasePose& base, const Velocity& velocity, double dt_s);
 // obstacles and unknown cells. *limited tells whether the speed was cut.
 Velocity SafeVelocity(const OccupancyMap& map, const BasePose& base, const Velocity& wanted, double horizon_s,
                       bool* limited);
+
+// Contact felt through the odometry: a base driven for at least a second whose odometry moved under a quarter of the
+// commanded motion (and under 20 mm) stands against something (the simulator stops a base that touches an object, a
+// real one stalls or its bumper stops it). The commanded motion is summed as a vector along the base's heading, so
+// a leg backed up and driven forward again within the second (the look-around shuttle) expects what the base
+// really moved, not the sum of both legs (room_06: "driven 33 mm, moved 5 mm", a contact felt where nothing was,
+// boxed the robot in at its start). The window restarts when the base is not driven (|v| <= 20 mm/s), when the
+// odometry moved 20 mm, and after a contact.
+class ContactDetector {
+ public:
+  // One step: commanded forward speed (mm/s, negative backing up), the base heading (rad, world), the odometry's
+  // base position (mm, odometry frame), the step's duration (s) and time (µs). True when a contact is felt.
+  bool Update(double commanded_v_mm_s, double heading_rad, const Eigen::Vector2d& odometry_mm, double dt_s,
+              int64_t now_us);
+  // Figures of the last contact: commanded motion (mm), odometry motion (mm), window (s).
+  double expected_mm() const { return expected_mm_; }
+  double moved_mm() const { return moved_mm_; }
+  double window_s() const { return window_s_; }
+
+ private:
+  Eigen::Vector2d start_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d expected_ = Eigen::Vector2d::Zero();  // mm, summed commanded motion (world directions)
+  int64_t start_us_ = -1;
+  double expected_mm_ = 0, moved_mm_ = 0, window_s_ = 0;
+};
 
 }  // namespace objscan

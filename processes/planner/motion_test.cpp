@@ -102,5 +102,48 @@ TEST(TrailTest, StaysOnTrailOnlyAlongIt) {
   EXPECT_FALSE(StaysOnTrail(trail, base, {-100, 0}, 0.5, 30));
 }
 
+// Drives the detector for `seconds` at 30 Hz with the given command; the odometry follows the command times `follow`
+// (1 = the base moves as asked, 0 = it stands). Returns the number of contacts felt.
+int DriveContact(ContactDetector* d, double v_mm_s, double omega_rad_s, double seconds, double follow,
+                 Eigen::Vector2d* odometry, double* heading, int64_t* now_us) {
+  int contacts = 0;
+  const double dt = 1.0 / 30;
+  for (int i = 0; i < static_cast<int>(std::lround(seconds * 30)); ++i) {
+    *odometry += follow * v_mm_s * dt * Eigen::Vector2d(std::cos(*heading), std::sin(*heading));
+    *heading += follow * omega_rad_s * dt;
+    *now_us += 33333;
+    contacts += d->Update(v_mm_s, *heading, *odometry, dt, *now_us) ? 1 : 0;
+  }
+  return contacts;
+}
+
+TEST(ContactDetectorTest, ABaseHeldWhileDrivenIsAContactOnceASecond) {
+  ContactDetector d;
+  Eigen::Vector2d odometry(0, 0);
+  double heading = 0;
+  int64_t now = 0;
+  EXPECT_EQ(DriveContact(&d, 80, 0, 2.5, 0.0, &odometry, &heading, &now), 2);
+  EXPECT_NEAR(d.expected_mm(), 80, 5);
+  EXPECT_LT(d.moved_mm(), 1);
+  EXPECT_EQ(DriveContact(&d, 80, 0, 3, 1.0, &odometry, &heading, &now), 0);  // free again
+  EXPECT_EQ(DriveContact(&d, 80, 0, 1.5, 0.1, &odometry, &heading, &now), 1);  // slipping at 10 %
+}
+
+// room_06: the look-around shuttle backed up at 23 mm/s while turning at 30 deg/s, then drove forward at 71 mm/s,
+// within one second: the base moved as asked, no contact.
+TEST(ContactDetectorTest, BackingUpThenDrivingOnIsNoContact) {
+  ContactDetector d;
+  Eigen::Vector2d odometry(2836, -1053);
+  double heading = -0.71;
+  int64_t now = 0;
+  int contacts = DriveContact(&d, -23, -0.52, 0.9, 1.0, &odometry, &heading, &now);
+  contacts += DriveContact(&d, 71, 0.32, 0.4, 1.0, &odometry, &heading, &now);
+  contacts += DriveContact(&d, -40, 0, 0.5, 1.0, &odometry, &heading, &now);
+  contacts += DriveContact(&d, 40, 0, 0.6, 1.0, &odometry, &heading, &now);
+  EXPECT_EQ(contacts, 0);
+  // An arc of small radius (23 mm/s at 30 deg/s) moved as asked: no contact either.
+  EXPECT_EQ(DriveContact(&d, 23, 0.52, 3, 1.0, &odometry, &heading, &now), 0);
+}
+
 }  // namespace
 }  // namespace objscan

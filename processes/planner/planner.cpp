@@ -250,23 +250,13 @@ std::vector<std::string> Planner::TakeEvents() {
   return out;
 }
 
-// A base driven for a second whose odometry moved under a quarter of what was asked (and under 20 mm) stands against
-// something: the simulator stops a base that touches an object, a real one stalls or its bumper stops it. What it
-// touched is not in the landmarks (an untextured object has none: room_05's base touched a plain cylinder 6 times,
-// room_02's a plain sphere), so the cell ahead of the footprint (behind it when reversing) is marked felt: an
-// obstacle for the rest of the mission, which paths and the safety check then keep clear of.
+// A contact (ContactDetector): what the base touched is not in the landmarks (an untextured object has none:
+// room_05's base touched a plain cylinder 6 times, room_02's a plain sphere), so the cells ahead of the footprint
+// (behind it when reversing) are marked felt: obstacles for the rest of the mission, which paths and the safety check
+// then keep clear of.
 void Planner::CheckContact(double dt) {
   if (!have_odometry_base_ || !have_base_) return;
-  const bool driving = std::abs(commanded_v_mm_s_) > 20;
-  const double moved = (odometry_base_.position() - contact_check_position_).norm();
-  if (!driving || contact_check_utime_ < 0 || moved >= 20) {
-    contact_check_position_ = odometry_base_.position();
-    contact_check_utime_ = now_;
-    contact_expected_mm_ = 0;
-    return;
-  }
-  contact_expected_mm_ += std::abs(commanded_v_mm_s_) * dt;
-  if (now_ - contact_check_utime_ < kSecond || moved >= 0.25 * contact_expected_mm_) return;
+  if (!contact_.Update(commanded_v_mm_s_, base_.theta_rad, odometry_base_.position(), dt, now_)) return;
   const double sign = commanded_v_mm_s_ > 0 ? 1.0 : -1.0;
   const double reach = options_.map.footprint_radius_mm + 0.5 * options_.map.cell_mm;
   const Eigen::Vector2d ahead = sign * Eigen::Vector2d(std::cos(base_.theta_rad), std::sin(base_.theta_rad));
@@ -280,11 +270,8 @@ void Planner::CheckContact(double dt) {
   std::snprintf(text, sizeof(text),
                 "contact (%s): driven %.0f mm in %.1f s, moved %.0f mm: something the map does not show at (%.0f, "
                 "%.0f) mm, marked as an obstacle",
-                activity_.c_str(), contact_expected_mm_, (now_ - contact_check_utime_) * 1e-6, moved, at.x(), at.y());
+                activity_.c_str(), contact_.expected_mm(), contact_.window_s(), contact_.moved_mm(), at.x(), at.y());
   Event(text);
-  contact_check_position_ = odometry_base_.position();
-  contact_check_utime_ = now_;
-  contact_expected_mm_ = 0;
 }
 
 bool Planner::HeldLongerThan(int64_t us) const { return blocked_since_ >= 0 && now_ - blocked_since_ > us; }

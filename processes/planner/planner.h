@@ -283,11 +283,7 @@ class Planner {
   Eigen::Vector2d progress_position_ = Eigen::Vector2d::Zero();
   int64_t progress_utime_ = 0;
   double commanded_v_mm_s_ = 0;
-  // Contact: the odometry stood still while the base was driven (CheckContact). Odometry position when the current
-  // check began, its time, and the distance the commands asked for since.
-  Eigen::Vector2d contact_check_position_ = Eigen::Vector2d::Zero();
-  int64_t contact_check_utime_ = -1;
-  double contact_expected_mm_ = 0;
+  ContactDetector contact_;  // the odometry stood still while the base was driven (CheckContact)
   int contacts_ = 0;
   void CheckContact(double dt);
   double last_step_ms_ = 0, last_next_view_ms_ = 0;
