@@ -30,7 +30,8 @@
 //     away gets tens of new landmarks, its old tracks ended). A track records a view when its cluster passes the rule, is in
 //     view and observed, and the camera is >= min_view_baseline_mm away from every view recorded before or sees it
 //     from a direction >= min_view_bearing_deg apart. A track is "missed" in an update in which its box is in view
-//     within max_view_distance_mm but its cluster is not observed (or gone).
+//     within max_view_distance_mm, no other cluster's box stands on the line of sight to it, and its cluster is
+//     not observed (or gone).
 //  6. Candidate: a track whose cluster passes the rule now, with >= 1 view and missed fewer than lost_after_updates
 //     times in a row; or, seen only from afar, fails only the size limits by a little (look closer, options). Confirmable: a candidate with >= min_views views whose centre moved <= max_centre_motion_mm over
 //     its last min_views passing views. Among several, the nearest to the robot (robot_xy_mm) wins, without a robot
@@ -241,6 +242,10 @@ class ObjectFinder {
   void UpdateTarget(const FinderInput& input);
   void FillResult(const FinderInput& input, const std::vector<Cluster>& clusters);
   bool InView(const Eigen::Vector3d& centre, const FinderInput& input, double max_distance) const;
+  // True when the line of sight from the camera to `centre` passes through the box of a cluster other than `own`
+  // (index into clusters, -1 = none): another object stands between them, so not seeing the target there is no miss.
+  bool Occluded(const Eigen::Vector3d& centre, int own, const FinderInput& input,
+                const std::vector<Cluster>& clusters) const;
   bool IsCandidate(const Track& track) const;
   bool IsConfirmable(const Track& track) const;
   // Index into tracks_ of the best of the tracks accepted by `accept` (nearest to the robot first), -1 if none.

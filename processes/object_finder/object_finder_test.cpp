@@ -420,6 +420,34 @@ TEST(ObjectFinderTest, TheConfirmedTargetKeepsItsClusterWhenAnotherTrackIsNearer
   EXPECT_LT(Horizontal(r.box.centre_mm, Eigen::Vector3d(170, 0, 0)), 15.0);
 }
 
+// An object between the camera and the target (room_04: the robot bypassing an obstacle on its circle) hides it:
+// not seeing it there is no miss, the target stays CONFIRMED; the same views without the screen make it LOST.
+TEST(ObjectFinderTest, ATargetHiddenBehindAnotherObjectIsNotLost) {
+  for (const bool with_screen : {true, false}) {
+    SyntheticRoom room;
+    room.AddFloor(2500, 2000, 2.0);
+    const int box = room.AddBox("box", Eigen::Vector2d(0, 0), kBoxSize, kBoxYaw, 12);
+    const int screen = room.AddBox("screen", Eigen::Vector2d(650, 0), Eigen::Vector3d(100, 600, 500), 0, 12);
+    room.object(screen).hidden = true;
+    ObjectFinder finder;
+    const FinderResult& r = finder.result();
+    auto pose = [&](double deg) {
+      const double a = deg * kDeg;
+      return room.LookAt(Eigen::Vector3d(1300 * std::cos(a), 1300 * std::sin(a), 400), Eigen::Vector3d(0, 0, 70));
+    };
+    int64_t seq = 0;
+    for (double deg : {-110.0, -80.0, -50.0, -20.0}) ASSERT_TRUE(finder.Update(room.Observe(pose(deg), seq++)));
+    ASSERT_EQ(r.state, TargetState::kConfirmed);
+    room.object(screen).hidden = !with_screen;
+    room.object(box).hidden = true;  // behind the screen (or, without it, gone)
+    for (int k = 0; k < 8; ++k) {
+      ASSERT_TRUE(finder.Update(room.Observe(pose(-4 + k), seq++)));
+      if (with_screen) EXPECT_EQ(r.state, TargetState::kConfirmed) << k;
+    }
+    if (!with_screen) EXPECT_EQ(r.state, TargetState::kLost);
+  }
+}
+
 TEST(ObjectFinderTest, ConfirmedTargetDroppedWhenManyViewsRejectIt) {
   SyntheticRoom room;
   room.AddFloor(2500, 2000, 2.0);
