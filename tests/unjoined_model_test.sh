@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # A model built across a map restart that was never joined is loud (issue 24: runs that modeled "in the wrong frame"
 # ended with status ok). The session supervisor runs the sphere orbit with frames 80..99 rendered grey (every track
-# ends, the pose solver restarts its map) and the pose solver's map join switched off (--join-search 0: the new
-# map stays chained by the odometry only), in a private multicast namespace. The dense modeler builds its model from
+# ends, the pose solver restarts its map) and the pose solver's map join and relocalization by position switched off
+# (--join-search 0 --relocalize-search 0: the new map stays chained by the odometry only), in a private multicast
+# namespace. The dense modeler builds its model from
 # frames on both sides of the restart, so the session must end "failed" with a message that names the restart and
-# says what to try, and exit non-zero. The same run with the join on (the default) ends "ok".
+# says what to try, and exit non-zero. The same run with the defaults (relocalized by position) ends "ok".
 set -euo pipefail
 BIN="$1"; SRC="$2"
 source "$SRC/tests/netns_lib.sh"
@@ -25,7 +26,7 @@ PROCS
   echo "$rc" > "$WORK/$name.rc"
 }
 
-run unjoined 7701 "--join-search 0"
+run unjoined 7701 "--join-search 0 --relocalize-search 0"
 s="$WORK/unjoined/summary.json"
 [ -f "$s" ] || { tail -n 30 "$WORK/unjoined.out"; fail "no summary.json"; }
 grep -q "maps never joined" "$WORK/unjoined/logs/pose_solver.log" || { tail -n 20 "$WORK/unjoined/logs/pose_solver.log"; fail "the pose solver did not report the unjoined map"; }

@@ -31,6 +31,10 @@ int64_t MonotonicMicros() {
 // While a restart after a loss waits for its new map, each frame up to this many after the last pose tries to find
 // the old map again by position (RelocalizeByProjection): 15 s at 30 Hz, the odometry's drift stays within the search.
 constexpr int kRelocalizeDuringRestartFrames = 450;
+// ... once the restart waited this long for its new map (1.5 s at 30 Hz): a new map joined to the old one by their
+// common landmarks is the more accurate (rendered sphere orbit, 20 grey frames: final ATE 0.42 mm joined, 2.4 mm
+// relocalized: the merged tracks tie the two sides at one place only), relocalization the fallback when none starts.
+constexpr int kRelocalizeAfterWaitFrames = 45;
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -233,7 +237,7 @@ FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReadi
 
   FrameResult result;
   std::string reloc_why;
-  if (phase_ == Phase::kInitializing && recovering_ && last_good_ >= 0 &&
+  if (phase_ == Phase::kInitializing && recovering_ && last_good_ >= 0 && f - init_start_ >= kRelocalizeAfterWaitFrames &&
       f - last_good_ <= kRelocalizeDuringRestartFrames && RelocalizeByProjectionTimed(f, PredictFromLastGood(f), &reloc_why)) {
     // The old map is seen again before the new one started: it goes on (the restart is dropped).
     frames_[f].status = PoseStatus::kRelocalized;
@@ -603,7 +607,10 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   unjoined_points_.clear();
   if (was_recovering) {
     int pairs = 0;
-    if (options_.join_search_mm > 0 && JoinToOldMap(first, last, new_points, &pairs, &join_message)) {
+    // By the landmarks both maps hold; else by position: the old landmarks projected from the span's last pose
+    // (chained through the odometry over the short gap) paired with its tracks.
+    if ((options_.join_search_mm > 0 && JoinToOldMap(first, last, new_points, &pairs, &join_message)) ||
+        JoinByProjection(first, last, new_points, &join_message)) {
       scale_source_ = scale_source_before;
       segment_floor_first_ = -1;  // joined: the old map's scale
       segment_floor_points_.clear();
@@ -990,6 +997,51 @@ bool PoseEstimator::RelocalizeByProjection(int f, const Eigen::Isometry3d& predi
     << Eigen::AngleAxisd(predicted.linear().transpose() * fr.world_from_camera.linear()).angle() * 180 / M_PI
     << " deg from the prediction, " << f - last_good_ << " frames after the last pose)";
   notice_ = m.str();
+  return true;
+}
+
+bool PoseEstimator::JoinByProjection(int first, int last, const std::vector<int64_t>& new_points, std::string* message) {
+  if (!(options_.relocalize_search_px > 0) || !frames_[last].posed) return false;
+  const Frame& fr = frames_[last];
+  const std::unordered_set<int64_t> is_new(new_points.begin(), new_points.end());
+  // Every track of `last` not observing an old landmark (new-map landmarks and tracks without one), against the old
+  // map's landmarks projected from its pose chained through the odometry.
+  std::vector<int> tracks;
+  for (size_t i = 0; i < fr.ids.size(); ++i)
+    if (!points_.count(fr.ids[i]) || is_new.count(fr.ids[i])) tracks.push_back(static_cast<int>(i));
+  std::vector<int64_t> old_landmarks;
+  for (const auto& [id, p] : points_)
+    if (!is_new.count(id) && fr.Find(id) < 0) old_landmarks.push_back(id);
+  std::vector<std::pair<int64_t, int64_t>> merges;
+  Eigen::Isometry3d pose;
+  std::string why;
+  if (static_cast<int>(tracks.size()) < kRelocMinInliers ||
+      !MatchByProjection(last, tracks, old_landmarks, fr.world_from_camera, &merges, &pose, &why)) {
+    *message += (message->empty() ? "maps not joined by position (" : "; not by position either (") + why + ")";
+    return false;
+  }
+  // The new map moves so that `last` takes its pose against the old map (kFourDof: x, y and yaw only, the camera
+  // centre to its place).
+  Eigen::Isometry3d t = pose * fr.world_from_camera.inverse();
+  if (options_.model == MotionModel::kFourDof) {
+    const Eigen::Matrix3d yaw = Eigen::AngleAxisd(std::atan2(t.linear()(1, 0), t.linear()(0, 0)),
+                                                  Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    t.linear() = yaw;
+    t.translation() = pose.translation() - yaw * fr.world_from_camera.translation();
+    t.translation().z() = 0;
+  }
+  const double shift_mm = t.translation().norm(), turn_deg = Eigen::AngleAxisd(t.linear()).angle() * 180 / M_PI;
+  ApplySimilarity(1.0, t, first, last, new_points);
+  int merged = 0;
+  for (const auto& [from, to] : merges)
+    if (points_.count(to)) {
+      MergeLandmark(from, to, last);
+      ++merged;
+    }
+  std::ostringstream m;
+  m << "joined to the old map by position (" << merged << " tracks on old landmarks; the new map moved " << shift_mm
+    << " mm, " << turn_deg << " deg)";
+  *message = m.str();
   return true;
 }
 

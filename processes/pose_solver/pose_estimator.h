@@ -356,6 +356,12 @@ class PoseEstimator {
                          const Eigen::Isometry3d& predicted, std::vector<std::pair<int64_t, int64_t>>* merges,
                          Eigen::Isometry3d* pose, std::string* why) const;
   bool RelocalizeByProjectionTimed(int f, const Eigen::Isometry3d& predicted, std::string* why);  // counts, CPU time
+  // After a restart whose 3-D join failed: the tracks of the span's last frame (with or without a landmark of the
+  // new map) paired by position with the old map's landmarks projected from its pose (chained through the odometry);
+  // when PnP holds, the new map (frames first..last, points new_points) moves rigidly (kFourDof: x, y, yaw) so that
+  // frame `last` takes its pose against the old map, and the paired tracks observe the old landmarks. False
+  // (nothing changed, *message extended with why) otherwise.
+  bool JoinByProjection(int first, int last, const std::vector<int64_t>& new_points, std::string* message);
   // Frame f's pose predicted from the last good frame: moved by the odometry between the two when both have it,
   // else the last good pose itself. Needs last_good_ >= 0.
   Eigen::Isometry3d PredictFromLastGood(int f) const;

@@ -95,6 +95,9 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("fuse-search", &e->fuse_search_mm, "mm, largest distance between a new and the old landmark it joins");
   p.Add("fuse-max-px", &e->fuse_max_px, "px, the old landmark's largest reprojection error in the new track's views");
   p.Add("fuse-min-parallax", &e->fuse_min_parallax_deg, "deg, parallax the new track needs before it is fused");
+  p.Add("relocalize-search", &e->relocalize_search_px,
+        "px, largest image shift searched when a lost frame is relocalized by position from the odometry's "
+        "prediction (larger for poorer odometry; 0 = off)");
   p.Add("join-search", &e->join_search_mm,
         "mm, after a restart join the new map to the old by common landmarks this close (0 = odometry chaining only)");
   p.Add("join-max", &e->join_max_mm, "mm, final landmark pair distance of the join");
