@@ -200,6 +200,7 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   ASSERT_FALSE(out_.statuses.empty());
   const process_status_t& last = out_.statuses.back();
   EXPECT_EQ(StatusValue(last, "final_voxels"), m.num_voxels);
+  EXPECT_NEAR(StatusValue(last, "live_final_offset_mm"), 0.0, 1e-6);  // live votes kept, final poses = live ones
   EXPECT_EQ(StatusValue(last, "final_triangles"), m.num_mesh_triangles);
   for (const char* name : {"final_floor_band_dropped", "final_carved", "final_hidden_vertices",
                            "final_curled_triangles", "final_voxels_off_mesh", "final_weak_vertices", "final_weak_moved",
@@ -313,6 +314,13 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
     if (revote) {
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revoted_pairs"), n);
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revote_rejected"), 0);  // a scale keeps the epipolar lines
+      EXPECT_EQ(StatusValue(out_.statuses.back(), "live_final_offset_mm"), -1.0);  // final poses used
+    } else {
+      // The live votes kept while the final poses lie 3 % of the ring's radius away: reported (the session fails).
+      const double offset = StatusValue(out_.statuses.back(), "live_final_offset_mm");
+      const double radius = scene_.RingPose(0, n).translation().norm();
+      EXPECT_NEAR(offset, 0.03 * radius, 0.01 * radius);
+      EXPECT_GT(offset, 5.0);
     }
     std::printf("re-vote %s: final voxels' median error %.2f mm\n", revote ? "on" : "off", error_mm[revote ? 0 : 1]);
   }
