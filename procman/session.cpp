@@ -486,19 +486,20 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   // A model built across an unjoined map restart mixes two frames (the pose solver's last unjoined restart inside the
   // frames the dense modeler voted from): the model and the target can be centimetres off while everything else
   // looks fine (room_08: restart at frame 2074 during the orbit, target 306 mm off). Loud, with what to try.
+  // A process's last status value `name` into *v; false when not reported.
+  const auto value = [&](const char* process, const char* name, double* v) {
+    auto it = monitor->statuses_.find(process);
+    if (it == monitor->statuses_.end()) return false;
+    for (int k = 0; k < it->second.num_values; ++k)
+      if (it->second.value_name[k] == name) {
+        *v = it->second.value[k];
+        return true;
+      }
+    return false;
+  };
   std::string mixed_frames;
   {
     double restart = -1, first = -1, last = -1;
-    const auto value = [&](const char* process, const char* name, double* v) {
-      auto it = monitor->statuses_.find(process);
-      if (it == monitor->statuses_.end()) return false;
-      for (int k = 0; k < it->second.num_values; ++k)
-        if (it->second.value_name[k] == name) {
-          *v = it->second.value[k];
-          return true;
-        }
-      return false;
-    };
     if (value("pose_solver", "last_unjoined_restart_seq", &restart) && restart >= 0 &&
         value("dense_modeler", "model_first_seq", &first) && value("dense_modeler", "model_last_seq", &last) &&
         first >= 0 && first < restart && restart <= last) {
@@ -515,19 +516,16 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   if (!mixed_frames.empty() && failure.empty() && !interrupted) failure = mixed_frames;
   // A model from the live poses while the final ones lie elsewhere is not in trajectory.txt's frame (the dense
   // modeler's status; room_02: the re-vote kept no point after an unjoined restart, the model 390 mm off).
-  {
-    auto it = monitor->statuses_.find("dense_modeler");
-    if (it != monitor->statuses_.end() && failure.empty() && !interrupted)
-      for (int k = 0; k < it->second.num_values; ++k)
-        if (it->second.value_name[k] == "live_final_offset_mm" && it->second.value[k] > 5.0) {
-          char text[400];
-          std::snprintf(text, sizeof(text),
-                        "the model lies %.0f mm off trajectory.txt's frame: the dense modeler kept the votes of the "
-                        "live poses (its log says why) while the final poses moved %.0f mm. Run again (missions "
-                        "differ from run to run), or keep the tracking through the modeling",
-                        it->second.value[k], it->second.value[k]);
-          failure = text;
-        }
+  double live_final_offset_mm = -1;
+  if (failure.empty() && !interrupted && value("dense_modeler", "live_final_offset_mm", &live_final_offset_mm) &&
+      live_final_offset_mm > 5.0) {
+    char text[400];
+    std::snprintf(text, sizeof(text),
+                  "the model lies %.0f mm off trajectory.txt's frame: the dense modeler kept the votes of the live "
+                  "poses (its log says why) while the final poses moved that far. Run again (missions differ from "
+                  "run to run), or keep the tracking through the modeling",
+                  live_final_offset_mm);
+    failure = text;
   }
 
   // Summary.
