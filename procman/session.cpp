@@ -155,13 +155,15 @@ class Monitor {
 
   // Another process on this bus that is not one of ours (same name and pid on this host). One with the name of one
   // of our processes is another session's: its messages mix with ours (the same channels, frame numbers from 0).
-  // A real process reports every second: one that has reported kForeignReports times is taken for another
-  // session (about 2 s); a single forged status is only logged and listed.
+  // A real session's processes each report every second: kForeignReports statuses from foreign processes with our
+  // names, counted together, are taken for another session (under a second when it runs several processes, so a
+  // session that stops its processes at once, having found ours, is still found); a single forged status is only
+  // logged and listed.
   static constexpr int kForeignReports = 3;
   void NoteForeign(const process_status_t& m) {
     const std::string who = "'" + m.name + "' (pid " + std::to_string(m.pid) + " on host " + m.host + ")";
     const bool same_name = is_ours_ && is_ours_(m.name);
-    if (same_name && ++foreign_reports_[who] >= kForeignReports && foreign_session_.empty()) foreign_session_ = who;
+    if (same_name && ++foreign_reports_ >= kForeignReports && foreign_session_.empty()) foreign_session_ = who;
     if (!foreign_.insert(who).second) return;
     LogWarning(std::string(same_name ? "another session is on this bus: " : "a process of no session here is on this bus: ") +
                who + (same_name ? " runs next to ours and its messages mix with this run's" : " (not counted as ours)"));
@@ -171,7 +173,7 @@ class Monitor {
   std::function<bool(const std::string& name)> is_ours_;  // a name in the session's process list
   std::set<std::string> foreign_;    // foreign processes heard, as "'name' (pid P on host H)"
   std::string foreign_session_;      // the first foreign process with one of our names ("" = none)
-  std::map<std::string, int> foreign_reports_;  // statuses heard per foreign process with one of our names
+  int foreign_reports_ = 0;          // statuses heard from foreign processes with one of our names
   std::map<std::string, ChannelCount> channels_;
   std::map<std::string, process_status_t> statuses_;
   std::vector<std::string> error_order_;  // processes in the order they first reported STATE_ERROR
@@ -475,6 +477,8 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
 
   // Processes that ended in their error state say why the session failed, the first to fail first: it is usually
   // the cause (the planner found no target, so the dense modeler had nothing to model).
+  // Another session heard only while ours stopped: its messages still mixed with ours.
+  if (failure.empty() && !interrupted && !monitor->foreign_session_.empty()) failure = foreign_session_failure();
   if (failure.empty() && !interrupted) {
     for (const std::string& name : monitor->error_order_) {
       const process_status_t& s = monitor->statuses_[name];
