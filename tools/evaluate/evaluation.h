@@ -2,6 +2,8 @@
 // TUM lines: "t tx ty tz qx qy qz qw" (camera-to-world), '#' comments; positions in the file's unit (objscan: mm).
 #pragma once
 
+#include "common/ply.h"  // ReadPlyPoints, ReadPlyMesh (the evaluation reads both)
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -37,17 +39,6 @@ struct TrajectoryEvaluation {
 // Pairs poses by timestamp (nearest, |dt| <= max_dt_s) and evaluates them.
 bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const std::vector<StampedPose>& truth,
                              bool with_scale, double max_dt_s, TrajectoryEvaluation* out, std::string* error);
-
-// Reads the vertices (x y z) of an ASCII or binary_little_endian PLY (float or double coordinates). With normals
-// non-null, also the vertex normals (nx ny nz); false when the file has none.
-bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
-                   std::vector<Eigen::Vector3d>* normals = nullptr);
-
-// Reads the vertices (x y z) and faces of an ASCII or binary_little_endian PLY: the face element must follow the
-// vertex element and hold only a list property vertex_indices (or vertex_index; any integer types); polygons are
-// fan-triangulated. False with *error on an unreadable or malformed file or an index out of range.
-bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices,
-                 std::vector<Eigen::Vector3i>* triangles, std::string* error);
 
 // Exact distance from a point to a triangle mesh (the nearest point of any of its triangles), over a uniform grid
 // of the triangles (cells about twice the mean edge): exact, not an approximation by samples. Triangles with an
