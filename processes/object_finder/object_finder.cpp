@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -81,6 +82,44 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
 bool FinderCamera::IsValid() const {
   return width > 0 && height > 0 && fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
          std::isfinite(cy);
+}
+
+bool BoxFromModel(const std::vector<Eigen::Vector3d>& voxels_mm, double voxel_mm, const FloorPlane& floor,
+                  const TargetBox& near, TargetBox* box, int* voxels_used, std::string* why) {
+  if (voxels_used) *voxels_used = 0;
+  if (!(voxel_mm > 0) || !std::isfinite(voxel_mm)) {
+    *why = "the model's voxel size is not positive";
+    return false;
+  }
+  const Eigen::Isometry3d floor_from_world = floor.FloorFromWorld();
+  std::vector<Eigen::Vector3d> above;  // floor frame
+  for (const Eigen::Vector3d& v : voxels_mm) {
+    if (!v.allFinite()) continue;
+    const Eigen::Vector3d f = floor_from_world * v;
+    if (f.z() > voxel_mm) above.push_back(f);
+  }
+  std::vector<std::vector<int>> clusters = EuclideanClusters(above, 2.5 * voxel_mm, kMinModelVoxels);
+  if (clusters.empty()) {
+    *why = std::to_string(above.size()) + " of " + std::to_string(voxels_mm.size()) +
+           " voxels above the floor and no connected group of " + std::to_string(kMinModelVoxels);
+    return false;
+  }
+  const auto largest = std::max_element(clusters.begin(), clusters.end(),
+                                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  const ClusterBox fitted = FitClusterBox(above, *largest, floor);
+  const Eigen::Vector2d offset = (fitted.centre_mm - near.centre_mm).head<2>();
+  const double c = std::cos(near.yaw_rad), s = std::sin(near.yaw_rad);
+  const Eigen::Vector2d along(c * offset.x() + s * offset.y(), -s * offset.x() + c * offset.y());
+  if (std::abs(along.x()) > near.size_mm.x() || std::abs(along.y()) > near.size_mm.y()) {
+    char text[200];
+    std::snprintf(text, sizeof(text), "the model's largest part (%zu voxels) is centred %.0f mm from the landmarks' box, "
+                  "outside its footprint grown by half", largest->size(), offset.norm());
+    *why = text;
+    return false;
+  }
+  *box = ToTargetBox(fitted);
+  if (voxels_used) *voxels_used = static_cast<int>(largest->size());
+  return true;
 }
 
 ImageRegion ProjectBox(const TargetBox& box, const Eigen::Isometry3d& world_from_camera, const FinderCamera& camera) {

@@ -15,6 +15,7 @@
 #include "common/bus.h"
 #include "common/log.h"
 #include "common/options.h"
+#include "common/ply.h"
 #include "common/robot_model.h"
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
@@ -45,6 +46,16 @@ std::string Describe(const TargetBox& box) {
 
 std::string Views(int views) { return std::to_string(views) + (views == 1 ? " view" : " views"); }
 
+// text as a JSON string (quotes and backslashes escaped, control characters dropped)
+std::string JsonString(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
 std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
   return "[" + Format(format, v.x()) + ", " + Format(format, v.y()) + ", " + Format(format, v.z()) + "]";
 }
@@ -67,6 +78,8 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.Add("output-dir", &o->output_dir, "write target.json here at end of stream (\"\" = none)");
   p.Add("final-pose-channel", &o->final_pose_channel,
         "final poses (pose_t): target.json is re-expressed in their frame (\"\" = keep the online poses' frame)");
+  p.Add("model-channel", &o->model_channel,
+        "final model (model_t): target.json's box is measured on its voxels (\"\" = the landmarks' box, no wait)");
   ObjectFinderOptions* f = &o->finder;
   p.Add("floor-inlier-distance", &f->floor_inlier_mm, "mm, max |height| of a floor landmark");
   p.Add("floor-max-tilt", &f->floor_max_tilt_deg, "deg, max angle of the floor normal from world z");
@@ -117,7 +130,7 @@ bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& o, std::stri
   return false;
 }
 
-std::string TargetJson(const FinderResult& r, int updates) {
+std::string TargetJson(const FinderResult& r, int updates, const BoxSource& source) {
   std::ostringstream j;
   j << "{\n";
   j << "  \"state\": \"" << TargetStateName(r.state) << "\",\n";
@@ -142,8 +155,14 @@ std::string TargetJson(const FinderResult& r, int updates) {
   j << (r.other_candidates.empty() ? "],\n" : "\n  ],\n");
   j << "  \"floor\": {\"found\": " << (r.floor_valid ? "true" : "false")
     << ", \"normal\": " << JsonVector(r.floor.normal, "%.6f")
-    << ", \"offset_mm\": " << Format("%.2f", r.floor.offset_mm) << "}\n";
-  j << "}\n";
+    << ", \"offset_mm\": " << Format("%.2f", r.floor.offset_mm) << "},\n";
+  j << "  \"box_source\": \"" << (source.from_model ? "model" : "landmarks") << "\"";
+  if (source.from_model)
+    j << ",\n  \"landmarks_centre_mm\": " << JsonVector(source.landmarks_box.centre_mm, "%.2f")
+      << ",\n  \"landmarks_size_mm\": " << JsonVector(source.landmarks_box.size_mm, "%.2f")
+      << ",\n  \"model_voxels\": " << source.model_voxels;
+  if (!source.model_error.empty()) j << ",\n  \"model_box_error\": " << JsonString(source.model_error);
+  j << "\n}\n";
   return j.str();
 }
 
@@ -170,6 +189,10 @@ ObjectFinderNode::ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& opti
     bus_.SubscribeMessage<pose_t>(
         options_.final_pose_channel, [this](const pose_t& m, const RawMessage&) { OnFinalPose(m); },
         status_.MalformedHandler("final pose"), 65536);
+  if (!options_.model_channel.empty())
+    bus_.SubscribeMessage<model_t>(
+        options_.model_channel, [this](const model_t& m, const RawMessage&) { OnModel(m); },
+        status_.MalformedHandler("model"), 4);
   bus_.SubscribeMessage<control_t>(
       options_.control_channel, [this](const control_t& m, const RawMessage&) { OnControl(m); },
       status_.MalformedHandler("control"));
@@ -178,7 +201,9 @@ ObjectFinderNode::ObjectFinderNode(Bus& bus, const ObjectFinderNodeOptions& opti
 namespace {
 constexpr size_t kMaxCentres = 200000;             // camera centres kept per kind (a 1.8 h run at 30 Hz)
 constexpr int64_t kFinalPoseWaitUs = 120'000'000;  // wall clock the end waits for the pose solver's final poses
+constexpr int64_t kModelWaitUs = 600'000'000;      // wall clock it then waits for the dense model
 const char* const kPoseSolverName = "pose_solver";
+const char* const kDenseModelerName = "dense_modeler";
 }  // namespace
 
 void ObjectFinderNode::OnFinalPose(const pose_t& msg) {
@@ -442,6 +467,11 @@ void ObjectFinderNode::OnControl(const control_t& msg) {
     FinishTarget("the pose solver finished");
     return;
   }
+  if (awaiting_model_ && msg.command == control_t::COMMAND_FINISHED && msg.sender == kDenseModelerName) {
+    status_.CountIn();  // its MODEL comes first: a FINISHED without one means none is coming
+    CompleteTarget("the dense modeler finished without one");
+    return;
+  }
   const bool finalize = IsFinalizeRequest(msg, options_.name);
   if (!finalize) {
     if (msg.command != control_t::COMMAND_END_OF_STREAM) return;
@@ -451,6 +481,10 @@ void ObjectFinderNode::OnControl(const control_t& msg) {
   if (finished_) return;
   if (awaiting_final_) {  // FINALIZE (or a repeated end of stream) while waiting: end with what there is
     if (finalize) FinishTarget("asked to finalize");
+    return;
+  }
+  if (awaiting_model_) {
+    if (finalize) CompleteTarget("asked to finalize");
     return;
   }
   const FinderResult& r = finder_.result();
@@ -531,18 +565,80 @@ void ObjectFinderNode::FinishTarget(const std::string& why) {
   } else if (r.state != TargetState::kSearching && !why.empty()) {
     LogWarning("target.json stays in the online poses' frame: no final poses (" + why + ")");
   }
-  if (!options_.output_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(options_.output_dir, ec);
-    const std::string path = options_.output_dir + "/target.json";
-    std::ofstream out(path);
-    out << TargetJson(r, finder_.updates());
-    out.close();
-    if (out)
-      LogInfo("wrote " + path);
-    else
-      LogError("cannot write " + path);
+  final_result_ = r;
+  if (ExpectsModel(r)) {
+    WriteTargetJson(r, BoxSource{});  // the landmarks' box in the final frame now: a hard stop later still leaves it
+    if (have_model_) {
+      CompleteTarget("");
+      return;
+    }
+    awaiting_model_ = true;
+    awaiting_since_us_ = WallTimeMicros();
+    status_.SetState(+process_status_t::STATE_RUNNING, "waiting for the dense model on " + options_.model_channel);
+    return;
   }
+  CompleteTarget("");
+}
+
+bool ObjectFinderNode::ExpectsModel(const FinderResult& r) const {
+  return !options_.model_channel.empty() && !options_.output_dir.empty() && r.state != TargetState::kSearching;
+}
+
+void ObjectFinderNode::WriteTargetJson(const FinderResult& r, const BoxSource& source) {
+  if (options_.output_dir.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(options_.output_dir, ec);
+  const std::string path = options_.output_dir + "/target.json";
+  std::ofstream out(path);
+  out << TargetJson(r, finder_.updates(), source);
+  out.close();
+  if (out)
+    LogInfo("wrote " + path);
+  else
+    LogError("cannot write " + path);
+}
+
+void ObjectFinderNode::OnModel(const model_t& msg) {
+  status_.CountIn();
+  model_ = msg;
+  have_model_ = true;
+  if (awaiting_model_) CompleteTarget("");
+}
+
+void ObjectFinderNode::CompleteTarget(const std::string& why) {
+  awaiting_model_ = false;
+  FinderResult r = final_result_;
+  BoxSource source;
+  if (ExpectsModel(r)) {
+    std::string error;
+    std::vector<Eigen::Vector3d> voxels;
+    if (!have_model_) {
+      error = "no model on " + options_.model_channel + " (" + why + ")";
+    } else if (model_.voxels_ply_path.empty() || model_.num_voxels <= 0) {
+      error = "the dense modeler's model is empty or was not written";
+    } else if (!r.floor_valid) {
+      error = "no floor to measure the model's height from";
+    } else if (!ReadPlyPoints(model_.voxels_ply_path, &voxels, &error)) {
+      error = "cannot read the model's voxels on this host: " + error;
+    } else {
+      TargetBox box;
+      int used = 0;
+      if (BoxFromModel(voxels, model_.voxel_size_mm, r.floor, r.box, &box, &used, &error)) {
+        source.from_model = true;
+        source.landmarks_box = r.box;
+        source.model_voxels = used;
+        LogInfo("target.json's box measured on the model (" + std::to_string(used) + " of " +
+                std::to_string(voxels.size()) + " voxels): " + Describe(box) +
+                Format(", %.1f mm from the landmarks' box", (box.centre_mm - r.box.centre_mm).norm()));
+        r.box = box;
+      }
+    }
+    if (!source.from_model) {
+      source.model_error = error;
+      LogWarning("target.json keeps the landmarks' box: " + error);
+    }
+  }
+  WriteTargetJson(r, source);
   PublishTarget(WallTimeMicros());
   PublishFinished(bus_, status_, options_.control_channel, options_.name,
                   last_landmarks_seq_ >= 0 ? r.utime : end_utime_, last_landmarks_seq_);
@@ -554,6 +650,8 @@ void ObjectFinderNode::FinishTarget(const std::string& why) {
 void ObjectFinderNode::Tick(int64_t wall_utime) {
   if (awaiting_final_ && wall_utime - awaiting_since_us_ > kFinalPoseWaitUs)
     FinishTarget("none within " + std::to_string(kFinalPoseWaitUs / 1'000'000) + " s of the end of stream");
+  if (awaiting_model_ && wall_utime - awaiting_since_us_ > kModelWaitUs)
+    CompleteTarget("none within " + std::to_string(kModelWaitUs / 1'000'000) + " s of the final poses");
   if (have_target_ && wall_utime - target_published_us_ >= static_cast<int64_t>(options_.target_period_s * 1e6))
     PublishTarget(wall_utime);
   status_.PublishIfDue(wall_utime);
@@ -561,6 +659,7 @@ void ObjectFinderNode::Tick(int64_t wall_utime) {
 
 void ObjectFinderNode::OnShutdown() {
   if (awaiting_final_) FinishTarget("stopped before the pose solver finished");
+  if (awaiting_model_) CompleteTarget("stopped before the dense modeler finished");
   status_.PublishIfDue(WallTimeMicros(), true);
 }
 

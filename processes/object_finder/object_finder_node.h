@@ -17,8 +17,15 @@
 //                   for the pose solver's FINISHED (sender "pose_solver"; at most 120 s, or FINALIZE): target.json
 //                   is then rewritten in the final poses' frame (the Sim(3) from the online to the final camera
 //                   centres of the frames since the confirmation; kept online, with a warning, when that is not
-//                   rigid within 20 mm RMS or fewer than 10 frames have both).
+//                   rigid within 20 mm RMS or fewer than 10 frames have both). With model_channel as well, that
+//                   target.json is written at once and FINISHED then waits for the dense modeler's MODEL (at most
+//                   600 s, until the dense modeler's FINISHED without it, or FINALIZE): the box is measured again on
+//                   the model's voxels (BoxFromModel in object_finder.h; the landmarks' box was 29-47 mm off on mesh
+//                   targets whose model was within 1 mm) and target.json rewritten with "box_source": "model"; when
+//                   that fails (no model, its file unreadable on this host, too few voxels, a model elsewhere) the
+//                   landmarks' box stays ("box_source": "landmarks", "model_box_error": why) with a warning.
 //   CAMERA_POSE_FINAL pose_t: the final poses (tracking / relocalized ones), by seq.
+//   MODEL           model_t: the dense modeler's final model (voxels_ply_path, voxel_size_mm); the last one kept.
 // Outputs:
 //   TARGET          target_t after every update (utime/seq of the map's keyframe, frame "world", state, centre,
 //                   size, yaw, confidence, roi in that keyframe's image), repeated every target_period_s (stateless).
@@ -36,7 +43,9 @@
 // OdometryFromMessage's reasons, "control: malformed".
 // target.json: {"state": "confirmed", "centre_mm": [x, y, z], "size_mm": [x, y, z], "yaw_rad", "confidence",
 // "confirmed_seq", "confirmed_utime", "views", "points", "seq", "utime", "updates", "frame": "world",
-// "other_candidates": [{"centre_mm", "size_mm", "points"}], "floor": {"found", "normal": [3], "offset_mm"}}
+// "other_candidates": [{"centre_mm", "size_mm", "points"}], "floor": {"found", "normal": [3], "offset_mm"},
+// "box_source": "landmarks" | "model", with "model": "landmarks_centre_mm", "landmarks_size_mm", "model_voxels";
+// "model_box_error" when the model was expected but not used}
 // (world frame = the pose solver's, as trajectory.txt; zeros when searching; height(p) = normal . p + offset_mm).
 // Handlers run inside Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
@@ -52,6 +61,7 @@
 #include "objscan/camera_info_t.hpp"
 #include "objscan/control_t.hpp"
 #include "objscan/landmarks_t.hpp"
+#include "objscan/model_t.hpp"
 #include "objscan/odometry_t.hpp"
 #include "objscan/pose_t.hpp"
 #include "objscan/target_t.hpp"
@@ -77,6 +87,8 @@ struct ObjectFinderNodeOptions {
   std::string output_dir;                           // write target.json here at end of stream ("" = none)
   std::string final_pose_channel = "CAMERA_POSE_FINAL";  // input final poses (pose_t): target.json is re-expressed
                                                          // in their frame ("" = keep the online poses' frame)
+  std::string model_channel = "MODEL";              // input final model (model_t): target.json's box is measured on
+                                                    // its voxels ("" = the landmarks' box, no wait)
   ObjectFinderOptions finder;                       // the finder's options
 };
 
@@ -84,8 +96,16 @@ struct ObjectFinderNodeOptions {
 void AddObjectFinderNodeOptions(OptionParser& parser, ObjectFinderNodeOptions* options);
 bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& options, std::string* why);
 
+// How target.json's box was measured.
+struct BoxSource {
+  bool from_model = false;   // the dense model's voxels (else the landmarks')
+  TargetBox landmarks_box;   // with from_model: the landmarks' box it replaced
+  int model_voxels = 0;      // with from_model: voxels in the boxed part of the model
+  std::string model_error;   // the model was expected but not used: why ("" otherwise)
+};
+
 // target.json text for a result (see above). updates: updates so far.
-std::string TargetJson(const FinderResult& result, int updates);
+std::string TargetJson(const FinderResult& result, int updates, const BoxSource& source = {});
 
 class ObjectFinderNode : public Node {
  public:
@@ -107,8 +127,15 @@ class ObjectFinderNode : public Node {
   void OnOdometry(const odometry_t& msg);
   void OnControl(const control_t& msg);
   void OnFinalPose(const pose_t& msg);
-  // Writes target.json (in the final poses' frame when they came), publishes TARGET and FINISHED: the end.
+  void OnModel(const model_t& msg);
+  // Carries the result into the final poses' frame (when they came) and writes target.json; then waits for the
+  // model (model_channel) or completes at once.
   void FinishTarget(const std::string& why);
+  // Measures the box on the model when one came (why: why there is none otherwise), writes target.json, publishes
+  // TARGET and FINISHED: the end.
+  void CompleteTarget(const std::string& why);
+  bool ExpectsModel(const FinderResult& r) const;  // a target, output_dir and model_channel
+  void WriteTargetJson(const FinderResult& r, const BoxSource& source);
   bool RobotPosition(Eigen::Vector2d* xy_mm) const;
   void PublishTarget(int64_t wall_utime);
   void LogChanges(const FinderResult& r);
@@ -124,7 +151,11 @@ class ObjectFinderNode : public Node {
   // final phase moves whole stretches: room_07, 117 mm).
   std::map<int64_t, Eigen::Vector3d> online_centres_, final_centres_;
   bool awaiting_final_ = false;      // end of stream answered in part: target.json waits for the final poses
+  bool awaiting_model_ = false;      // target.json written in the final poses' frame: waits for MODEL
   int64_t awaiting_since_us_ = 0;    // wall clock
+  FinderResult final_result_;        // the result in the final poses' frame (while awaiting_model_)
+  bool have_model_ = false;          // a MODEL arrived
+  model_t model_;                    // the last MODEL
   int64_t end_utime_ = 0;            // utime of the end-of-stream message
   bool have_camera_ = false;
   PinholeCamera first_camera_;  // the accepted camera_info (a different later one is rejected)

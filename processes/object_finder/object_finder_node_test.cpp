@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <opencv2/core/persistence.hpp>
 #include <vector>
@@ -60,11 +61,7 @@ void PutInt32(std::vector<uint8_t>* bytes, size_t offset, int32_t value) {
 class ObjectFinderNodeTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    bus_ = MakeLcmBus("memq://");
-    bus_->SubscribeMessage<target_t>("TARGET", [this](const target_t& m, const RawMessage&) { targets_.push_back(m); });
-    bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
-      if (m.command == control_t::COMMAND_FINISHED && m.sender != "pose_solver") finished_.push_back(m);
-    });
+    MakeBus();
     room_.AddFloor(2500, 2000, 2.0);
     room_.AddBox("box", kBoxCentre.head<2>(), Eigen::Vector3d(150, 120, 140), 0.3, 12);
     room_.AddSphere("sphere", Eigen::Vector2d(-2000, 1500), 200, 12);
@@ -78,6 +75,15 @@ class ObjectFinderNodeTest : public ::testing::Test {
   }
   void TearDown() override { std::filesystem::remove_all(out_dir_); }
 
+  // A new bus (a node's subscriptions live as long as its bus: one bus per node).
+  void MakeBus() {
+    node_.reset();
+    bus_ = MakeLcmBus("memq://");
+    bus_->SubscribeMessage<target_t>("TARGET", [this](const target_t& m, const RawMessage&) { targets_.push_back(m); });
+    bus_->SubscribeMessage<control_t>("OBJSCAN_CONTROL", [this](const control_t& m, const RawMessage&) {
+      if (m.command == control_t::COMMAND_FINISHED && m.sender == "object_finder") finished_.push_back(m);
+    });
+  }
   void Start() { node_ = std::make_unique<ObjectFinderNode>(*bus_, options_); }
   void Drain() {
     while (bus_->Handle(0) > 0) {
@@ -103,10 +109,11 @@ class ObjectFinderNodeTest : public ::testing::Test {
     pose.status = status;
     ASSERT_TRUE(bus_->PublishMessage(channel, PoseToMessage(pose)));
   }
-  void PoseSolverFinished() {
+  void PoseSolverFinished() { Finished("pose_solver"); }
+  void Finished(const std::string& sender) {
     control_t c;
     c.utime = 0;
-    c.sender = "pose_solver";
+    c.sender = sender;
     c.target = "*";
     c.command = control_t::COMMAND_FINISHED;
     c.last_seq = 100;
@@ -200,6 +207,9 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
   EXPECT_TRUE(std::filesystem::exists(out_dir_ / "target.json"));  // the online one, at once
   PoseSolverFinished();
   Drain();
+  EXPECT_TRUE(finished_.empty());  // then it waits for the dense model; the dense modeler ends without one
+  Finished("dense_modeler");
+  Drain();
   ASSERT_EQ(finished_.size(), 1u);
   EXPECT_EQ(finished_[0].sender, "object_finder");
   EXPECT_EQ(finished_[0].last_seq, 53);
@@ -224,6 +234,9 @@ TEST_F(ObjectFinderNodeTest, ConfirmsTheTargetAndWritesTargetJson) {
   EXPECT_GT(normal[2], 0.999);
   EXPECT_NEAR(static_cast<double>(json["floor"]["offset_mm"]), 0.0, 2.0);
   EXPECT_TRUE(json["other_candidates"].isSeq());
+  EXPECT_EQ(static_cast<std::string>(json["box_source"]), "landmarks");
+  EXPECT_NE(static_cast<std::string>(json["model_box_error"]).find("no model on MODEL (the dense modeler finished"),
+            std::string::npos);
 }
 
 // The final phase moved the frames since the confirmation rigidly (a joined or re-chained map restart: room_07's
@@ -251,6 +264,7 @@ TEST_F(ObjectFinderNodeTest, WhileSearchingTheLogSaysWhyTheClustersAreNoTarget) 
 }
 
 TEST_F(ObjectFinderNodeTest, TargetJsonFollowsTheFinalPoses) {
+  options_.model_channel = "";  // the landmarks' box, carried into the final frame
   Start();
   PublishInfo();
   for (int k = 0; k < 6; ++k) PublishKeyframe(k);
@@ -287,6 +301,92 @@ TEST_F(ObjectFinderNodeTest, TargetJsonFollowsTheFinalPoses) {
   ASSERT_EQ(normal.size(), 3u);
   EXPECT_GT(normal[2], 0.999);
   EXPECT_NEAR(static_cast<double>(json["floor"]["offset_mm"]), 0.0, 2.0);
+}
+
+// The dense modeler's final model, 2 mm voxels on the five visible faces of the target box moved by `shift`, as
+// model_voxels.ply in out_dir; the MODEL message that announces it.
+model_t WriteBoxModel(const std::filesystem::path& dir, const Eigen::Vector3d& shift) {
+  std::vector<Eigen::Vector3d> voxels;
+  const Eigen::Vector3d half(75, 60, 70);
+  const Eigen::Rotation2Dd yaw(0.3);
+  for (double x = -half.x(); x <= half.x(); x += 2)
+    for (double y = -half.y(); y <= half.y(); y += 2)
+      for (double z = -half.z(); z <= half.z(); z += 2)
+        if (std::abs(x) > half.x() - 1 || std::abs(y) > half.y() - 1 || z > half.z() - 1) {
+          const Eigen::Vector2d xy = yaw * Eigen::Vector2d(x, y);
+          voxels.push_back(kBoxCentre + shift + Eigen::Vector3d(xy.x(), xy.y(), z));
+        }
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "model_voxels.ply").string();
+  std::ofstream out(path);
+  out << "ply\nformat ascii 1.0\nelement vertex " << voxels.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  for (const auto& v : voxels) out << v.x() << " " << v.y() << " " << v.z() << "\n";
+  model_t m{};
+  m.utime = 0;
+  m.voxels_ply_path = path;
+  m.voxel_size_mm = 2;
+  m.num_voxels = static_cast<int32_t>(voxels.size());
+  return m;
+}
+
+// With a target, the end waits for the dense model after the final poses and measures target.json's box on it (here
+// 25 mm from the landmarks' box); the model may also come first. A model file this host cannot read, or a model of
+// something else: the landmarks' box stays, and target.json says why.
+TEST_F(ObjectFinderNodeTest, TargetJsonBoxIsMeasuredOnTheDenseModel) {
+  const Eigen::Vector3d shift(20, -15, 0);
+  for (const char* order : {"model last", "model first", "unreadable", "elsewhere"}) {
+    SCOPED_TRACE(order);
+    const std::string mode = order;
+    finished_.clear();
+    std::filesystem::remove_all(out_dir_);
+    MakeBus();
+    Start();
+    PublishInfo();
+    for (int k = 0; k < 6; ++k) PublishKeyframe(k);
+    Drain();
+    ASSERT_EQ(node_->finder().result().state, TargetState::kConfirmed);
+    model_t model = WriteBoxModel(out_dir_, mode == "elsewhere" ? Eigen::Vector3d(900, 0, 0) : shift);
+    if (mode == "unreadable") model.voxels_ply_path = (out_dir_ / "elsewhere" / "model_voxels.ply").string();
+    EndOfStream();
+    if (mode == "model first") ASSERT_TRUE(bus_->PublishMessage("MODEL", model));
+    PoseSolverFinished();
+    Drain();
+    if (mode != "model first") {
+      EXPECT_TRUE(finished_.empty());
+      ASSERT_TRUE(bus_->PublishMessage("MODEL", model));
+      Drain();
+    }
+    ASSERT_EQ(finished_.size(), 1u);
+    EXPECT_TRUE(node_->Finished());
+    cv::FileStorage json((out_dir_ / "target.json").string(), cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON);
+    ASSERT_TRUE(json.isOpened());
+    std::vector<double> centre, size, landmarks_centre;
+    json["centre_mm"] >> centre;
+    json["size_mm"] >> size;
+    ASSERT_EQ(centre.size(), 3u);
+    ASSERT_EQ(size.size(), 3u);
+    const Eigen::Vector3d c(centre[0], centre[1], centre[2]);
+    if (mode == "model last" || mode == "model first") {
+      EXPECT_EQ(static_cast<std::string>(json["box_source"]), "model");
+      EXPECT_LT((c - (kBoxCentre + shift)).norm(), 2.0) << c.transpose();
+      EXPECT_NEAR(size[0], 150, 2.0);
+      EXPECT_NEAR(size[1], 120, 2.0);
+      EXPECT_NEAR(size[2], 140, 2.0);
+      EXPECT_NEAR(static_cast<double>(json["yaw_rad"]), 0.3, 0.02);
+      json["landmarks_centre_mm"] >> landmarks_centre;
+      ASSERT_EQ(landmarks_centre.size(), 3u);
+      EXPECT_LT((Eigen::Vector3d(landmarks_centre[0], landmarks_centre[1], landmarks_centre[2]) - kBoxCentre).norm(),
+                10.0);
+      EXPECT_GT(static_cast<int>(json["model_voxels"]), 10000);
+    } else {
+      EXPECT_EQ(static_cast<std::string>(json["box_source"]), "landmarks");
+      EXPECT_LT((c - kBoxCentre).norm(), 10.0) << c.transpose();
+      const std::string error = json["model_box_error"];
+      EXPECT_NE(error.find(mode == "unreadable" ? "cannot read the model's voxels on this host" : "outside"),
+                std::string::npos) << error;
+    }
+  }
 }
 
 TEST_F(ObjectFinderNodeTest, MalformedMessagesAreRejectedBeforeDecoding) {

@@ -586,6 +586,62 @@ TEST(ObjectFinderTest, ImageRegionOfABox) {
   EXPECT_EQ(roi.height, 480);
 }
 
+// A dense model's voxels (2 mm) on the five visible faces of a 150 x 120 x 140 mm box, yaw 20 deg, standing on a
+// floor tilted by 1 deg; a band of floor voxels around it and a stray group of 60 voxels 300 mm away: the box comes
+// back within a voxel; a landmarks' box elsewhere, too few voxels or no voxel size: false, box untouched.
+TEST(ObjectFinderTest, BoxFromTheDenseModel) {
+  constexpr double kVoxel = 2.0;
+  FloorPlane floor;
+  floor.normal = Eigen::Vector3d(std::sin(1 * kDeg), 0, std::cos(1 * kDeg));
+  floor.offset_mm = 12;
+  const Eigen::Isometry3d world_from_floor = floor.FloorFromWorld().inverse();
+  const Eigen::Vector2d centre_xy(400, -300);
+  const Eigen::Rotation2Dd yaw(kBoxYaw);
+  std::vector<Eigen::Vector3d> voxels;
+  const Eigen::Vector3d half = kBoxSize / 2;
+  const auto add = [&](double x, double y, double z) {  // box frame, z from the floor
+    const Eigen::Vector2d xy = centre_xy + yaw * Eigen::Vector2d(x, y);
+    voxels.push_back(world_from_floor * Eigen::Vector3d(xy.x(), xy.y(), z));
+  };
+  for (double x = -half.x(); x <= half.x(); x += kVoxel)
+    for (double y = -half.y(); y <= half.y(); y += kVoxel)
+      for (double z = 0; z <= kBoxSize.z(); z += kVoxel) {
+        const bool side = std::abs(x) > half.x() - kVoxel / 2 || std::abs(y) > half.y() - kVoxel / 2;
+        if (side || z > kBoxSize.z() - kVoxel / 2) add(x, y, z);
+      }
+  for (double x = -half.x() - 20; x <= half.x() + 20; x += kVoxel)  // floor band: at most one voxel up
+    for (double y = -half.y() - 20; y <= half.y() + 20; y += kVoxel) add(x, y, 0.5 * kVoxel * ((int(x + y) / 2) % 2));
+  for (int i = 0; i < 60; ++i) add(300 + 2 * (i % 6), 2 * (i / 6), 20);  // a stray group
+  TargetBox near;  // the landmarks' box: 40 mm off, a little too large
+  near.centre_mm = world_from_floor * Eigen::Vector3d(centre_xy.x() + 30, centre_xy.y() - 27, 75);
+  near.size_mm = Eigen::Vector3d(170, 130, 150);
+  near.yaw_rad = kBoxYaw;
+  TargetBox box;
+  int used = 0;
+  std::string why;
+  ASSERT_TRUE(BoxFromModel(voxels, kVoxel, floor, near, &box, &used, &why)) << why;
+  const Eigen::Vector3d true_centre = world_from_floor * Eigen::Vector3d(centre_xy.x(), centre_xy.y(), half.z());
+  EXPECT_LT((box.centre_mm - true_centre).norm(), kVoxel) << box.centre_mm.transpose();
+  EXPECT_NEAR(box.size_mm.x(), kBoxSize.x(), kVoxel);
+  EXPECT_NEAR(box.size_mm.y(), kBoxSize.y(), kVoxel);
+  EXPECT_NEAR(box.size_mm.z(), kBoxSize.z(), kVoxel);
+  EXPECT_NEAR(box.yaw_rad, kBoxYaw, 1 * kDeg);
+  EXPECT_GT(used, 1000);
+
+  const TargetBox untouched = box;
+  TargetBox far = near;
+  far.centre_mm += Eigen::Vector3d(400, 0, 0);
+  EXPECT_FALSE(BoxFromModel(voxels, kVoxel, floor, far, &box, &used, &why));
+  EXPECT_NE(why.find("outside"), std::string::npos) << why;
+  EXPECT_EQ(used, 0);
+  const std::vector<Eigen::Vector3d> few(voxels.end() - 40, voxels.end());
+  EXPECT_FALSE(BoxFromModel(few, kVoxel, floor, near, &box, &used, &why));
+  EXPECT_NE(why.find("no connected group"), std::string::npos) << why;
+  EXPECT_FALSE(BoxFromModel(voxels, 0, floor, near, &box, &used, &why));
+  EXPECT_FALSE(BoxFromModel({}, kVoxel, floor, near, &box, &used, &why));
+  EXPECT_EQ(box.centre_mm, untouched.centre_mm);
+}
+
 TEST(ObjectFinderTest, InvalidOptionsThrow) {
   ObjectFinderOptions o;
   o.target_max_size_mm = 50;  // below the minimum
