@@ -519,10 +519,11 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   }
   if (!mixed_frames.empty() && failure.empty() && !interrupted) failure = mixed_frames;
   // A model from the live poses while the final ones lie elsewhere is not in trajectory.txt's frame (the dense
-  // modeler's status; room_02: the re-vote kept no point after an unjoined restart, the model 390 mm off).
-  double live_final_offset_mm = -1;
-  if (failure.empty() && !interrupted && value("dense_modeler", "live_final_offset_mm", &live_final_offset_mm) &&
-      live_final_offset_mm > 5.0) {
+  // modeler's status model_off_trajectory_frame, by its own limit; room_02: the re-vote kept no point after an
+  // unjoined restart, the model 390 mm off).
+  double live_final_offset_mm = -1, off_frame = 0;
+  if (failure.empty() && !interrupted && value("dense_modeler", "model_off_trajectory_frame", &off_frame) &&
+      off_frame == 1 && value("dense_modeler", "live_final_offset_mm", &live_final_offset_mm)) {
     char text[400];
     std::snprintf(text, sizeof(text),
                   "the model lies %.0f mm off trajectory.txt's frame: the dense modeler kept the votes of the live "

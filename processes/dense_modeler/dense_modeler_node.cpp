@@ -952,6 +952,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     }
   }
   status_.SetValue("live_final_offset_mm", live_final_offset_mm);
+  status_.SetValue("model_off_trajectory_frame", live_final_offset_mm > kLiveFinalOffsetWarnMm ? 1 : 0);
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_, &refine_views);
   if (options_.model.surface_method == 1)
     LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +

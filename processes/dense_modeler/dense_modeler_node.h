@@ -48,7 +48,10 @@
 // final_carved, final_hidden_vertices, final_curled_triangles, final_voxels_off_mesh, final_weak_vertices,
 // final_weak_moved, final_rim_vertices_removed (weak_surface_refit.h), final_carving_s, final_visibility_s,
 // final_revoted_pairs (pairs triangulated with final poses; 0 = the live votes were kept), final_revote_rejected
-// (matches the re-triangulation's checks rejected, the final region's included) and final_revote_s. Handlers run inside
+// (matches the re-triangulation's checks rejected, the final region's included), final_revote_s, live_final_offset_mm
+// (live votes kept although final poses came: the median camera centre offset between them, mm; -1 otherwise) and
+// model_off_trajectory_frame (1 when that offset is over 5 mm: the model is not in trajectory.txt's frame, the
+// session fails the run). Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 

@@ -315,12 +315,14 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revoted_pairs"), n);
       EXPECT_EQ(StatusValue(out_.statuses.back(), "final_revote_rejected"), 0);  // a scale keeps the epipolar lines
       EXPECT_EQ(StatusValue(out_.statuses.back(), "live_final_offset_mm"), -1.0);  // final poses used
+      EXPECT_EQ(StatusValue(out_.statuses.back(), "model_off_trajectory_frame"), 0);
     } else {
       // The live votes kept while the final poses lie 3 % of the ring's radius away: reported (the session fails).
       const double offset = StatusValue(out_.statuses.back(), "live_final_offset_mm");
       const double radius = scene_.RingPose(0, n).translation().norm();
       EXPECT_NEAR(offset, 0.03 * radius, 0.01 * radius);
       EXPECT_GT(offset, 5.0);
+      EXPECT_EQ(StatusValue(out_.statuses.back(), "model_off_trajectory_frame"), 1);
     }
     std::printf("re-vote %s: final voxels' median error %.2f mm\n", revote ? "on" : "off", error_mm[revote ? 0 : 1]);
   }
