@@ -303,7 +303,7 @@ class PoseEstimator {
   // with *message) when too few pairs agree or they are degenerate.
   bool JoinToOldMap(int first, int last, const std::vector<int64_t>& new_points, int* num_pairs, std::string* message);
   // At keyframe f: JoinToOldMap for the pending unjoined map (unjoined_first_..f) once it grew; on success its
-  // landmarks are fused and notice_ says so. Stops trying kLateJoinFrames after the restart (the map stays apart).
+  // landmarks are fused and notice_ says so.
   void TryLateJoin(int f, const std::vector<int64_t>& added);
   // Moves every held observation of landmark `from` to landmark `to`, removes `from` and aliases its track (frame f
   // is the last that carried it).
@@ -401,11 +401,13 @@ class PoseEstimator {
                                        // are landmarks last seen before it)
   // A restarted map not joined at its start (too few landmarks in common yet: room_07's restarts shared 5-10) is
   // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: every map joined), its landmarks
-  // (Landmarks(true)), and their count at the last try (a new try once it grew by half).
+  // (Landmarks(true)), and their count and frame at the last try (a new try once it grew by half, or grew at all
+  // 300 frames later, for the whole run).
   int unjoined_first_ = -1;
   std::vector<int64_t> unjoined_restart_seqs_;  // earlier maps never joined (UnjoinedRestartSeqs)
   std::vector<int64_t> unjoined_points_;
   size_t unjoined_tried_size_ = 0;
+  int unjoined_tried_frame_ = 0;
   Phase phase_ = Phase::kInitializing;
   bool map_initialized_ = false;
   int init_start_ = 0;      // first frame considered by the (re)initialization
