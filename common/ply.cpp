@@ -1,7 +1,6 @@
 #include "common/ply.h"
 
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -9,232 +8,253 @@
 namespace objscan {
 namespace {
 
-// The PLY reader behind ReadPlyPoints and ReadPlyMesh: the vertex element (x y z, and nx ny nz when normals is
-// given) and, when triangles is given, the face element that follows it (a list property vertex_indices or
-// vertex_index; polygons fan-triangulated).
-bool ReadPly(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
-             std::vector<Eigen::Vector3d>* normals, std::vector<Eigen::Vector3i>* triangles) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = "cannot read " + path;
-    return false;
-  }
-  std::string line, format;
-  long vertex_count = -1, face_count = -1;
-  bool in_vertex = false, in_face = false, face_before_vertex = false;
-  struct Prop {
-    std::string name, type;
+struct PlyProperty {
+  std::string name;
+  std::string type;
+  bool is_list = false;
+  std::string count_type;
+};
+struct PlyElement {
+  std::string name;
+  int64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+int PlyTypeSize(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+template <typename T>
+double Load(const uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return static_cast<double>(v);
+}
+
+double PlyReadBinary(const std::string& t, const uint8_t* p) {
+  if (t == "char" || t == "int8") return Load<int8_t>(p);
+  if (t == "uchar" || t == "uint8") return Load<uint8_t>(p);
+  if (t == "short" || t == "int16") return Load<int16_t>(p);
+  if (t == "ushort" || t == "uint16") return Load<uint16_t>(p);
+  if (t == "int" || t == "int32") return Load<int32_t>(p);
+  if (t == "uint" || t == "uint32") return Load<uint32_t>(p);
+  if (t == "float" || t == "float32") return Load<float>(p);
+  return Load<double>(p);
+}
+
+std::string Trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+}  // namespace
+
+bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
+  *out = PlyData();
+  size_t pos = 0;
+  auto next_line = [&](std::string* line) {
+    if (pos >= data.size()) return false;
+    size_t end = data.find('\n', pos);
+    if (end == std::string::npos) end = data.size();
+    *line = Trim(data.substr(pos, end - pos));
+    pos = end + 1;
+    return true;
   };
-  std::vector<Prop> props;
-  std::string face_count_type, face_index_type;  // the face list's types
-  bool face_has_other_properties = false;
-  std::getline(in, line);
-  if (line.rfind("ply", 0) != 0) {
-    *error = path + ": not a PLY file";
+  std::string line;
+  if (!next_line(&line) || line != "ply") {
+    *error = "not a PLY file";
     return false;
   }
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ss(line);
-    std::string word;
-    ss >> word;
-    if (word == "format")
-      ss >> format;
-    else if (word == "element") {
-      std::string name;
-      long count;
-      ss >> name >> count;
-      in_vertex = name == "vertex";
-      in_face = name == "face";
-      if (in_vertex) vertex_count = count;
-      if (in_face) {
-        face_count = count;
-        face_before_vertex = vertex_count < 0;
-      }
-    } else if (word == "property" && in_face) {
-      std::string type, name;
-      ss >> type;
-      if (type == "list") {
-        ss >> face_count_type >> face_index_type >> name;
-        if (name != "vertex_indices" && name != "vertex_index") face_has_other_properties = true;
-      } else {
-        face_has_other_properties = true;
-      }
-    } else if (word == "property" && in_vertex) {
-      Prop p;
-      ss >> p.type;
-      if (p.type == "list") {
-        *error = path + ": list property in vertex element";
-        return false;
-      }
-      ss >> p.name;
-      props.push_back(p);
-    } else if (word == "end_header") {
-      break;
-    }
-  }
-  if (vertex_count < 0) {
-    *error = path + ": no vertex element";
-    return false;
-  }
-  auto type_size = [](const std::string& t) -> int {
-    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-    if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
-    if (t == "double" || t == "float64") return 8;
-    return 0;
-  };
-  int xi = -1, yi = -1, zi = -1;
-  for (size_t i = 0; i < props.size(); ++i) {
-    if (props[i].name == "x") xi = static_cast<int>(i);
-    if (props[i].name == "y") yi = static_cast<int>(i);
-    if (props[i].name == "z") zi = static_cast<int>(i);
-  }
-  if (xi < 0 || yi < 0 || zi < 0) {
-    *error = path + ": vertex has no x y z";
-    return false;
-  }
-  int nxi = -1, nyi = -1, nzi = -1;
-  for (size_t i = 0; i < props.size(); ++i) {
-    if (props[i].name == "nx") nxi = static_cast<int>(i);
-    if (props[i].name == "ny") nyi = static_cast<int>(i);
-    if (props[i].name == "nz") nzi = static_cast<int>(i);
-  }
-  if (normals) {
-    if (nxi < 0 || nyi < 0 || nzi < 0) {
-      *error = path + ": vertex has no nx ny nz";
+  std::string format;
+  std::vector<PlyElement> elements;
+  for (;;) {
+    if (!next_line(&line)) {
+      *error = "PLY header without end_header";
       return false;
     }
-    normals->clear();
+    std::istringstream in(line);
+    std::string word;
+    in >> word;
+    if (word == "end_header") break;
+    if (word == "format") {
+      in >> format;
+    } else if (word == "element") {
+      PlyElement e;
+      in >> e.name >> e.count;
+      if (!in || e.count < 0) {
+        *error = "bad PLY element line '" + line + "'";
+        return false;
+      }
+      elements.push_back(e);
+    } else if (word == "property") {
+      if (elements.empty()) {
+        *error = "PLY property before element";
+        return false;
+      }
+      PlyProperty p;
+      in >> p.type;
+      if (p.type == "list") {
+        p.is_list = true;
+        in >> p.count_type >> p.type;
+        if (PlyTypeSize(p.count_type) == 0) {
+          *error = "bad PLY list count type '" + p.count_type + "'";
+          return false;
+        }
+      }
+      in >> p.name;
+      if (PlyTypeSize(p.type) == 0) {
+        *error = "unknown PLY property type '" + p.type + "'";
+        return false;
+      }
+      elements.back().properties.push_back(p);
+    }
   }
-  points->clear();
-  points->reserve(static_cast<size_t>(vertex_count));
-  if (format == "ascii") {
-    for (long v = 0; v < vertex_count; ++v) {
-      if (!std::getline(in, line)) break;
-      std::istringstream ss(line);
-      std::vector<double> values(props.size());
-      for (auto& value : values) ss >> value;
-      if (!ss) {
-        *error = path + ": bad vertex line " + std::to_string(v);
-        return false;
+  const bool ascii = format == "ascii";
+  if (!ascii && format != "binary_little_endian") {
+    *error = "unsupported PLY format '" + format + "' (ascii or binary_little_endian)";
+    return false;
+  }
+  std::istringstream text(ascii ? data.substr(pos) : std::string());
+  int64_t num_vertices = -1;
+  bool have_vertex = false;
+  for (const PlyElement& e : elements) {
+    const bool is_vertex = e.name == "vertex";
+    const bool is_face = e.name == "face";
+    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iface = -1;
+    for (size_t k = 0; k < e.properties.size(); ++k) {
+      const std::string& n = e.properties[k].name;
+      const int i = static_cast<int>(k);
+      if (e.properties[k].is_list) {
+        if (n == "vertex_indices" || n == "vertex_index") iface = i;
+        continue;
       }
-      points->emplace_back(values[xi], values[yi], values[zi]);
-      if (normals) normals->emplace_back(values[nxi], values[nyi], values[nzi]);
+      if (n == "x") ix = i;
+      if (n == "y") iy = i;
+      if (n == "z") iz = i;
+      if (n == "nx") inx = i;
+      if (n == "ny") iny = i;
+      if (n == "nz") inz = i;
     }
-  } else if (format == "binary_little_endian") {
-    std::vector<int> offsets;
-    int stride = 0;
-    for (const auto& p : props) {
-      const int s = type_size(p.type);
-      if (s == 0) {
-        *error = path + ": unknown property type " + p.type;
-        return false;
-      }
-      offsets.push_back(stride);
-      stride += s;
+    if (is_vertex && (ix < 0 || iy < 0 || iz < 0)) {
+      *error = "PLY vertex without x, y, z";
+      return false;
     }
-    std::vector<char> row(stride);
-    auto read_value = [&](int i) -> double {
-      const char* at = row.data() + offsets[i];
-      if (props[i].type == "double" || props[i].type == "float64") {
-        double d;
-        std::memcpy(&d, at, 8);
-        return d;
-      }
-      float f;
-      std::memcpy(&f, at, 4);
-      return f;
+    const bool with_normals = is_vertex && inx >= 0 && iny >= 0 && inz >= 0;
+    if (is_vertex) {
+      have_vertex = true;
+      num_vertices = e.count;
+      out->has_normals = with_normals;
+      out->points.reserve(static_cast<size_t>(e.count));
+    }
+    if (is_face && iface >= 0) out->has_faces = true;
+    std::vector<double> values(e.properties.size());
+    std::vector<int64_t> poly;
+    const auto read_value = [&](const std::string& type, double* v) {
+      if (ascii) return static_cast<bool>(text >> *v);
+      const size_t s = static_cast<size_t>(PlyTypeSize(type));
+      if (pos + s > data.size()) return false;
+      *v = PlyReadBinary(type, reinterpret_cast<const uint8_t*>(&data[pos]));
+      pos += s;
+      return true;
     };
-    for (long v = 0; v < vertex_count; ++v) {
-      if (!in.read(row.data(), stride)) break;
-      points->emplace_back(read_value(xi), read_value(yi), read_value(zi));
-      if (normals) normals->emplace_back(read_value(nxi), read_value(nyi), read_value(nzi));
+    for (int64_t i = 0; i < e.count; ++i) {
+      for (size_t k = 0; k < e.properties.size(); ++k) {
+        const PlyProperty& p = e.properties[k];
+        if (!p.is_list) {
+          if (!read_value(p.type, &values[k])) {
+            *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i) + " of " +
+                     std::to_string(e.count);
+            return false;
+          }
+          continue;
+        }
+        double count = 0;
+        if (!read_value(p.count_type, &count)) {
+          *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
+          return false;
+        }
+        if (count < 0 || count > 1000) {
+          *error = "bad PLY list length " + std::to_string(count);
+          return false;
+        }
+        if (static_cast<int>(k) == iface) poly.clear();
+        for (int j = 0; j < static_cast<int>(count); ++j) {
+          double v = 0;
+          if (!read_value(p.type, &v)) {
+            *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
+            return false;
+          }
+          if (static_cast<int>(k) == iface) poly.push_back(static_cast<int64_t>(v));
+        }
+      }
+      if (is_vertex) {
+        out->points.emplace_back(values[ix], values[iy], values[iz]);
+        if (with_normals) out->normals.emplace_back(values[inx], values[iny], values[inz]);
+      }
+      if (is_face && iface >= 0) {
+        for (int64_t idx : poly)
+          if (idx < 0 || idx >= num_vertices) {
+            *error = "face " + std::to_string(i) + " has vertex index " + std::to_string(idx) + " out of range" +
+                     (have_vertex ? "" : " (no vertex element before the faces)");
+            return false;
+          }
+        for (size_t k = 2; k < poly.size(); ++k)
+          out->triangles.emplace_back(static_cast<int>(poly[0]), static_cast<int>(poly[k - 1]),
+                                      static_cast<int>(poly[k]));
+      }
     }
-  } else {
-    *error = path + ": unsupported PLY format " + format;
-    return false;
   }
-  if (static_cast<long>(points->size()) != vertex_count) {
-    *error = path + ": file ends after " + std::to_string(points->size()) + " of " + std::to_string(vertex_count) +
-             " vertices";
-    return false;
-  }
-  if (!triangles) return true;
-  triangles->clear();
-  if (face_count < 0 || face_index_type.empty()) {
-    *error = path + ": no face element with vertex_indices";
-    return false;
-  }
-  if (face_before_vertex || face_has_other_properties) {
-    *error = path + ": only a face element after the vertices, holding only vertex_indices, is supported";
-    return false;
-  }
-  const int count_size = type_size(face_count_type), index_size = type_size(face_index_type);
-  if (count_size == 0 || index_size == 0 || index_size == 8) {
-    *error = path + ": unsupported face list types " + face_count_type + " " + face_index_type;
-    return false;
-  }
-  std::vector<long> polygon;
-  long faces_read = 0;
-  for (long f = 0; f < face_count; ++f) {
-    polygon.clear();
-    if (format == "ascii") {
-      if (!std::getline(in, line)) break;
-      std::istringstream ss(line);
-      long n = 0;
-      ss >> n;
-      for (long k = 0; k < n && ss; ++k) {
-        long index;
-        if (ss >> index) polygon.push_back(index);
-      }
-      if (!ss || n < 3) {
-        *error = path + ": bad face line " + std::to_string(f);
-        return false;
-      }
-    } else {
-      uint64_t n = 0;
-      if (!in.read(reinterpret_cast<char*>(&n), count_size)) break;  // little endian
-      if (n < 3 || n > 1000) {
-        *error = path + ": face " + std::to_string(f) + " has " + std::to_string(n) + " vertices";
-        return false;
-      }
-      for (uint64_t k = 0; k < n; ++k) {
-        int64_t index = 0;
-        if (!in.read(reinterpret_cast<char*>(&index), index_size)) break;
-        if (index_size < 8 && face_index_type[0] != 'u' && (index >> (8 * index_size - 1)) & 1)
-          index -= int64_t{1} << (8 * index_size);  // sign extension
-        polygon.push_back(static_cast<long>(index));
-      }
-      if (!in) break;
-    }
-    for (long index : polygon)
-      if (index < 0 || index >= vertex_count) {
-        *error = path + ": face " + std::to_string(f) + " has vertex index " + std::to_string(index) + " out of range";
-        return false;
-      }
-    for (size_t k = 1; k + 1 < polygon.size(); ++k)
-      triangles->emplace_back(static_cast<int>(polygon[0]), static_cast<int>(polygon[k]),
-                              static_cast<int>(polygon[k + 1]));
-    ++faces_read;
-  }
-  if (faces_read != face_count) {
-    *error = path + ": file ends after " + std::to_string(faces_read) + " of " + std::to_string(face_count) + " faces";
+  if (!have_vertex) {
+    *error = "no vertex element";
     return false;
   }
   return true;
 }
 
-}  // namespace
+bool ReadPlyFile(const std::string& path, PlyData* out, std::string* error) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    *error = "cannot read " + path;
+    return false;
+  }
+  std::ostringstream buffer;
+  buffer << file.rdbuf();
+  if (!ParsePly(buffer.str(), out, error)) {
+    *error = path + ": " + *error;
+    return false;
+  }
+  return true;
+}
 
 bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points, std::string* error,
                    std::vector<Eigen::Vector3d>* normals) {
-  return ReadPly(path, points, error, normals, nullptr);
+  PlyData ply;
+  if (!ReadPlyFile(path, &ply, error)) return false;
+  if (normals && !ply.has_normals) {
+    *error = path + ": vertex has no nx ny nz";
+    return false;
+  }
+  *points = std::move(ply.points);
+  if (normals) *normals = std::move(ply.normals);
+  return true;
 }
 
 bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices,
                  std::vector<Eigen::Vector3i>* triangles, std::string* error) {
-  return ReadPly(path, vertices, error, nullptr, triangles);
+  PlyData ply;
+  if (!ReadPlyFile(path, &ply, error)) return false;
+  if (!ply.has_faces) {
+    *error = path + ": no face element with vertex_indices";
+    return false;
+  }
+  *vertices = std::move(ply.points);
+  *triangles = std::move(ply.triangles);
+  return true;
 }
 
 }  // namespace objscan

@@ -87,5 +87,42 @@ TEST(PlyTest, ReadsAsciiAndBinaryMeshes) {
   for (const auto& p : {ascii, binary, bad}) std::remove(p.c_str());
 }
 
+// Other programs' files: another element before the vertices, normals and a list among the vertex properties, a
+// face property after the index list; a truncated binary file and a forged list length fail with a message.
+TEST(PlyTest, OtherElementsAndPropertiesAreSkippedAndBadDataFails) {
+  PlyData ply;
+  std::string error;
+  ASSERT_TRUE(ParsePly("ply\nformat ascii 1.0\ncomment x\nelement camera 1\nproperty float f\n"
+                       "element vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
+                       "property float ny\nproperty float nz\nproperty list uchar int tags\nelement face 1\n"
+                       "property list uchar int vertex_indices\nproperty uchar flags\nend_header\n800\n"
+                       "0 0 0 0 0 1 2 7 8\n1 0 0 0 0 1 0\n0 1 0 0 0 1 1 5\n3 0 1 2 9\n",
+                       &ply, &error)) << error;
+  ASSERT_EQ(ply.points.size(), 3u);
+  EXPECT_EQ(ply.points[2], Eigen::Vector3d(0, 1, 0));
+  ASSERT_TRUE(ply.has_normals);
+  EXPECT_EQ(ply.normals[1], Eigen::Vector3d(0, 0, 1));
+  ASSERT_TRUE(ply.has_faces);
+  ASSERT_EQ(ply.triangles.size(), 1u);
+  EXPECT_EQ(ply.triangles[0], Eigen::Vector3i(0, 1, 2));
+
+  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                       "property float z\nend_header\n";
+  const float xyz[4] = {1, 2, 3, 4};  // 1.33 vertices
+  binary.append(reinterpret_cast<const char*>(xyz), sizeof(xyz));
+  EXPECT_FALSE(ParsePly(binary, &ply, &error));
+  EXPECT_NE(error.find("truncated"), std::string::npos) << error;
+  EXPECT_FALSE(ParsePly("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                        "property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n"
+                        "0 0 0\n2000000000 0 0 0\n",
+                        &ply, &error));
+  EXPECT_NE(error.find("list length"), std::string::npos) << error;
+  EXPECT_FALSE(ParsePly("ply\nformat binary_big_endian 1.0\nelement vertex 0\nend_header\n", &ply, &error));
+  EXPECT_FALSE(ParsePly("not a ply", &ply, &error));
+  EXPECT_FALSE(ParsePly("ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",
+                        &ply, &error));
+  EXPECT_NE(error.find("no vertex element"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace objscan

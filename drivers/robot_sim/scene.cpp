@@ -12,6 +12,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "common/ply.h"
+
 namespace objscan {
 namespace {
 
@@ -265,59 +267,6 @@ cv::Mat MakeProceduralTexture(const TextureSpec& spec) {
 
 namespace {
 
-struct PlyProperty {
-  std::string name;
-  std::string type;
-  bool is_list = false;
-  std::string count_type;
-};
-struct PlyElement {
-  std::string name;
-  int64_t count = 0;
-  std::vector<PlyProperty> properties;
-};
-
-int PlyTypeSize(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
-}
-
-double PlyReadBinary(const std::string& t, const uint8_t* p) {
-  if (t == "char" || t == "int8") return static_cast<int8_t>(p[0]);
-  if (t == "uchar" || t == "uint8") return p[0];
-  if (t == "short" || t == "int16") {
-    int16_t v;
-    std::memcpy(&v, p, 2);
-    return v;
-  }
-  if (t == "ushort" || t == "uint16") {
-    uint16_t v;
-    std::memcpy(&v, p, 2);
-    return v;
-  }
-  if (t == "int" || t == "int32") {
-    int32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-  }
-  if (t == "uint" || t == "uint32") {
-    uint32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-  }
-  if (t == "float" || t == "float32") {
-    float v;
-    std::memcpy(&v, p, 4);
-    return v;
-  }
-  double v;
-  std::memcpy(&v, p, 8);
-  return v;
-}
-
 bool AddPolygon(const std::vector<int64_t>& poly, int64_t num_vertices, RawMesh* out, std::string* error) {
   for (int64_t idx : poly) {
     if (idx < 0 || idx >= num_vertices) {
@@ -331,155 +280,15 @@ bool AddPolygon(const std::vector<int64_t>& poly, int64_t num_vertices, RawMesh*
 }
 
 bool LoadPly(const std::string& data, RawMesh* out, std::string* error) {
-  size_t pos = 0;
-  auto next_line = [&](std::string* line) {
-    if (pos >= data.size()) return false;
-    size_t end = data.find('\n', pos);
-    if (end == std::string::npos) end = data.size();
-    *line = Trim(data.substr(pos, end - pos));
-    pos = end + 1;
-    return true;
-  };
-  std::string line;
-  if (!next_line(&line) || line != "ply") {
-    *error = "not a PLY file";
-    return false;
-  }
-  std::string format;
-  std::vector<PlyElement> elements;
-  for (;;) {
-    if (!next_line(&line)) {
-      *error = "PLY header without end_header";
-      return false;
-    }
-    std::istringstream in(line);
-    std::string word;
-    in >> word;
-    if (word == "end_header") break;
-    if (word == "format")
-      in >> format;
-    else if (word == "element") {
-      PlyElement e;
-      in >> e.name >> e.count;
-      if (!in || e.count < 0) {
-        *error = "bad PLY element line";
-        return false;
-      }
-      elements.push_back(e);
-    } else if (word == "property") {
-      if (elements.empty()) {
-        *error = "PLY property before element";
-        return false;
-      }
-      PlyProperty p;
-      in >> p.type;
-      if (p.type == "list") {
-        p.is_list = true;
-        in >> p.count_type >> p.type;
-        if (PlyTypeSize(p.count_type) == 0) {
-          *error = "bad PLY list count type";
-          return false;
-        }
-      }
-      in >> p.name;
-      if (PlyTypeSize(p.type) == 0) {
-        *error = "unknown PLY property type '" + p.type + "'";
-        return false;
-      }
-      elements.back().properties.push_back(p);
-    }
-  }
-  const bool ascii = format == "ascii";
-  if (!ascii && format != "binary_little_endian") {
-    *error = "unsupported PLY format '" + format + "' (ascii or binary_little_endian)";
-    return false;
-  }
-  std::istringstream text(ascii ? data.substr(pos) : std::string());
-  int64_t num_vertices = -1;
-  for (const PlyElement& e : elements) {
-    const bool is_vertex = e.name == "vertex";
-    const bool is_face = e.name == "face";
-    int ix = -1, iy = -1, iz = -1, iface = -1;
-    for (size_t k = 0; k < e.properties.size(); ++k) {
-      const std::string& n = e.properties[k].name;
-      if (n == "x") ix = static_cast<int>(k);
-      if (n == "y") iy = static_cast<int>(k);
-      if (n == "z") iz = static_cast<int>(k);
-      if (e.properties[k].is_list && (n == "vertex_indices" || n == "vertex_index")) iface = static_cast<int>(k);
-    }
-    if (is_vertex && (ix < 0 || iy < 0 || iz < 0)) {
-      *error = "PLY vertex without x, y, z";
-      return false;
-    }
-    if (is_vertex) num_vertices = e.count;
-    std::vector<double> values(e.properties.size());
-    std::vector<int64_t> poly;
-    for (int64_t i = 0; i < e.count; ++i) {
-      for (size_t k = 0; k < e.properties.size(); ++k) {
-        const PlyProperty& p = e.properties[k];
-        if (p.is_list) {
-          double count = 0;
-          if (ascii) {
-            if (!(text >> count)) {
-              *error = "PLY data truncated";
-              return false;
-            }
-          } else {
-            const int s = PlyTypeSize(p.count_type);
-            if (pos + s > data.size()) {
-              *error = "PLY data truncated";
-              return false;
-            }
-            count = PlyReadBinary(p.count_type, reinterpret_cast<const uint8_t*>(&data[pos]));
-            pos += s;
-          }
-          if (count < 0 || count > 1000) {
-            *error = "bad PLY list length";
-            return false;
-          }
-          if (static_cast<int>(k) == iface) poly.clear();
-          for (int j = 0; j < static_cast<int>(count); ++j) {
-            double v = 0;
-            if (ascii) {
-              if (!(text >> v)) {
-                *error = "PLY data truncated";
-                return false;
-              }
-            } else {
-              const int s = PlyTypeSize(p.type);
-              if (pos + s > data.size()) {
-                *error = "PLY data truncated";
-                return false;
-              }
-              v = PlyReadBinary(p.type, reinterpret_cast<const uint8_t*>(&data[pos]));
-              pos += s;
-            }
-            if (static_cast<int>(k) == iface) poly.push_back(static_cast<int64_t>(v));
-          }
-        } else if (ascii) {
-          if (!(text >> values[k])) {
-            *error = "PLY data truncated";
-            return false;
-          }
-        } else {
-          const int s = PlyTypeSize(p.type);
-          if (pos + s > data.size()) {
-            *error = "PLY data truncated";
-            return false;
-          }
-          values[k] = PlyReadBinary(p.type, reinterpret_cast<const uint8_t*>(&data[pos]));
-          pos += s;
-        }
-      }
-      if (is_vertex) out->positions.emplace_back(values[ix], values[iy], values[iz]);
-      if (is_face && iface >= 0 && !AddPolygon(poly, num_vertices, out, error)) return false;
-    }
-  }
-  for (const auto& p : out->positions)
+  PlyData ply;
+  if (!ParsePly(data, &ply, error)) return false;
+  for (const auto& p : ply.points)
     if (!p.allFinite()) {
       *error = "PLY vertex not finite";
       return false;
     }
+  out->positions = std::move(ply.points);
+  out->triangles = std::move(ply.triangles);
   return true;
 }
 
