@@ -270,7 +270,7 @@ std::unique_ptr<FrameSource> OpenImageFolder(const FrameSourceOptions& options, 
   std::string note = "calibration " + calib_path;
   const fs::path gt_path = root / "poses_gt.txt";
   if (fs::is_regular_file(gt_path)) {
-    std::vector<TimedPose> poses;
+    std::vector<StampedPose> poses;
     if (!ReadTumTrajectory(gt_path.string(), options.gt_position_scale, &poses, error)) return nullptr;
     if (poses.size() == names.size()) {
       for (size_t i = 0; i < names.size(); ++i) {
@@ -715,50 +715,12 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options, 
   return nullptr;
 }
 
-bool ReadTumTrajectory(const std::string& path, double position_scale, std::vector<TimedPose>* poses,
+bool ReadTumTrajectory(const std::string& path, double position_scale, std::vector<StampedPose>* poses,
                        std::string* error) {
-  std::ifstream in(path);
-  if (!in) return Fail(error, "cannot read " + path);
-  poses->clear();
-  double scale = position_scale;
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty()) continue;
-    if (trimmed[0] == '#') {
-      std::string text = Lower(trimmed.substr(1));
-      text.erase(
-          std::remove_if(text.begin(), text.end(), [](char c) { return std::isspace(static_cast<unsigned char>(c)); }),
-          text.end());
-      if (text == "units:mm" || text == "unit:mm") scale = 1.0;
-      continue;
-    }
-    std::istringstream fields(trimmed);
-    std::vector<double> v;
-    std::string token;
-    while (fields >> token) {
-      double x = 0;
-      if (!ParseDouble(token, &x))
-        return Fail(error, path + ":" + std::to_string(line_number) + ": bad number '" + token + "'");
-      v.push_back(x);
-    }
-    if (v.size() != 8)
-      return Fail(error, path + ":" + std::to_string(line_number) + ": expected 't tx ty tz qx qy qz qw', got " +
-                             std::to_string(v.size()) + " numbers");
-    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (std::abs(q.norm() - 1.0) > 1e-3)
-      return Fail(error, path + ":" + std::to_string(line_number) + ": quaternion is not unit");
-    q.normalize();
-    TimedPose pose;
-    pose.t = v[0];
-    pose.world_from_camera = Eigen::Isometry3d::Identity();
-    pose.world_from_camera.linear() = q.toRotationMatrix();
-    pose.world_from_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-    poses->push_back(pose);
-  }
-  // The unit header may come anywhere among the comments; apply the scale at the end.
+  bool units_mm = false;
+  if (!ReadTumTrajectory(path, poses, error, &units_mm)) return false;
+  // The unit header may come anywhere among the comments: the scale applies to every pose.
+  const double scale = units_mm ? 1.0 : position_scale;
   for (auto& pose : *poses) pose.world_from_camera.translation() *= scale;
   return true;
 }

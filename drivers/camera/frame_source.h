@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/camera_model.h"
+#include "common/tum.h"
 
 namespace objscan {
 
@@ -89,15 +90,10 @@ std::unique_ptr<FrameSource> OpenFrameSource(const FrameSourceOptions& options, 
 
 // ReadCalibrationFile / WriteCalibrationFile (common/camera_model.h) read and write the calibration files.
 
-// One line of a TUM trajectory: t in s, world_from_camera with the position already converted to mm.
-struct TimedPose {
-  double t = 0;
-  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
-};
-// Reads a TUM file ("t tx ty tz qx qy qz qw" per line, '#' comments, camera-to-world). Positions are multiplied by
-// position_scale, except when a header comment says "# units: mm" (then taken as mm). Non-unit quaternions
-// (|q| off by more than 1e-3) and malformed lines are errors.
-bool ReadTumTrajectory(const std::string& path, double position_scale, std::vector<TimedPose>* poses,
+// Reads a TUM file (common/tum.h: "t tx ty tz qx qy qz qw" per line, '#' comments, camera-to-world, non-unit
+// quaternions and malformed lines are errors). Positions are multiplied by position_scale, except when a header
+// comment says "# units: mm" (then taken as mm).
+bool ReadTumTrajectory(const std::string& path, double position_scale, std::vector<StampedPose>* poses,
                        std::string* error);
 
 // One view of a Middlebury *_par.txt: "name k11..k33 r11..r33 t1 t2 t3", x ~ K [R | t] X, X_cam = R X + t.

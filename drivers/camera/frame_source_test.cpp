@@ -245,7 +245,7 @@ TEST(FrameSourceTest, CalibrationErrorsAreClear) {
 TEST(FrameSourceTest, TumUnitsAndErrors) {
   TempDir dir("tum");
   const std::string path = (dir.path() / "poses.txt").string();
-  std::vector<TimedPose> poses;
+  std::vector<StampedPose> poses;
   std::string error;
   std::ofstream(path) << "# units: mm\n0.0 10 20 30 0 0 0 1\n\n0.5 1 2 3 0 0 0 1\n";
   ASSERT_TRUE(ReadTumTrajectory(path, 1000, &poses, &error)) << error;

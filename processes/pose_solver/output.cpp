@@ -1,5 +1,7 @@
 #include "processes/pose_solver/output.h"
 
+#include "common/tum.h"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -21,44 +23,23 @@ bool IsWrittenPose(PoseStatus s) { return s == PoseStatus::kTracking || s == Pos
 
 bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
                         bool include_all_statuses) {
-  std::ofstream out(path);
-  if (!out) return Fail(error, "cannot write " + path);
   // The scale of the poses written (the last one's: a map's scale source only improves, none -> metric).
   ScaleSource scale = ScaleSource::kNone;
-  for (const auto& p : poses)
-    if (include_all_statuses || IsWrittenPose(p.status)) scale = p.scale_source;
-  out << "# TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions in "
-      << (IsMetric(scale) ? "mm" : "an arbitrary unit") << "\n# scale: " << ScaleDescription(scale) << "\n";
-  out << std::fixed;
+  std::vector<StampedPose> written;
   for (const auto& p : poses) {
     if (!include_all_statuses && !IsWrittenPose(p.status)) continue;
-    const Eigen::Quaterniond q(p.world_from_camera.linear());
-    const Eigen::Vector3d t = p.world_from_camera.translation();
-    out << std::setprecision(6) << p.utime / 1e6 << ' ' << std::setprecision(4) << t.x() << ' ' << t.y() << ' ' << t.z()
-        << ' ' << std::setprecision(9) << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+    scale = p.scale_source;
+    StampedPose s;
+    s.t = p.utime / 1e6;
+    s.world_from_camera = p.world_from_camera;
+    written.push_back(s);
   }
-  out.flush();
-  if (!out) return Fail(error, "write error on " + path);
-  return true;
-}
-
-bool ReadTumTrajectory(const std::string& path, std::vector<CameraPoseEstimate>* poses, std::string* error) {
-  std::ifstream in(path);
-  if (!in) return Fail(error, "cannot read " + path);
-  poses->clear();
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream s(line);
-    double t, x, y, z, qx, qy, qz, qw;
-    if (!(s >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) return Fail(error, "malformed line in " + path);
-    CameraPoseEstimate p;
-    p.utime = std::llround(t * 1e6);
-    p.world_from_camera.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
-    p.world_from_camera.translation() = Eigen::Vector3d(x, y, z);
-    p.status = PoseStatus::kTracking;
-    poses->push_back(p);
-  }
+  const std::vector<std::string> header = {
+      std::string("TUM trajectory: timestamp[s] tx ty tz qx qy qz qw; camera-to-world (world_from_camera); positions "
+                  "in ") + (IsMetric(scale) ? "mm" : "an arbitrary unit"),
+      std::string("scale: ") + ScaleDescription(scale)};
+  std::string why;
+  if (!objscan::WriteTumTrajectory(path, written, header, &why, 4)) return Fail(error, why);
   return true;
 }
 

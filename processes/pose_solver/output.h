@@ -22,7 +22,8 @@ namespace objscan {
 // True for the pose statuses the writers keep (tracking, relocalized): the frames that count as posed.
 bool IsWrittenPose(PoseStatus status);
 
-// Writes poses whose status is in `statuses` (default: tracking and relocalized).
+// Writes poses whose status is in `statuses` (default: tracking and relocalized) as TUM (common/tum.h; t from utime,
+// positions with 4 decimals), under a header saying whether positions are mm or an arbitrary unit.
 bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEstimate>& poses, std::string* error,
                         bool include_all_statuses = false);
 // Header comments say whether positions are mm or an arbitrary unit (scale: the map's ScaleSource).
@@ -72,8 +73,5 @@ class ObservationSpool {
   std::string error_;
   int64_t frames_ = 0;
 };
-
-// Reads a TUM file written by WriteTumTrajectory back (for tests/tools): utime (rounded from t) and pose.
-bool ReadTumTrajectory(const std::string& path, std::vector<CameraPoseEstimate>* poses, std::string* error);
 
 }  // namespace objscan

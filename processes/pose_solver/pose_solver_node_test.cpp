@@ -1,5 +1,7 @@
 #include "processes/pose_solver/pose_solver_node.h"
 
+#include "common/tum.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -117,11 +119,11 @@ TEST(PoseSolverNode, OrbitEndToEndWithOutputs) {
   for (const char* f : {"trajectory.txt", "trajectory_online.txt", "landmarks.ply", "colmap/cameras.txt",
                         "colmap/images.txt", "colmap/points3D.txt"})
     EXPECT_TRUE(std::filesystem::exists(o.output_dir + "/" + f)) << f;
-  std::vector<CameraPoseEstimate> read;
+  std::vector<StampedPose> read;
   std::string error;
   ASSERT_TRUE(ReadTumTrajectory(o.output_dir + "/trajectory.txt", &read, &error)) << error;
   ASSERT_EQ(read.size(), 200u);
-  EXPECT_EQ(read[30].utime, s.frames[30].utime);
+  EXPECT_EQ(std::llround(read[30].t * 1e6), s.frames[30].utime);
   EXPECT_LT((read[30].world_from_camera.translation() - est[30].translation()).norm(), 1e-3);
 }
 

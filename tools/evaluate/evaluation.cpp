@@ -16,52 +16,6 @@
 
 namespace objscan {
 
-bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "cannot read " + path;
-    return false;
-  }
-  poses->clear();
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream ss(line);
-    double t, x, y, z, qx, qy, qz, qw;
-    if (!(ss >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) {
-      *error = path + ":" + std::to_string(number) + ": expected 't tx ty tz qx qy qz qw'";
-      return false;
-    }
-    StampedPose p;
-    p.t = t;
-    p.world_from_camera.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
-    p.world_from_camera.translation() = Eigen::Vector3d(x, y, z);
-    poses->push_back(p);
-  }
-  return true;
-}
-
-bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
-                        const std::vector<std::string>& header, std::string* error) {
-  std::ofstream out(path);
-  if (!out) {
-    *error = "cannot write " + path;
-    return false;
-  }
-  for (const auto& h : header) out << "# " << h << "\n";
-  char buf[256];
-  for (const auto& p : poses) {
-    const Eigen::Quaterniond q(p.world_from_camera.linear());
-    const Eigen::Vector3d t = p.world_from_camera.translation();
-    std::snprintf(buf, sizeof(buf), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.t, t.x(), t.y(), t.z(), q.x(), q.y(),
-                  q.z(), q.w());
-    out << buf;
-  }
-  return static_cast<bool>(out);
-}
-
 bool EvaluateTumTrajectories(const std::vector<StampedPose>& estimated, const std::vector<StampedPose>& truth,
                              bool with_scale, double max_dt_s, TrajectoryEvaluation* out, std::string* error) {
   std::vector<StampedPose> sorted_truth = truth;

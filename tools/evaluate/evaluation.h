@@ -2,8 +2,6 @@
 // TUM lines: "t tx ty tz qx qy qz qw" (camera-to-world), '#' comments; positions in the file's unit (objscan: mm).
 #pragma once
 
-#include "common/ply.h"  // ReadPlyPoints, ReadPlyMesh (the evaluation reads both)
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -12,19 +10,10 @@
 #include <vector>
 
 #include "common/geometry.h"
+#include "common/ply.h"  // ReadPlyPoints, ReadPlyMesh (the evaluation reads both)
+#include "common/tum.h"  // StampedPose, ReadTumTrajectory, WriteTumTrajectory
 
 namespace objscan {
-
-struct StampedPose {
-  double t = 0;  // s
-  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
-};
-
-// Reads a TUM trajectory. False with *error on an unreadable file or a malformed line.
-bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error);
-// Writes a TUM trajectory (header comment lines first, each prefixed with "# ").
-bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
-                        const std::vector<std::string>& header, std::string* error);
 
 struct TrajectoryEvaluation {
   int num_estimated = 0;
