@@ -71,12 +71,16 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
     return false;
   }
   for (const auto& h : header) std::fprintf(out, "# %s\n", h.c_str());
-  const int d = std::clamp(position_decimals, 0, 17);
+  const int d = std::min(position_decimals, 17);
   for (const auto& p : poses) {
     const Eigen::Quaterniond q(p.world_from_camera.linear());
     const Eigen::Vector3d t = p.world_from_camera.translation();
-    std::fprintf(out, "%.6f %.*f %.*f %.*f %.9f %.9f %.9f %.9f\n", p.t, d, t.x(), d, t.y(), d, t.z(), q.x(), q.y(),
-                 q.z(), q.w());
+    if (d < 0)  // lossless: every double reads back exactly
+      std::fprintf(out, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.t, t.x(), t.y(), t.z(), q.x(), q.y(),
+                   q.z(), q.w());
+    else
+      std::fprintf(out, "%.6f %.*f %.*f %.*f %.9f %.9f %.9f %.9f\n", p.t, d, t.x(), d, t.y(), d, t.z(), q.x(), q.y(),
+                   q.z(), q.w());
   }
   const bool ok = std::ferror(out) == 0;
   if (std::fclose(out) != 0 || !ok) {

@@ -23,7 +23,8 @@ bool ReadTumTrajectory(const std::string& path, std::vector<StampedPose>* poses,
                        bool* units_mm = nullptr);
 
 // Writes header lines (each as "# " + line), then one line per pose: t with 6 decimals, positions with
-// position_decimals, the quaternion with 9. False with *error when the file cannot be written.
+// position_decimals, the quaternion with 9; position_decimals < 0: positions and quaternion with 17 significant
+// digits (they read back exactly). False with *error when the file cannot be written.
 bool WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
                         const std::vector<std::string>& header, std::string* error, int position_decimals = 6);
 

@@ -35,9 +35,11 @@ TEST(TumTest, RoundTripUnitsHeaderAndErrors) {
     std::getline(in, first);
     EXPECT_EQ(first, "# units: mm");
   }
-  ASSERT_TRUE(WriteTumTrajectory(path, poses, {}, &error)) << error;
+  ASSERT_TRUE(WriteTumTrajectory(path, poses, {}, &error, -1)) << error;  // lossless
   ASSERT_TRUE(ReadTumTrajectory(path, &read, &error, &units_mm)) << error;
   EXPECT_FALSE(units_mm);
+  EXPECT_EQ(read[0].world_from_camera.translation(), poses[0].world_from_camera.translation());
+  EXPECT_LT((read[1].world_from_camera.linear() - poses[1].world_from_camera.linear()).norm(), 1e-14);
 
   // Malformed lines name the file and line.
   for (const char* bad : {"0 1 2 3 0 0 0 1\n0 1 2 3 0 0 1\n", "0 1 2 3 0 0 0 2\n", "0 1 2 nan 0 0 0 1\n",

@@ -115,10 +115,10 @@ bool FrameIndexFromName(const std::string& name, int64_t* index) {
   return true;
 }
 
-bool ColmapImagesToTum(const std::vector<ColmapImage>& images, double rate_hz, std::vector<TumPose>* poses,
+bool ColmapImagesToTum(const std::vector<ColmapImage>& images, double rate_hz, std::vector<StampedPose>* poses,
                        std::string* error) {
   if (!(rate_hz > 0)) return Fail(error, "rate must be > 0 Hz");
-  std::vector<std::pair<int64_t, TumPose>> indexed;
+  std::vector<std::pair<int64_t, StampedPose>> indexed;
   std::set<int64_t> seen;
   for (const auto& image : images) {
     int64_t index = 0;
@@ -126,11 +126,11 @@ bool ColmapImagesToTum(const std::vector<ColmapImage>& images, double rate_hz, s
       return Fail(error, "image name '" + image.name + "' holds no frame number");
     if (!seen.insert(index).second)
       return Fail(error, "two images with frame number " + std::to_string(index) + " ('" + image.name + "')");
-    TumPose pose;
+    StampedPose pose;
     pose.t = static_cast<double>(index) / rate_hz;
     const Eigen::Matrix3d world_from_camera_rotation = image.camera_from_world_rotation.toRotationMatrix().transpose();
-    pose.orientation = Eigen::Quaterniond(world_from_camera_rotation);
-    pose.position = -world_from_camera_rotation * image.camera_from_world_translation;
+    pose.world_from_camera.linear() = world_from_camera_rotation;
+    pose.world_from_camera.translation() = -world_from_camera_rotation * image.camera_from_world_translation;
     indexed.emplace_back(index, pose);
   }
   std::sort(indexed.begin(), indexed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });

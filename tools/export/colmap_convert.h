@@ -38,7 +38,7 @@ bool FrameIndexFromName(const std::string& name, int64_t* index);
 
 // Converts registered images to TUM poses world_from_camera (R^T, -R^T t) with t = frame index / rate_hz s,
 // sorted by t. Fails on a name without a frame index, a duplicate index or rate_hz <= 0.
-bool ColmapImagesToTum(const std::vector<ColmapImage>& images, double rate_hz, std::vector<TumPose>* poses,
+bool ColmapImagesToTum(const std::vector<ColmapImage>& images, double rate_hz, std::vector<StampedPose>* poses,
                        std::string* error);
 
 // COLMAP ImageReader.camera_model / camera_params for a calibration: PINHOLE "fx,fy,cx,cy" without distortion,

@@ -98,20 +98,21 @@ TEST(ColmapImagesToTum, InvertsCamFromWorldAndTimesByFrameNumber) {
   EXPECT_EQ(images[1].num_observations, 0);
   EXPECT_EQ(images[2].name, "000003.png");
 
-  std::vector<TumPose> poses;
+  std::vector<StampedPose> poses;
   ASSERT_TRUE(ColmapImagesToTum(images, 30, &poses, &error)) << error;
   ASSERT_EQ(poses.size(), 3u);
   const int expected_order[3] = {1, 2, 0};  // sorted by frame number 0, 3, 10
   for (int i = 0; i < 3; ++i) {
     const auto& [index, pose] = truth[expected_order[i]];
     EXPECT_DOUBLE_EQ(poses[i].t, index / 30.0);
-    EXPECT_LT((poses[i].position - pose.translation()).norm(), 1e-12) << i;
-    EXPECT_LT(poses[i].orientation.angularDistance(Eigen::Quaterniond(pose.linear())), 1e-12) << i;
+    EXPECT_LT((poses[i].world_from_camera.translation() - pose.translation()).norm(), 1e-12) << i;
+    EXPECT_LT(Eigen::Quaterniond(poses[i].world_from_camera.linear()).angularDistance(Eigen::Quaterniond(pose.linear())),
+              1e-12) << i;
   }
 
   // Round trip through the TUM writer and the evaluator: a scaled copy of the truth aligns with scale ~ 1/1000.
   const std::string tum = TempPath("colmap_tum.txt");
-  ASSERT_TRUE(WriteTumPoses(tum, poses, {"test"}, &error)) << error;
+  ASSERT_TRUE(WriteTumTrajectory(tum, poses, {"test"}, &error)) << error;
   std::vector<StampedPose> estimated, true_poses;
   ASSERT_TRUE(ReadTumTrajectory(tum, &estimated, &error)) << error;
   ASSERT_EQ(estimated.size(), 3u);
@@ -158,7 +159,7 @@ TEST(ColmapImagesToTum, RejectsNamesWithoutNumbersDuplicatesAndBadRates) {
   ColmapImage a, b;
   a.name = "000001.png";
   b.name = "images/000001.jpg";
-  std::vector<TumPose> poses;
+  std::vector<StampedPose> poses;
   std::string error;
   EXPECT_FALSE(ColmapImagesToTum({a, b}, 30, &poses, &error));
   EXPECT_NE(error.find("two images"), std::string::npos) << error;

@@ -169,7 +169,7 @@ bool DatasetWriter::Finish(std::string* error) {
   }
 
   if (!true_poses_.empty()) {
-    std::vector<TumPose> lines;
+    std::vector<StampedPose> lines;
     summary_.frames_without_true_pose = 0;
     for (const auto& f : frames) {
       const auto it = true_poses_.find(f.seq);
@@ -177,18 +177,17 @@ bool DatasetWriter::Finish(std::string* error) {
         ++summary_.frames_without_true_pose;
         continue;
       }
-      TumPose p;
+      StampedPose p;
       p.t = static_cast<double>(it->second.utime) / 1e6;
-      p.position = it->second.world_from_camera.translation();
-      p.orientation = Eigen::Quaterniond(it->second.world_from_camera.linear());
+      p.world_from_camera = it->second.world_from_camera;
       lines.push_back(p);
     }
-    if (!WriteTumPoses((root / "poses_gt.txt").string(), lines,
+    if (!WriteTumTrajectory((root / "poses_gt.txt").string(), lines,
                        {"units: mm",
                         "objscan true camera poses (world_from_camera), t = utime / 1e6 s, one per image "
                         "in images/ that has one, in file-name order",
                         "t tx ty tz qx qy qz qw"},
-                       error))
+                       error, -1))  // lossless: the folder replays the session exactly
       return false;
     summary_.true_poses_written = static_cast<int64_t>(lines.size());
   }
@@ -218,21 +217,6 @@ bool DatasetWriter::Finish(std::string* error) {
     if (!WriteOdometryFile((root / kOdometryFileName).string(), readings, error)) return false;
     summary_.odometry_written = static_cast<int64_t>(readings.size());
   }
-  return true;
-}
-
-bool WriteTumPoses(const std::string& path, const std::vector<TumPose>& poses, const std::vector<std::string>& header,
-                   std::string* error) {
-  std::FILE* out = std::fopen(path.c_str(), "w");
-  if (!out) return Fail(error, "cannot write " + path);
-  for (const auto& h : header) std::fprintf(out, "# %s\n", h.c_str());
-  for (const auto& p : poses) {
-    const Eigen::Quaterniond& q = p.orientation;
-    std::fprintf(out, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.t, p.position.x(), p.position.y(),
-                 p.position.z(), q.x(), q.y(), q.z(), q.w());
-  }
-  const bool ok = std::ferror(out) == 0;
-  if (std::fclose(out) != 0 || !ok) return Fail(error, "cannot write " + path);
   return true;
 }
 

@@ -28,6 +28,7 @@
 
 #include "common/camera_model.h"
 #include "common/sensor_data.h"
+#include "common/tum.h"
 
 namespace objscan {
 
@@ -106,16 +107,5 @@ class DatasetWriter {
 
 // Image file name of frame seq: 6 digits zero padded ("000042.png"); negative seqs are rejected by AddFrame.
 std::string DatasetImageName(int64_t seq);
-
-// One line of a TUM file.
-struct TumPose {
-  double t = 0;                                                     // s
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();               // world_from_camera translation (file unit)
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // world_from_camera rotation
-};
-// Writes "t tx ty tz qx qy qz qw" lines (t with 6 decimals, the rest with 17 significant digits) after the header
-// lines (each written as "# " + line).
-bool WriteTumPoses(const std::string& path, const std::vector<TumPose>& poses, const std::vector<std::string>& header,
-                   std::string* error);
 
 }  // namespace objscan

@@ -38,17 +38,17 @@ int ColmapToTum(int argc, char** argv) {
     return 2;
   }
   std::vector<ColmapImage> images;
-  std::vector<TumPose> poses;
+  std::vector<StampedPose> poses;
   std::string error;
   if (!ReadColmapImagesTxt(parser.positional()[0], &images, &error)) return Fail(error);
   if (!ColmapImagesToTum(images, rate, &poses, &error)) return Fail(error);
-  if (!WriteTumPoses(parser.positional()[1], poses,
+  if (!WriteTumTrajectory(parser.positional()[1], poses,
                      {"COLMAP reconstruction " + parser.positional()[0] +
                           ": world_from_camera in model units "
                           "(arbitrary scale), t = frame number / " +
                           std::to_string(rate) + " Hz",
                       "t tx ty tz qx qy qz qw"},
-                     &error))
+                     &error, -1))  // lossless: model units can be small
     return Fail(error);
   std::printf("images %zu\n", images.size());
   return 0;
