@@ -23,6 +23,9 @@
 namespace objscan {
 
 void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
+  // Only what a user sets (issue 27): plumbing, the pairing (scripts/profiles), memory and publication bounds, the
+  // region and target, voxel size and vote threshold, the mesh refinement switch, and the two options the docs give
+  // as command-line examples. Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
   p.Add("info-channel", &o->info_channel, "camera_info_t channel");
@@ -40,20 +43,10 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("buffer-frames", &o->buffer_frames, "frames kept in the ring buffer (> pair-gap)");
   p.Add("pair-gap", &o->pair_gap, "frame j is paired with frame j - pair-gap");
   p.Add("pair-every", &o->pair_every, "only frames with seq % pair-every == 0 start a pair");
-  p.Add("max-pair-landmark-error", &o->max_pair_landmark_error_px,
-        "px, skip pairs whose median landmark reprojection error exceeds this (0 = off)");
   p.Add("voxel-map-every", &o->voxel_map_every, "pairs between VOXEL_MAP publications");
   p.Add("max-map-voxels", &o->max_map_voxels, "voxels per VOXEL_MAP message at most");
-  p.Add("revote-final-poses", &o->revote_final_poses,
-        "final phase: triangulate every pair's pixel matches again with the final poses and vote them anew");
   p.Add("max-stored-matches", &o->max_stored_matches,
         "pixel matches kept for the re-vote at most (20 bytes each; beyond, the live votes are kept)");
-  p.Add("carving-downsample", &o->carving_downsample, "integer downsampling of the images kept for carving");
-  p.Add("max-carving-views", &o->max_carving_views, "images kept for carving at most");
-  p.Add("refinement-downsample", &o->refinement_downsample,
-        "integer downsampling of the gray images kept for the mesh's photometric refinement");
-  p.Add("max-central-track-ids", &o->max_central_track_ids,
-        "track ids whose central views are counted at most (beyond, ids neither landmarks nor in view are forgotten)");
   p.Add("use-target-box", &o->use_target_box, "restrict the model to the confirmed TARGET box");
   p.Add("require-target", &o->require_target,
         "model nothing before a confirmed TARGET (closed loop: the robot searches for its target first)");
@@ -61,178 +54,21 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("roi-box", &o->roi_box, "mm, world region xmin,ymin,zmin,xmax,ymax,zmax when no TARGET box (\"\" = none)");
   p.Add("auto-roi", &o->auto_roi, "derive the region of interest from the landmarks near the image centre");
   AutoRoiOptions* r = &o->roi;
-  p.Add("roi-central-fraction", &r->central_fraction, "central window, fraction of the image width and height");
-  p.Add("roi-min-central-views", &r->min_central_views, "views with the track in the central window");
-  p.Add("roi-min-central-landmarks", &r->min_central_landmarks, "fewer central landmarks = no automatic region");
-  p.Add("roi-cluster-k", &r->cluster_k, "cluster radius in median distances to the median");
   p.Add("roi-margin", &r->margin_mm, "mm, minimum growth of the automatic box on every side");
-  p.Add("roi-margin-fraction", &r->margin_fraction, "growth of the automatic box as a fraction of its extent");
   p.Add("roi-detect-floor", &r->detect_floor, "exclude the floor plane found among the landmarks");
-  p.Add("roi-floor-radius", &r->floor_radius_mm, "mm, horizontal radius searched for floor landmarks");
-  p.Add("roi-floor-tolerance", &r->floor_tolerance_mm, "mm, floor plane inlier distance");
-  p.Add("roi-min-floor-points", &r->min_floor_points, "landmarks needed to accept a floor plane");
-  p.Add("roi-max-floor-tilt", &r->max_floor_tilt_deg, "deg, max angle of the floor normal to world +z");
   p.Add("roi-floor-clearance", &r->floor_clearance_mm, "mm, points lower than this above the floor are dropped");
-  p.Add("roi-ransac-iterations", &r->ransac_iterations, "floor RANSAC samples");
   p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
   p.Add("threads", &o->threads, "OpenCV threads (cv::setNumThreads)");
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   DenseModelOptions* m = &o->model;
   p.Add("vote-threshold", &m->vote_threshold, "votes a voxel needs for VOXEL_MAP and the final model");
-  p.Add("min-relative-votes", &m->min_relative_votes,
-        "final seeds need this fraction of their strongest neighbour's votes");
-  p.Add("carve", &m->carve, "run photometric space carving in the final phase");
-  p.Add("smoothing-passes", &m->smoothing_passes, "occupancy smoothing passes before meshing (shell method)");
-  p.Add("surface-method", &m->surface_method, "0 = thresholded shell, 1 = vote ridge along the normal");
-  p.Add("ridge-normal-radius", &m->ridge.normal_radius, "voxels, neighbourhood half-size for the ridge normals");
-  p.Add("ridge-tolerance", &m->ridge.ridge_tolerance, "ridge keeps votes >= this x the votes 1 voxel along +-normal");
-  p.Add("ridge-min-component", &m->ridge.min_component_voxels, "voxels, smaller ridge fragments are dropped");
-  p.Add("ridge-min-component-fraction", &m->ridge.min_component_fraction,
-        "ridge fragments smaller than this fraction of the largest are dropped");
-  p.Add("ridge-smoothing-min-normal-cos", &m->ridge.smoothing_min_normal_cos,
-        "surface fit neighbours need normals within acos(this) of the point's own");
   p.Add("ridge-border-rings", &m->ridge.border_rings, "rings of triangles peeled off the mesh's open borders");
-  CurledBorderOptions* cb = &m->ridge.curled_borders;
-  p.Add("curl-max-rings", &cb->max_rings, "passes peeling curled rims off the mesh's open borders at most (0 = off)");
-  p.Add("curl-max-angle", &cb->max_angle_deg,
-        "deg, a border triangle whose normal is farther than this from every interior normal near it is curled");
-  p.Add("curl-radius", &cb->radius_mm, "mm, interior vertices within this of a border triangle's centroid count");
-  p.Add("curl-interior-rings", &cb->interior_rings, "rings from the border beyond which a mesh vertex is interior");
-  p.Add("curl-min-offset", &cb->min_offset_mm,
-        "mm, a curled border triangle also lies this far off the nearest interior vertex's tangent plane");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
-  CreaseOptions* cr = &m->ridge.creases;
-  p.Add("crease-radius", &cr->radius_voxels,
-        "voxels, neighbourhood split into two faces to sharpen a crease (0 = off)");
-  p.Add("crease-min-angle", &cr->min_angle_deg, "deg, the two faces' normals at least this far apart");
-  p.Add("crease-core-angle", &cr->core_angle_deg, "deg, neighbours within this of a face's normal give its plane");
-  p.Add("crease-min-face-points", &cr->min_face_points, "surface points each face of a crease needs at least");
-  p.Add("crease-max-move", &cr->max_move_voxels, "voxels, crease points that would move farther stay");
-  p.Add("floor-band", &m->floor_band_mm,
-        "mm, ridge voxels lower than this above the floor that face up are dropped as floor (0 = off)");
-  p.Add("crevice-band", &m->crevice_band_mm,
-        "mm, ridge voxels lower than this above the floor that face down are dropped as the crevice (0 = off)");
-  p.Add("crevice-normal", &m->crevice_normal_deg, "deg, a crevice voxel's normal lies this far below the horizontal");
-  p.Add("floor-band-normal", &m->floor_band_normal_deg, "deg, largest angle of a floor voxel's normal to the floor's");
-  p.Add("mesh-min-seen-views", &m->visibility.min_seen_views,
-        "mesh vertices seen (unoccluded, facing) by fewer views are removed: inner sheets (0 = off)");
-  p.Add("mesh-min-seen-fraction", &m->visibility.min_seen_fraction,
-        "mesh vertices seen by fewer than this fraction of the views they face are removed (0 = off)");
-  p.Add("mesh-visibility-tolerance", &m->visibility.depth_tolerance_mm,
-        "mm, a mesh vertex this far behind the rendered mesh still counts as seen");
-  p.Add("mesh-visibility-min-facing-cos", &m->visibility.min_facing_cos,
-        "cos of the largest angle between a mesh vertex normal and the ray to a camera that sees it");
-  p.Add("mesh-visibility-max-views", &m->visibility.max_views, "views rendered for the mesh visibility at most");
-  WeakRefitOptions* wr = &m->weak_refit;
-  p.Add("weak-refit-relative-votes", &wr->relative_votes,
-        "mesh vertices with less than this fraction of the median vertex votes are refitted (0 = off)");
-  p.Add("weak-refit-radius", &wr->radius_mm, "mm, strong vertices within this of a weak one fit its surface");
-  p.Add("weak-refit-min-neighbours", &wr->min_neighbours, "strong vertices a weak vertex's fit needs at least");
-  p.Add("weak-refit-min-normal-cos", &wr->min_normal_cos,
-        "strong vertices need normals within acos(this) of the weak one's");
-  p.Add("weak-refit-max-gap", &wr->max_gap_deg, "deg, largest angle around a weak vertex without a strong one");
-  p.Add("weak-refit-max-residual", &wr->max_residual_mm, "mm, weighted RMS residual of the fit at most");
-  p.Add("weak-refit-max-move", &wr->max_move_mm, "mm, a weak vertex moves at most this far");
-  p.Add("weak-refit-min-move", &wr->min_move_mm, "mm, a weak vertex closer than this to the fitted surface stays");
-  p.Add("weak-refit-rim-drop", &wr->rim_drop_mm,
-        "mm, weak unsurrounded border vertices farther than this off the extrapolated fit are removed (0 = off)");
-  PhotometricRefinementOptions* pr = &m->refinement;
-  p.Add("refine-mesh", &pr->enabled, "move the final mesh's vertices along their normals to where the views agree");
-  p.Add("refine-max-views", &pr->max_views, "views rendered for the refinement's visibility at most");
-  p.Add("refine-min-facing-cos", &pr->min_facing_cos,
-        "cos of the largest angle between a vertex normal and a view ray");
-  p.Add("refine-views-per-sample", &pr->views_per_sample, "views scored per refined sample at most");
-  p.Add("refine-min-views", &pr->min_views, "samples seen by fewer views are not refined");
-  p.Add("refine-sample-spacing", &pr->sample_spacing_mm, "mm, one refined sample vertex per cell of this size");
-  p.Add("refine-search", &pr->search_mm, "mm, half range of the search along the normal");
-  p.Add("refine-step", &pr->step_mm, "mm, step of the search along the normal");
-  p.Add("refine-patch-half", &pr->patch_half, "points each side of the centre of the tangent-plane patch");
-  p.Add("refine-patch-spacing", &pr->patch_spacing_mm, "mm, spacing of the patch's points");
-  p.Add("refine-min-score", &pr->min_score, "mean pairwise NCC a sample's best offset needs");
-  p.Add("refine-min-gain", &pr->min_gain, "NCC the best offset must gain over the mesh's own");
-  p.Add("refine-min-patch-stddev", &pr->min_patch_stddev, "gray levels, texture every view's patch needs");
-  p.Add("refine-smoothing-radius", &pr->smoothing_radius_mm, "mm, samples within this vote on a vertex's offset");
-  p.Add("refine-min-normal-cos", &pr->min_normal_cos, "their normals within acos(this) of the vertex's");
-  p.Add("refine-min-neighbour-samples", &pr->min_neighbour_samples, "vertices with fewer samples around stay");
-  AffineDenseOptions* d = &m->dense;
-  p.Add("dense-mapping", &d->mapping, "0 = affine barycentric map, 1 = plane of the triangle");
-  p.Add("dense-pixel-step", &d->pixel_step, "px, sample every n-th pixel of A");
-  p.Add("dense-epipolar-threshold", &d->epipolar_threshold_px, "px, max distance of Q to the epipolar line");
-  p.Add("dense-max-color-difference", &d->max_color_difference, "gray levels, max mean |dBGR| (< 0 = off)");
-  p.Add("dense-ncc-half-window", &d->ncc_half_window, "px, NCC window half side (0 = off)");
-  p.Add("dense-min-ncc", &d->min_ncc, "min NCC of the warped window");
-  p.Add("dense-min-window-stddev", &d->min_window_stddev, "gray levels, flatter windows skip the NCC test");
-  p.Add("dense-refine", &d->refine_along_epipolar, "refine Q by a 1-D NCC search along the epipolar line");
-  p.Add("dense-refine-search", &d->refine_search_px, "px, half length of the refinement search");
-  p.Add("dense-refine-step", &d->refine_step_px, "px, refinement step");
-  p.Add("dense-refine-first-steps", &d->refine_first_steps,
-        "steps each side of the prediction searched first, the rest only if their best is at their edge or "
-        "under dense-refine-first-min-ncc (0 = all at once)");
-  p.Add("dense-refine-first-min-ncc", &d->refine_first_min_ncc,
-        "NCC the first steps' best must reach to end the search (else every step is scored)");
-  p.Add("dense-skip-floor-triangles", &d->skip_floor_triangles, "skip triangles whose vertices all lie on the floor");
-  p.Add("dense-reject-refine-at-border", &d->reject_refine_at_border,
-        "drop pixels whose best refined match is at the end of the search");
-  p.Add("dense-min-triangle-area", &d->min_triangle_area_px2, "px^2, smaller triangles are skipped");
-  p.Add("dense-strict-triangle-edge", &d->strict_triangle_edge_px,
-        "px, triangles with a longer edge get the floor junction's texture and NCC checks");
-  p.Add("dense-max-triangle-edge", &d->max_triangle_edge_px, "px, triangles with longer edges are skipped");
-  p.Add("dense-min-triangle-angle", &d->min_triangle_angle_deg, "deg, thinner triangles are skipped");
-  p.Add("dense-max-depth-ratio", &d->max_vertex_depth_ratio, "max/min vertex depth; larger = depth edge");
-  p.Add("dense-max-triangle-slant", &d->max_triangle_slant_deg, "deg, more oblique 3-D triangles are skipped");
-  p.Add("dense-min-triangulation-angle", &d->min_triangulation_angle_deg, "deg, min angle between the rays");
-  p.Add("dense-max-reprojection", &d->max_reprojection_px, "px, max reprojection error of a dense point");
-  p.Add("dense-min-feature-separation", &d->min_feature_separation_px, "px, closer features are dropped");
-  p.Add("dense-region-slack", &d->region_slack_mm, "mm, triangles this far outside the region are skipped");
-  p.Add("dense-junction-min-window-stddev", &d->junction_min_window_stddev,
-        "gray levels, floor-object triangles need this texture (< 0 = off)");
-  p.Add("dense-junction-min-ncc", &d->junction_min_ncc, "min NCC in floor-object triangles");
-  p.Add("dense-junction-floor-ncc-margin", &d->junction_floor_ncc_margin,
-        "floor-object triangle pixels whose floor-plane match has an NCC >= theirs minus this are dropped (< 0 = off)");
-  p.Add("dense-junction-floor-min-separation", &d->junction_floor_min_separation_px,
-        "px, floor-object triangle pixels whose floor-plane match lies closer than this are dropped");
-  p.Add("dense-region-margin", &d->region_image_margin_px, "px, margin around the region's projected box");
-  PairMatchOptions* pm = &m->pair_matches;
-  p.Add("pair-matches", &pm->enabled, "add the pair's own LK matches where the tracker left the object bare");
-  p.Add("pair-match-max-corners", &pm->max_corners, "corners detected per pair at most");
-  p.Add("pair-match-corner-quality", &pm->corner_quality, "Shi-Tomasi quality level, relative to the best corner");
-  p.Add("pair-match-min-distance", &pm->min_distance_px, "px, between new corners");
-  p.Add("pair-match-min-track-distance", &pm->min_track_distance_px,
-        "px, from every tracked feature (new corners only where the tracker left a gap)");
-  p.Add("pair-match-window", &pm->window_px, "px, side of the LK window (odd)");
-  p.Add("pair-match-pyramid-levels", &pm->pyramid_levels, "LK pyramid levels");
-  p.Add("pair-match-lk-iterations", &pm->lk_max_iterations, "LK iterations per level at most");
-  p.Add("pair-match-lk-epsilon", &pm->lk_epsilon_px, "px, LK stops when its step is smaller");
-  p.Add("pair-match-max-backward-error", &pm->max_backward_error_px, "px, max forward-backward LK error");
-  p.Add("pair-match-max-residual", &pm->max_residual, "gray levels, max mean |A - B| over the LK window");
-  p.Add("pair-match-bare-distance", &pm->bare_distance_px,
-        "px, corners this far from every tracked feature need only bare-max-backward-error (no residual limit)");
-  p.Add("pair-match-bare-max-backward-error", &pm->bare_max_backward_error_px,
-        "px, max forward-backward LK error of bare corners");
-  p.Add("pair-match-max-epipolar", &pm->max_epipolar_px, "px, max distance of a match from its epipolar line");
-  p.Add("pair-match-skip-floor-corners", &pm->skip_floor_corners,
-        "corners whose nearest tracked features all lie on the floor are not matched");
-  p.Add("pair-match-guess-neighbours", &pm->guess_neighbours,
-        "nearest tracked features whose median range along A's rays starts LK (0 = none)");
-  VoxelVoteOptions* v = &m->votes;
-  p.Add("voxel-size", &v->voxel_size_mm, "mm, voxel edge");
-  p.Add("vote-neighbourhood", &v->neighbourhood, "0, 6 or 26 neighbours get votes");
-  p.Add("vote-center-weight", &v->center_weight, "votes for the point's own voxel");
-  p.Add("vote-face-weight", &v->face_weight, "votes for each face neighbour");
-  p.Add("vote-edge-weight", &v->edge_weight, "votes for each edge neighbour");
-  p.Add("vote-corner-weight", &v->corner_weight, "votes for each corner neighbour");
-  SpaceCarvingOptions* c = &m->carving;
-  p.Add("carve-max-color-stddev", &c->max_color_stddev, "gray levels, voxels with a larger colour std-dev are carved");
-  p.Add("carve-min-views", &c->min_views, "views a voxel needs before it can be carved");
-  p.Add("carve-max-iterations", &c->max_iterations, "carving passes at most");
-  p.Add("carve-min-removed-fraction", &c->min_removed_fraction,
-        "carving stops after a pass that removes fewer than this fraction of the seeds (0 = until none)");
-  p.Add("carve-depth-tolerance", &c->depth_tolerance_voxels, "voxels behind the z-buffer still visible");
-  p.Add("carve-footprint-scale", &c->footprint_scale, "z-buffer splat size factor");
-  p.Add("carve-use-normals", &c->use_normals, "require the voxel normal to face the camera");
-  p.Add("carve-min-normal-cos", &c->min_normal_cos, "min cos between the voxel normal and the view ray");
+  p.Add("refine-mesh", &m->refinement.enabled,
+        "move the final mesh's vertices along their normals to where the views agree");
+  p.Add("voxel-size", &m->votes.voxel_size_mm, "mm, voxel edge");
 }
 
 bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::string* why) {
@@ -252,14 +88,14 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.pair_gap < 1) e << "pair-gap must be >= 1; ";
   if (o.buffer_frames <= o.pair_gap) e << "buffer-frames must be > pair-gap; ";
   if (o.pair_every < 1) e << "pair-every must be >= 1; ";
-  if (!(o.max_pair_landmark_error_px >= 0)) e << "max-pair-landmark-error must be >= 0; ";
+  if (!(o.max_pair_landmark_error_px >= 0)) e << "max_pair_landmark_error_px must be >= 0; ";
   if (o.voxel_map_every < 1) e << "voxel-map-every must be >= 1; ";
   if (o.max_map_voxels < 1) e << "max-map-voxels must be >= 1; ";
-  if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving-downsample must be in [1, 8]; ";
+  if (o.carving_downsample < 1 || o.carving_downsample > 8) e << "carving_downsample must be in [1, 8]; ";
   if (o.max_stored_matches < 0) e << "max-stored-matches must be >= 0; ";
-  if (o.max_central_track_ids < 1) e << "max-central-track-ids must be >= 1; ";
-  if (o.max_carving_views < 2) e << "max-carving-views must be >= 2; ";
-  if (o.refinement_downsample < 1 || o.refinement_downsample > 8) e << "refinement-downsample must be in [1, 8]; ";
+  if (o.max_central_track_ids < 1) e << "max_central_track_ids must be >= 1; ";
+  if (o.max_carving_views < 2) e << "max_carving_views must be >= 2; ";
+  if (o.refinement_downsample < 1 || o.refinement_downsample > 8) e << "refinement_downsample must be in [1, 8]; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
   if (o.require_target && (!o.use_target_box || o.target_channel.empty()))
     e << "require-target needs use-target-box and a target channel; ";

@@ -138,7 +138,8 @@ struct DenseModelerNodeOptions {
   DenseModelOptions model;                               // dense matching, voting, carving, meshing
 };
 
-// Registers every option field.
+// Registers the options a user sets on the command line (the rest keep their defaults; code and tests set the
+// struct's fields directly).
 void AddDenseModelerNodeOptions(OptionParser& parser, DenseModelerNodeOptions* options);
 // True when usable; otherwise false with *why set.
 bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& options, std::string* why);

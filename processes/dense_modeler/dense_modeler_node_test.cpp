@@ -597,7 +597,7 @@ TEST(DenseModelerNodeOptions, Validation) {
   o = DenseModelerNodeOptions();
   o.max_central_track_ids = 0;
   EXPECT_FALSE(ValidateDenseModelerNodeOptions(o, &why));
-  EXPECT_NE(why.find("max-central-track-ids"), std::string::npos);
+  EXPECT_NE(why.find("max_central_track_ids"), std::string::npos);
   o.model.votes.neighbourhood = 5;
   auto bus = MakeLcmBus("memq://");
   EXPECT_THROW(DenseModelerNode(*bus, o), std::invalid_argument);
