@@ -652,27 +652,28 @@ const cv::Mat& GrayFloatOf(const DenseView& v, cv::Mat* gray8, cv::Mat* out) {
 bool ValidateAffineDenseOptions(const AffineDenseOptions& o, std::string* why) {
   std::ostringstream e;
   if (o.mapping != 0 && o.mapping != 1) e << "mapping must be 0 (affine) or 1 (plane); ";
-  if (o.pixel_step < 1) e << "pixel-step must be >= 1; ";
-  if (!(o.epipolar_threshold_px > 0)) e << "epipolar-threshold must be > 0; ";
+  if (o.pixel_step < 1) e << "pixel_step must be >= 1; ";
+  if (!(o.epipolar_threshold_px > 0)) e << "epipolar_threshold_px must be > 0; ";
   if (o.ncc_half_window < 0 || o.ncc_half_window > kMaxHalfWindow)
-    e << "ncc-half-window must be in [0, " << kMaxHalfWindow << "]; ";
-  if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min-ncc must be in [-1, 1]; ";
-  if (!(o.strict_triangle_edge_px > 0)) e << "strict-triangle-edge must be > 0 px; ";
-  if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction-min-ncc must be in [-1, 1]; ";
-  if (!(o.junction_floor_ncc_margin <= 2)) e << "junction-floor-ncc-margin must be <= 2 (< 0 = off); ";
-  if (!(o.junction_floor_min_separation_px >= 0)) e << "junction-floor-min-separation must be >= 0 px; ";
-  if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc-half-window >= 1; ";
+    e << "ncc_half_window must be in [0, " << kMaxHalfWindow << "]; ";
+  if (!(o.min_ncc >= -1 && o.min_ncc <= 1)) e << "min_ncc must be in [-1, 1]; ";
+  if (!(o.strict_triangle_edge_px > 0)) e << "strict_triangle_edge_px must be > 0 px; ";
+  if (!(o.junction_min_ncc >= -1 && o.junction_min_ncc <= 1)) e << "junction_min_ncc must be in [-1, 1]; ";
+  if (!(o.junction_floor_ncc_margin <= 2)) e << "junction_floor_ncc_margin must be <= 2 (< 0 = off); ";
+  if (!(o.junction_floor_min_separation_px >= 0)) e << "junction_floor_min_separation_px must be >= 0 px; ";
+  if (o.refine_along_epipolar && o.ncc_half_window < 1) e << "refinement needs ncc_half_window >= 1; ";
   if (!(o.refine_search_px > 0) || !(o.refine_step_px > 0)) e << "refine search and step must be > 0; ";
   if (o.refine_along_epipolar && !(o.refine_search_px >= o.refine_step_px))
     e << "refine search must be >= refine step (else the search has no step but the prediction); ";
-  if (o.refine_kernel < 0 || o.refine_kernel > 3) e << "refine-kernel must be in [0, 3]; ";
-  if (o.refine_first_steps < 0) e << "refine-first-steps must be >= 0 (0 = every step at once); ";
-  if (!(o.refine_first_min_ncc >= -1 && o.refine_first_min_ncc <= 1)) e << "refine-first-min-ncc must be in [-1, 1]; ";
-  if (!(o.max_triangle_edge_px > 0)) e << "max-triangle-edge must be > 0; ";
-  if (!(o.max_vertex_depth_ratio >= 1)) e << "max-vertex-depth-ratio must be >= 1; ";
-  if (!(o.max_triangle_slant_deg > 0 && o.max_triangle_slant_deg <= 90)) e << "max-triangle-slant must be in (0, 90]; ";
-  if (!(o.max_reprojection_px > 0)) e << "max-reprojection must be > 0; ";
-  if (!(o.min_triangulation_angle_deg >= 0)) e << "min-triangulation-angle must be >= 0; ";
+  if (o.refine_kernel < 0 || o.refine_kernel > 3) e << "refine_kernel must be in [0, 3]; ";
+  if (o.refine_first_steps < 0) e << "refine_first_steps must be >= 0 (0 = every step at once); ";
+  if (!(o.refine_first_min_ncc >= -1 && o.refine_first_min_ncc <= 1)) e << "refine_first_min_ncc must be in [-1, 1]; ";
+  if (!(o.max_triangle_edge_px > 0)) e << "max_triangle_edge_px must be > 0; ";
+  if (!(o.max_vertex_depth_ratio >= 1)) e << "max_vertex_depth_ratio must be >= 1; ";
+  if (!(o.max_triangle_slant_deg > 0 && o.max_triangle_slant_deg <= 90))
+    e << "max_triangle_slant_deg must be in (0, 90]; ";
+  if (!(o.max_reprojection_px > 0)) e << "max_reprojection_px must be > 0; ";
+  if (!(o.min_triangulation_angle_deg >= 0)) e << "min_triangulation_angle_deg must be >= 0; ";
   if (o.use_world_box && !(o.box_min.array() < o.box_max.array()).all()) e << "world box min must be < max; ";
   if (o.region.valid && !(o.region.box_min.array() < o.region.box_max.array()).all()) e << "region min must be < max; ";
   if (!(o.region_slack_mm >= 0) || !(o.region_image_margin_px >= 0)) e << "region slack and margin must be >= 0; ";

@@ -166,7 +166,7 @@ TEST(AffineDense, LargeTrianglesNeedTexturedWindows) {
   EXPECT_GT(small_strict, 0.9);
   o.strict_triangle_edge_px = 0;
   EXPECT_FALSE(ValidateAffineDenseOptions(o, &why));
-  EXPECT_NE(why.find("strict-triangle-edge"), std::string::npos);
+  EXPECT_NE(why.find("strict_triangle_edge_px"), std::string::npos);
 }
 
 // The views' grays, given as float or 8-bit (the node makes each frame's once), give the same points as grays
@@ -767,8 +767,8 @@ TEST(AffineDense, FloorJunctionPixelsThatTheFloorExplainsAreDropped) {
   o.junction_floor_ncc_margin = 3;
   o.junction_floor_min_separation_px = -1;
   EXPECT_FALSE(ValidateAffineDenseOptions(o, &why));
-  EXPECT_NE(why.find("junction-floor-ncc-margin"), std::string::npos);
-  EXPECT_NE(why.find("junction-floor-min-separation"), std::string::npos);
+  EXPECT_NE(why.find("junction_floor_ncc_margin"), std::string::npos);
+  EXPECT_NE(why.find("junction_floor_min_separation_px"), std::string::npos);
 }
 
 }  // namespace

@@ -22,27 +22,27 @@ constexpr double kGridCellPx = 16.0;                   // px, cells of the neare
 
 bool ValidatePairMatchOptions(const PairMatchOptions& o, std::string* why) {
   std::ostringstream e;
-  if (o.max_corners < 1) e << "pair-match max-corners must be >= 1; ";
-  if (!(o.corner_quality > 0 && o.corner_quality < 1)) e << "pair-match corner-quality must be in (0, 1); ";
-  if (!(o.min_distance_px > 0)) e << "pair-match min-distance must be > 0; ";
-  if (!(o.min_track_distance_px > 0)) e << "pair-match min-track-distance must be > 0; ";
+  if (o.max_corners < 1) e << "pair-match max_corners must be >= 1; ";
+  if (!(o.corner_quality > 0 && o.corner_quality < 1)) e << "pair-match corner_quality must be in (0, 1); ";
+  if (!(o.min_distance_px > 0)) e << "pair-match min_distance_px must be > 0; ";
+  if (!(o.min_track_distance_px > 0)) e << "pair-match min_track_distance_px must be > 0; ";
   if (o.window_px < 5 || o.window_px % 2 == 0) e << "pair-match window must be odd and >= 5; ";
-  if (o.pyramid_levels < 0 || o.pyramid_levels > 6) e << "pair-match pyramid-levels must be in [0, 6]; ";
-  if (o.lk_max_iterations < 1 || o.lk_max_iterations > 100) e << "pair-match lk-iterations must be in [1, 100]; ";
-  if (!(o.lk_epsilon_px > 0 && o.lk_epsilon_px < 1)) e << "pair-match lk-epsilon must be in (0, 1) px; ";
-  if (!(o.max_backward_error_px > 0)) e << "pair-match max-backward-error must be > 0; ";
-  if (!(o.max_residual > 0)) e << "pair-match max-residual must be > 0; ";
-  if (!(o.bare_distance_px > 0)) e << "pair-match bare-distance must be > 0; ";
-  if (!(o.bare_max_backward_error_px > 0)) e << "pair-match bare-max-backward-error must be > 0; ";
-  if (!(o.max_epipolar_px > 0)) e << "pair-match max-epipolar must be > 0; ";
-  if (o.guess_neighbours < 0) e << "pair-match guess-neighbours must be >= 0; ";
+  if (o.pyramid_levels < 0 || o.pyramid_levels > 6) e << "pair-match pyramid_levels must be in [0, 6]; ";
+  if (o.lk_max_iterations < 1 || o.lk_max_iterations > 100) e << "pair-match lk_max_iterations must be in [1, 100]; ";
+  if (!(o.lk_epsilon_px > 0 && o.lk_epsilon_px < 1)) e << "pair-match lk_epsilon_px must be in (0, 1) px; ";
+  if (!(o.max_backward_error_px > 0)) e << "pair-match max_backward_error_px must be > 0; ";
+  if (!(o.max_residual > 0)) e << "pair-match max_residual must be > 0; ";
+  if (!(o.bare_distance_px > 0)) e << "pair-match bare_distance_px must be > 0; ";
+  if (!(o.bare_max_backward_error_px > 0)) e << "pair-match bare_max_backward_error_px must be > 0; ";
+  if (!(o.max_epipolar_px > 0)) e << "pair-match max_epipolar_px must be > 0; ";
+  if (o.guess_neighbours < 0) e << "pair-match guess_neighbours must be >= 0; ";
   if (!(o.min_distance_px <= kMaxDistancePx) || !(o.min_track_distance_px <= kMaxDistancePx) ||
       !(o.bare_distance_px <= kMaxDistancePx))
     e << "pair-match distances must be <= " << kMaxDistancePx << " px; ";
   if (!(o.bare_distance_px >= o.min_track_distance_px))
-    e << "pair-match bare-distance must be >= min-track-distance (else every corner is bare); ";
+    e << "pair-match bare_distance_px must be >= min_track_distance_px (else every corner is bare); ";
   if (!(o.bare_max_backward_error_px >= o.max_backward_error_px))
-    e << "pair-match bare-max-backward-error must be >= max-backward-error (the bare rule is the looser one); ";
+    e << "pair-match bare_max_backward_error_px must be >= max_backward_error_px (the bare rule is the looser one); ";
   if (why) *why = e.str();
   return e.str().empty();
 }

@@ -309,7 +309,7 @@ TEST(PairMatches, OptionsAreValidated) {
   o = PairMatchOptions();
   o.max_residual = 0;
   EXPECT_FALSE(ValidatePairMatchOptions(o, &why));
-  EXPECT_NE(why.find("max-residual"), std::string::npos) << why;
+  EXPECT_NE(why.find("max_residual"), std::string::npos) << why;
   o = PairMatchOptions();
   o.corner_quality = 1;
   EXPECT_FALSE(ValidatePairMatchOptions(o, &why));

@@ -99,17 +99,17 @@ cv::Rect RegionOfInterest::ImageRect(const PinholeCamera& camera, const Eigen::I
 
 bool ValidateAutoRoiOptions(const AutoRoiOptions& o, std::string* why) {
   std::ostringstream e;
-  if (!(o.central_fraction > 0 && o.central_fraction <= 1)) e << "roi-central-fraction must be in (0, 1]; ";
-  if (o.min_central_views < 1) e << "roi-min-central-views must be >= 1; ";
-  if (o.min_central_landmarks < 3) e << "roi-min-central-landmarks must be >= 3; ";
-  if (!(o.cluster_k > 0)) e << "roi-cluster-k must be > 0; ";
-  if (!(o.margin_mm >= 0) || !(o.margin_fraction >= 0)) e << "roi margins must be >= 0; ";
-  if (!(o.floor_radius_mm > 0)) e << "roi-floor-radius must be > 0; ";
-  if (!(o.floor_tolerance_mm > 0)) e << "roi-floor-tolerance must be > 0; ";
-  if (o.min_floor_points < 3) e << "roi-min-floor-points must be >= 3; ";
-  if (!(o.max_floor_tilt_deg > 0 && o.max_floor_tilt_deg < 90)) e << "roi-max-floor-tilt must be in (0, 90); ";
+  if (!(o.central_fraction > 0 && o.central_fraction <= 1)) e << "roi central_fraction must be in (0, 1]; ";
+  if (o.min_central_views < 1) e << "roi min_central_views must be >= 1; ";
+  if (o.min_central_landmarks < 3) e << "roi min_central_landmarks must be >= 3; ";
+  if (!(o.cluster_k > 0)) e << "roi cluster_k must be > 0; ";
+  if (!(o.margin_mm >= 0) || !(o.margin_fraction >= 0)) e << "roi margin_mm and margin_fraction must be >= 0; ";
+  if (!(o.floor_radius_mm > 0)) e << "roi floor_radius_mm must be > 0; ";
+  if (!(o.floor_tolerance_mm > 0)) e << "roi floor_tolerance_mm must be > 0; ";
+  if (o.min_floor_points < 3) e << "roi min_floor_points must be >= 3; ";
+  if (!(o.max_floor_tilt_deg > 0 && o.max_floor_tilt_deg < 90)) e << "roi max_floor_tilt_deg must be in (0, 90); ";
   if (!(o.floor_clearance_mm >= 0)) e << "roi-floor-clearance must be >= 0; ";
-  if (o.ransac_iterations < 1) e << "roi-ransac-iterations must be >= 1; ";
+  if (o.ransac_iterations < 1) e << "roi ransac_iterations must be >= 1; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
