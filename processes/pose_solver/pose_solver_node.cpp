@@ -21,6 +21,9 @@
 namespace objscan {
 
 void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
+  // Only what a user sets (issue 27): plumbing, the motion model, the robot's geometry, the wide-baseline profile's
+  // settings (scripts/profiles), the scale sources, and the relocalization and map-join switches the tests and the
+  // README use. Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.Add("tracks-channel", &o->tracks_channel, "input feature_tracks_t channel");
   p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
@@ -29,14 +32,9 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("final-pose-channel", &o->final_pose_channel, "output pose_t channel for the final poses after global BA");
   p.Add("landmarks-channel", &o->landmarks_channel, "output landmarks_t channel");
   p.Add("control-channel", &o->control_channel, "control_t channel (finished in and out)");
-  p.Add("min-posed-fraction", &o->min_posed_fraction,
-        "the run fails (status error) when fewer than this fraction of the frames get a final pose (0 = never)");
   p.Add("status-channel", &o->status_channel, "process_status_t channel");
   p.Add("finish-on-sender", &o->finish_on_sender, "COMMAND_FINISHED from this sender starts the final phase");
   p.Add("model", &o->model, "camera motion model: 6dof or 4dof (robot on the floor: x, y, yaw, tilt)");
-  p.Add("pending-tracks-capacity", &o->pending_tracks_capacity, "track frames buffered before camera_info (>= 0)");
-  p.Add("tracks-queue-capacity", &o->tracks_queue_capacity, "messages buffered by the tracks subscription (>= 1)");
-  p.Add("max-odometry-gap", &o->max_odometry_gap_s, "s, odometry further than this from a frame is not used");
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   p.Add("output-dir", &o->output_dir, "write trajectory.txt, trajectory_online.txt, landmarks.ply, colmap/ here");
@@ -50,63 +48,27 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("camera-offset-x", &e->robot.camera_offset_mm.x(), "mm, optical centre in the tilt frame, forward");
   p.Add("camera-offset-y", &e->robot.camera_offset_mm.y(), "mm, optical centre in the tilt frame, left");
   p.Add("camera-offset-z", &e->robot.camera_offset_mm.z(), "mm, optical centre in the tilt frame, up");
-  p.Add("span-min-common-tracks", &e->start_span.min_common_tracks, "tracks common to every frame of the start span");
-  p.Add("span-min-frames", &e->start_span.min_frames, "frames in the start span (>= 3)");
-  p.Add("span-max-frames", &e->start_span.max_frames, "longest start span");
-  p.Add("span-min-rotation", &e->start_span.min_rotation_deg, "deg, rotation across the start span (parallax)");
-  p.Add("pnp-ransac-iterations", &e->pnp.ransac_iterations, "PnP RANSAC hypotheses");
-  p.Add("pnp-ransac-threshold", &e->pnp.ransac_threshold_px, "px, PnP RANSAC inlier threshold");
-  p.Add("pnp-inlier-threshold", &e->pnp.inlier_threshold_px, "px, inlier threshold after refinement");
   p.Add("pnp-min-inliers", &e->pnp.min_inliers, "fewer PnP inliers = lost");
-  p.Add("pnp-loss-scale", &e->pnp.loss_scale_px, "px, Huber scale of the PnP refinement");
-  p.Add("pnp-refine-iterations", &e->pnp.refine_iterations, "Ceres iterations of the PnP refinement");
-  p.Add("pnp-use-prior-first", &e->pnp.use_prior_first, "refine the previous pose before trying RANSAC");
-  p.Add("tri-min-parallax", &e->triangulation.min_parallax_deg, "deg, parallax a new landmark needs");
-  p.Add("tri-max-reprojection", &e->triangulation.max_reprojection_px, "px, max error in every view of a new landmark");
-  p.Add("tri-refine-iterations", &e->triangulation.refine_iterations, "Gauss-Newton iterations of triangulation");
   p.Add("tri-min-views", &e->min_triangulation_views, "posed views a track needs to be triangulated");
-  p.Add("tri-max-views", &e->max_triangulation_views, "views used for triangulation");
   p.Add("keyframe-interval", &e->keyframe_interval, "frames, longest gap between keyframes");
-  p.Add("keyframe-track-ratio", &e->keyframe_track_ratio, "keyframe when tracked landmarks fall below this ratio");
-  p.Add("local-window", &e->local_window_keyframes, "keyframes optimized by the windowed BA");
-  p.Add("local-ba-iterations", &e->local_ba_iterations, "Ceres iterations of the windowed BA");
-  p.Add("global-ba-iterations", &e->global_ba_iterations, "Ceres iterations of the final global BA");
-  p.Add("init-ba-iterations", &e->init_ba_iterations, "Ceres iterations of the start-span BA");
-  p.Add("ba-loss", &e->ba_loss, "robust loss: huber or cauchy");
-  p.Add("ba-loss-scale", &e->ba_loss_px, "px, robust loss scale");
-  p.Add("max-landmark-error", &e->max_landmark_error_px, "px, landmarks with larger RMS are removed");
   p.Add("use-floor-for-scale", &e->use_floor_for_scale, "4dof: level on and scale from the floor plane");
   p.Add("camera-height-known", &e->camera_height_known,
         "the robot geometry's camera height is real (false: images without odometry are only levelled by the floor, "
         "lengths stay arbitrary)");
-  p.Add("floor-tolerance", &e->floor_tolerance_mm, "mm, floor plane inlier distance");
-  p.Add("min-floor-points", &e->min_floor_points, "landmarks needed to accept a floor plane");
   p.Add("refine-scale-with-odometry", &e->refine_scale_with_odometry, "6dof: rescale at the end by odometry path");
   p.Add("online-scale-frames", &e->online_scale_frames, "6dof: rescale by odometry path at keyframes this long");
-  p.Add("local-fixed-keyframes", &e->local_fixed_keyframes, "older keyframes held fixed in the windowed BA");
-  p.Add("global-ba-all-frames", &e->global_ba_all_frames, "final BA over all frames instead of keyframes");
-  p.Add("observations-kept-frames", &e->observations_kept_frames,
-        "frames a posed non-keyframe keeps its observations (0 = all, for the final BA)");
-  p.Add("max-active-keyframes", &e->max_active_keyframes,
-        "keyframes that keep their observations; older ones are frozen (bounded memory; 0 = no limit)");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
   p.Add("fuse-landmarks", &e->fuse_landmarks,
         "re-associate a new landmark with an old one whose track ended (loop closure; tracks that come back)");
-  p.Add("fuse-search", &e->fuse_search_mm, "mm, largest distance between a new and the old landmark it joins");
-  p.Add("fuse-max-px", &e->fuse_max_px, "px, the old landmark's largest reprojection error in the new track's views");
-  p.Add("fuse-min-parallax", &e->fuse_min_parallax_deg, "deg, parallax the new track needs before it is fused");
   p.Add("relocalize-search", &e->relocalize_search_px,
         "px, largest image shift searched when a lost frame is relocalized by position from the odometry's "
         "prediction (larger for poorer odometry; 0 = off)");
   p.Add("join-search", &e->join_search_mm,
         "mm, after a restart join the new map to the old by common landmarks this close (0 = odometry chaining only)");
-  p.Add("join-max", &e->join_max_mm, "mm, final landmark pair distance of the join");
-  p.Add("join-min-landmarks", &e->join_min_landmarks, "common landmarks needed to join the maps");
   p.Add("two-view-min-matches", &e->two_view_min_matches,
         "wide baseline (6dof): pose a frame PnP cannot pose from the essential matrix with the last posed frame when "
         "they share this many tracks (0 = off)");
   p.Add("two-view-min-landmarks", &e->two_view_min_landmarks, "landmarks that frame must see to fix the step length");
-  p.Add("seed", &e->seed, "RANSAC seed");
 }
 
 bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* why) {
@@ -119,12 +81,12 @@ bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* 
   if (o.landmarks_channel.empty()) e << "landmarks-channel must not be empty; ";
   if (o.control_channel.empty()) e << "control-channel must not be empty; ";
   if (o.status_channel.empty()) e << "status-channel must not be empty; ";
-  if (!(o.min_posed_fraction >= 0 && o.min_posed_fraction <= 1)) e << "min-posed-fraction must be in [0, 1]; ";
+  if (!(o.min_posed_fraction >= 0 && o.min_posed_fraction <= 1)) e << "min_posed_fraction must be in [0, 1]; ";
   if (o.finish_on_sender.empty()) e << "finish-on-sender must not be empty; ";
   if (o.model != "6dof" && o.model != "4dof") e << "model must be 6dof or 4dof; ";
-  if (o.pending_tracks_capacity < 0) e << "pending-tracks-capacity must be >= 0; ";
-  if (o.tracks_queue_capacity < 1) e << "tracks-queue-capacity must be >= 1; ";
-  if (!(o.max_odometry_gap_s >= 0) || !std::isfinite(o.max_odometry_gap_s)) e << "max-odometry-gap must be >= 0; ";
+  if (o.pending_tracks_capacity < 0) e << "pending_tracks_capacity must be >= 0; ";
+  if (o.tracks_queue_capacity < 1) e << "tracks_queue_capacity must be >= 1; ";
+  if (!(o.max_odometry_gap_s >= 0) || !std::isfinite(o.max_odometry_gap_s)) e << "max_odometry_gap_s must be >= 0; ";
   if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
   std::string est_why;
   if (!ValidatePoseEstimatorOptions(o.estimator, &est_why)) e << est_why << "; ";
@@ -462,7 +424,7 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
   if (failure.empty() && frames > 0 &&
       static_cast<double>(posed) < options_.min_posed_fraction * static_cast<double>(frames)) {
     failure = "only " + std::to_string(posed) + " of " + std::to_string(frames) +
-              " frames got a pose (min-posed-fraction " + std::to_string(options_.min_posed_fraction).substr(0, 4) +
+              " frames got a pose (min_posed_fraction " + std::to_string(options_.min_posed_fraction).substr(0, 4) +
               "): ";
     if (odometry_seen_)  // a robot: the stream is continuous, so tracking was lost and no new map started
       failure += "tracking was lost and no new map started for long (last reason: " +

@@ -73,6 +73,8 @@ struct PoseSolverNodeOptions {
   PoseEstimatorOptions estimator;                        // the estimator's options (model set from `model`)
 };
 
+// Registers the options a user sets on the command line (the rest keep their defaults; code and tests set the
+// struct's fields directly).
 void AddPoseSolverNodeOptions(OptionParser& parser, PoseSolverNodeOptions* options);
 bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& options, std::string* why);
 
