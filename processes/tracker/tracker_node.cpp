@@ -15,6 +15,10 @@
 namespace objscan {
 
 void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
+  // Only what a user sets (issue 27): plumbing, the image queue and threads, the track budget and the corner quality
+  // (the replay's help and the docs give them as examples), the LK window (the node test's command line), and the
+  // descriptor tracking of the wide-baseline profile (scripts/profiles). Every other field keeps its default here;
+  // tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
   p.Add("info-channel", &o->info_channel, "optional camera_info_t channel that fixes the image size (\"\" = ignore)");
@@ -26,63 +30,16 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   KltTrackerOptions* k = &o->tracker;
   p.Add("klt-max-tracks", &k->max_tracks, "upper bound on live tracks per frame");
-  p.Add("klt-grid-cols", &k->grid_cols, "detection grid columns");
-  p.Add("klt-grid-rows", &k->grid_rows, "detection grid rows");
-  p.Add("klt-max-per-cell", &k->max_per_cell, "live-track quota per grid cell (0 = ceil(max_tracks / cells))");
-  p.Add("klt-border-margin", &k->border_margin_px, "px, tracks closer to the border are dropped / not born");
-  p.Add("klt-min-distance", &k->min_distance_px, "px, min distance of a new corner to other tracks");
-  p.Add("klt-duplicate-distance", &k->duplicate_distance_px,
-        "px, the younger of two closer tracks is dropped (0 = off)");
   p.Add("klt-quality-level", &k->quality_level, "Shi-Tomasi quality relative to the strongest corner, (0, 1)");
-  p.Add("klt-min-eigenvalue", &k->min_eigenvalue, "Shi-Tomasi absolute min eigenvalue floor");
-  p.Add("klt-corner-block-size", &k->corner_block_size, "px, Shi-Tomasi window (odd >= 3)");
-  p.Add("klt-subpix-half-window", &k->subpix_half_window, "px, cornerSubPix half window (0 = off)");
-  p.Add("klt-detect-interval", &k->detect_interval, "frames between corner detections (>= 1)");
-  p.Add("klt-min-cell-fill", &k->min_cell_fill, "detect when a cell holds < this fraction of its quota, (0, 1]");
   p.Add("klt-win-size", &k->win_size, "px, Lucas-Kanade window side (odd)");
-  p.Add("klt-max-level", &k->max_level, "pyramid levels above the base image");
-  p.Add("klt-predict-motion", &k->predict_motion, "start LK at the position predicted from the last displacement");
-  p.Add("klt-coarse-win-size", &k->coarse_win_size, "px, LK window on pyramid levels >= 1 (odd; 0 = klt-win-size)");
-  p.Add("klt-max-iterations", &k->max_iterations, "Lucas-Kanade iterations per level");
-  p.Add("klt-epsilon", &k->epsilon, "px, Lucas-Kanade convergence threshold");
-  p.Add("klt-lk-min-eigenvalue", &k->lk_min_eigenvalue,
-        "(gray levels / px)^2, Lucas-Kanade min eigenvalue of the window's gradient matrix (per pixel)");
-  p.Add("klt-lk-stop-level", &k->lk_stop_level, "pyramid level on which LK stops (0 = base; >0 needs anchor refine)");
-  p.Add("klt-forward-backward-check", &k->forward_backward_check, "drop tracks failing the forward-backward check");
-  p.Add("klt-fb-threshold", &k->fb_threshold_px, "px, max forward-backward round-trip error");
-  p.Add("klt-max-patch-error", &k->max_patch_error, "gray levels, max mean LK window residual (0 = off)");
   p.Add("threads", &k->threads, "OpenCV threads (cv::setNumThreads)");
-  p.Add("klt-anchor-refine", &k->anchor_refine,
-        "refine LK positions by affine alignment of each track's anchor template (no drift)");
-  p.Add("klt-anchor-half-window", &k->anchor_half_window, "px, anchor template half side, [2, 25]");
-  p.Add("klt-anchor-max-iterations", &k->anchor_max_iterations, "anchor alignment iterations per track and frame");
-  p.Add("klt-anchor-epsilon", &k->anchor_epsilon, "px, anchor alignment convergence threshold");
-  p.Add("klt-anchor-max-residual", &k->anchor_max_residual,
-        "max aligned RMS residual / template RMS contrast; worse tracks are dropped, (0, 2]");
-  p.Add("klt-anchor-reanchor-residual", &k->anchor_reanchor_residual,
-        "tracks with a residual between klt-anchor-max-residual and this are re-anchored at the LK position "
-        "instead of dropped, [0, 2] (0 = never)");
-  p.Add("klt-anchor-max-shift", &k->anchor_max_shift_px, "px, max distance of the refined from the LK position");
-  p.Add("klt-anchor-max-distortion", &k->anchor_max_distortion,
-        "max scale change since the anchor in any direction before re-anchoring (> 1)");
-  p.Add("klt-anchor-reanchor", &k->anchor_reanchor,
-        "re-take templates whose distortion exceeds klt-anchor-max-distortion (false = drop the track)");
-  p.Add("klt-use-avx2", &k->use_avx2, "AVX2 code for the anchor alignment when the CPU has it (identical output)");
   p.Add("descriptor-tracking", &o->descriptor_tracking,
         "off (KLT) | on (descriptor matching only, wide-baseline image sets) | auto (KLT, switch to descriptors "
-        "when KLT continues < descriptor-auto-keep-fraction of the tracks)");
+        "when KLT continues < descriptor_auto_keep_fraction of the tracks)");
   p.Add("descriptor-kind", &o->descriptor_kind, "sift | akaze | orb");
-  p.Add("descriptor-auto-keep-fraction", &o->descriptor_auto_keep_fraction,
-        "auto: fraction of the previous frame's KLT tracks below which the node switches, (0, 1)");
   DescriptorTrackerOptions* d = &o->descriptor;
   p.Add("descriptor-max-features", &d->max_features, "keypoints kept per frame (strongest first)");
   p.Add("descriptor-sift-contrast", &d->sift_contrast_threshold, "SIFT contrast threshold (lower = more keypoints)");
-  p.Add("descriptor-akaze-threshold", &d->akaze_threshold, "AKAZE response threshold");
-  p.Add("descriptor-clahe", &d->clahe_clip_limit, "CLAHE clip limit before detection (0 = off)");
-  p.Add("descriptor-ratio", &d->ratio, "Lowe ratio test threshold, (0, 1]");
-  p.Add("descriptor-mutual-check", &d->mutual_check, "keep only mutual best matches");
-  p.Add("descriptor-ransac-threshold", &d->ransac_threshold_px, "px, fundamental-matrix RANSAC inlier distance");
-  p.Add("descriptor-min-inliers", &d->min_inliers, "F-RANSAC inliers needed to carry ids from a frame (>= 8)");
   p.Add("descriptor-history", &d->history_frames, "earlier frames matched against (2 = also the one before), [1, 10]");
 }
 
@@ -102,7 +59,7 @@ bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
   DescriptorKind kind;
   if (!ParseDescriptorKind(o.descriptor_kind, &kind)) e << "descriptor-kind must be sift, akaze or orb; ";
   if (!(o.descriptor_auto_keep_fraction > 0 && o.descriptor_auto_keep_fraction < 1))
-    e << "descriptor-auto-keep-fraction must be in (0, 1); ";
+    e << "descriptor_auto_keep_fraction must be in (0, 1); ";
   std::string descriptor_why;
   if (!ValidateDescriptorTrackerOptions(o.descriptor, &descriptor_why)) e << "descriptor: " << descriptor_why << "; ";
   const std::string msg = e.str();

@@ -63,7 +63,8 @@ struct TrackerNodeOptions {
                                                     // taken from descriptor_kind and tracker.threads)
 };
 
-// Registers every option field (tracker options with prefix "klt-").
+// Registers the options a user sets on the command line (KLT options with prefix "klt-"; the rest keep their
+// defaults: code and tests set the struct's fields directly).
 void AddTrackerNodeOptions(OptionParser& parser, TrackerNodeOptions* options);
 // True when usable; otherwise false with *why set.
 bool ValidateTrackerNodeOptions(const TrackerNodeOptions& options, std::string* why);
