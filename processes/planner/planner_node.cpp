@@ -43,6 +43,9 @@ const char* kWorld = "world";
 }  // namespace
 
 void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
+  // Only what a user sets (issue 27): plumbing, the mission's radius, speeds, budgets and next views, the map's extent
+  // and the floor-support switch, and the robot (footprint, safety margin, clearance heights, geometry, speed and
+  // head limits). Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.Add("pose-channel", &o->pose_channel, "input camera pose channel (pose_t); one command per pose");
   p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel");
@@ -65,27 +68,16 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   p.Add("tracking-turn-deg-s", &o->tracking_turn_deg_s,
         "deg/s, fastest rotation of the base and of the camera (base + pan): the tracker must keep up");
   p.Add("explore-budget", &q->explore_budget_s, "s of exploring without a confirmed target before NO_TARGET");
-  p.Add("start-free", &q->start_free_mm, "mm of floor ahead of the start taken as free for the first motion");
   p.Add("coverage-target", &q->coverage_target, "coverage fraction that ends the next views, (0, 1]");
   p.Add("max-next-views", &q->max_next_views, "next views added at most");
   p.Add("next-views-budget", &q->next_views_budget_s, "s spent on next views at most");
-  p.Add("lost-search", &q->lost_search_s, "s the orbit waits and searches for a lost target before going on");
   p.Add("next-view-radii", &o->next_view_radii, "mm, comma-separated ring radii of next-view candidates");
-  p.Add("next-view-azimuth-step-deg", &o->azimuth_step_deg, "deg between next-view candidates on a ring");
-  p.Add("capture-arc-deg", &q->next_view.capture_arc_deg, "deg driven along the ring at a next view");
-  p.Add("coverage-sample", &q->coverage.sample_mm, "mm, spacing of the coverage's surface samples");
-  p.Add("max-incidence-deg", &o->max_incidence_deg, "deg, largest angle between a view and a surface normal");
-  p.Add("views-needed", &q->coverage.views_needed, "views that must see a surface sample to cover it");
   OccupancyMapOptions* m = &q->map;
-  p.Add("map-cell", &m->cell_mm, "mm, cell size of the planner's floor map");
   p.Add("map-size", &m->size_mm, "mm, side of the mapped square, centred on the robot's start");
-  p.Add("view-range", &m->view_range_mm, "mm, how far the camera's view rays mark the floor seen");
   p.Add("free-support", &m->free_support_mm,
         "mm, free floor needs a floor landmark this close (0 = view rays alone, for untextured floors)");
   p.Add("obstacle-min-z", &m->obstacle_min_z_mm, "mm, landmarks at least this high are obstacles");
   p.Add("obstacle-max-z", &m->obstacle_max_z_mm, "mm, landmarks higher than this do not block the base");
-  p.Add("min-observations", &m->min_observations, "views a landmark needs to count in the map");
-  p.Add("max-reprojection-error", &m->max_error_px, "px, landmarks with a larger RMS are not used");
   p.Add("footprint-radius", &m->footprint_radius_mm, "mm, radius of the robot's round footprint");
   p.Add("safety-margin", &m->safety_margin_mm, "mm, planned paths keep footprint + this from obstacles");
   RobotGeometry* r = &q->robot;

@@ -81,6 +81,8 @@ struct PlannerNodeOptions {
   PlannerOptions planner;                           // everything else (mm, s; robot geometry)
 };
 
+// Registers the options a user sets on the command line (the rest keep their defaults; code and tests set the
+// struct's fields directly).
 void AddPlannerNodeOptions(OptionParser& parser, PlannerNodeOptions* options);
 // True when usable; otherwise false with *why set.
 bool ValidatePlannerNodeOptions(const PlannerNodeOptions& options, std::string* why);
