@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -680,6 +681,47 @@ namespace {
 constexpr double kLiveFinalOffsetWarnMm = 5.0;
 }  // namespace
 
+RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPair>& pairs, std::string* note) const {
+  note->clear();
+  if (!region_.valid) return region_;
+  std::map<int64_t, std::pair<Eigen::Vector3d, Eigen::Vector3d>> centres;  // seq -> (live, final) camera centre
+  for (const StoredPair& sp : pairs)
+    for (const auto& [seq, live] : {std::make_pair(sp.seq_a, &sp.world_from_a), std::make_pair(sp.seq_b, &sp.world_from_b)}) {
+      auto f = final_poses_.find(seq);
+      if (f != final_poses_.end()) centres[seq] = {live->translation(), f->second.translation()};
+    }
+  std::vector<Eigen::Vector3d> from, to;
+  for (const auto& [seq, c] : centres) {
+    from.push_back(c.first);
+    to.push_back(c.second);
+  }
+  Sim3 sim;
+  if (from.size() < 10 || !AlignUmeyama(from, to, true, &sim)) return region_;
+  double sum2 = 0;
+  for (size_t i = 0; i < from.size(); ++i) sum2 += (sim * from[i] - to[i]).squaredNorm();
+  const double rms = std::sqrt(sum2 / from.size());
+  const Eigen::Vector3d centre = 0.5 * (region_.box_min + region_.box_max);
+  const double moved = (sim * centre - centre).norm();
+  char text[320];
+  // A region moved by less than a voxel stays (the final adjustment's sub-millimetre changes); a move that is not a
+  // Sim(3) (the views' centres off it by more than 20 mm RMS) is not followed either.
+  if (moved <= grid_.voxel_size()) return region_;
+  if (rms > 20.0) {
+    std::snprintf(text, sizeof(text),
+                  "final votes: the region stays in the live frame: the final camera centres are no Sim(3) of the live "
+                  "ones (%.1f mm RMS over %zu views; the region's centre would move %.0f mm)",
+                  rms, from.size(), moved);
+    *note = text;
+    return region_;
+  }
+  std::snprintf(text, sizeof(text),
+                "final votes: the region moved with the final poses by %.0f mm (Sim(3) of the live camera centres, scale "
+                "%.4f, %.2f mm RMS over %zu views)",
+                moved, sim.scale, rms, from.size());
+  *note = text;
+  return TransformRegion(region_, sim);
+}
+
 bool DenseModelerNode::RevoteWithFinalPoses() {
   status_.SetValue("final_revoted_pairs", 0);
   status_.SetValue("final_revote_rejected", 0);
@@ -694,7 +736,15 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   pairs.swap(stored_pairs_);  // freed on return
   stored_matches_ = 0;
   VoxelVoteGrid fresh(options_.model.votes);
-  const AffineDenseOptions dense = DenseOptionsForNow();
+  AffineDenseOptions dense = DenseOptionsForNow();
+  // The region (the TARGET box, the automatic region) was found in the live poses' frame. When the final poses are
+  // the live ones moved as a whole (an unjoined map restart rescaled by its floor: room_02, 8 Dec, final poses 351 mm
+  // from the live ones, every re-voted point outside the live region, the model kept in the live frame), the region
+  // moves with them.
+  std::string region_note;
+  const RegionOfInterest final_region = RegionInFinalFrame(pairs, &region_note);
+  if (!region_note.empty()) LogInfo(region_note);
+  dense.region = final_region;
   int64_t with_final = 0, points = 0, rejected = 0;
   for (const StoredPair& sp : pairs) {
     auto fa = final_poses_.find(sp.seq_a), fb = final_poses_.find(sp.seq_b);
@@ -729,6 +779,7 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   else
     LogInfo("final votes recomputed in " + std::to_string(seconds) + " s: " + counts);
   status_.SetValue("final_revoted_pairs", static_cast<double>(with_final));
+  region_ = final_region;  // the model's region, as its votes
   grid_ = std::move(fresh);
   status_.SetValue("voxels", static_cast<double>(grid_.num_voxels()));
   status_.SetValue("votes", static_cast<double>(grid_.total_votes()));

@@ -296,4 +296,26 @@ bool ParseRoiBox(const std::string& text, RegionOfInterest* roi, std::string* wh
   return true;
 }
 
+RegionOfInterest TransformRegion(const RegionOfInterest& region, const Sim3& sim) {
+  RegionOfInterest out = region;
+  if (!region.valid) return out;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d c((corner & 1) ? region.box_max.x() : region.box_min.x(),
+                            (corner & 2) ? region.box_max.y() : region.box_min.y(),
+                            (corner & 4) ? region.box_max.z() : region.box_min.z());
+    const Eigen::Vector3d m = sim * c;
+    lo = lo.cwiseMin(m);
+    hi = hi.cwiseMax(m);
+  }
+  out.box_min = lo;
+  out.box_max = hi;
+  if (region.has_floor) {  // n'.x' = s n.x + n'.t: heights scale by s
+    out.floor_normal = (sim.rotation * region.floor_normal).normalized();
+    out.floor_offset_mm = sim.scale * region.floor_offset_mm + out.floor_normal.dot(sim.translation);
+    out.floor_clearance_mm = sim.scale * region.floor_clearance_mm;
+  }
+  return out;
+}
+
 }  // namespace objscan

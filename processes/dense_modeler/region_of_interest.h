@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "common/camera_model.h"
+#include "common/geometry.h"
 
 namespace objscan {
 
@@ -120,5 +121,10 @@ bool AutoRegionOfInterest(const std::vector<int64_t>& landmark_ids, const std::v
 // Parses "xmin,ymin,zmin,xmax,ymax,zmax" (mm). "" gives an invalid region and true. False with *why when malformed
 // or min >= max on an axis.
 bool ParseRoiBox(const std::string& text, RegionOfInterest* roi, std::string* why);
+
+// The region carried by a similarity x' = sim * x (the map moved as a whole: the final poses are the live ones moved
+// by a Sim(3)): the box becomes the axis-aligned box around its 8 moved corners, the floor plane moves with it and the
+// clearance scales. An invalid region stays invalid.
+RegionOfInterest TransformRegion(const RegionOfInterest& region, const Sim3& sim);
 
 }  // namespace objscan

@@ -229,5 +229,32 @@ TEST(RegionOfInterestTest, FloorJunctionTriangles) {
   EXPECT_FALSE(r.TriangleOnFloor(floor, floor, floor));  // no region
 }
 
+// A region carried by a Sim(3): points inside stay inside, heights above the floor scale, the box grows to hold the
+// rotated corners; an invalid region stays invalid.
+TEST(RegionOfInterestTest, TransformRegionCarriesBoxAndFloor) {
+  RegionOfInterest r;
+  r.valid = true;
+  r.box_min = Eigen::Vector3d(-100, -50, -10);
+  r.box_max = Eigen::Vector3d(100, 50, 200);
+  r.has_floor = true;
+  r.floor_normal = Eigen::Vector3d(0.05, 0, 1).normalized();
+  r.floor_offset_mm = 4;
+  r.floor_clearance_mm = 3;
+  Sim3 sim;
+  sim.scale = 1.2;
+  sim.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.1, 0.2, 1).normalized()).toRotationMatrix();
+  sim.translation = Eigen::Vector3d(300, -200, 50);
+  const RegionOfInterest t = TransformRegion(r, sim);
+  ASSERT_TRUE(t.valid);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 100), Eigen::Vector3d(90, -40, 150), Eigen::Vector3d(-95, 45, 30)}) {
+    EXPECT_TRUE(t.Contains(sim * p)) << p.transpose();
+    EXPECT_NEAR(t.HeightAboveFloor(sim * p), sim.scale * r.HeightAboveFloor(p), 1e-9);
+  }
+  EXPECT_FALSE(t.Contains(sim * Eigen::Vector3d(0, 0, 1)));  // under the clearance (1.2 * 3 mm) after the move
+  EXPECT_DOUBLE_EQ(t.floor_clearance_mm, 3.6);
+  RegionOfInterest none;
+  EXPECT_FALSE(TransformRegion(none, sim).valid);
+}
+
 }  // namespace
 }  // namespace objscan
