@@ -31,7 +31,7 @@ bool ValidateRobotSimOptions(const RobotSimOptions& o, std::string* why) {
   if (!Finite(o.orbit_radius_mm) || o.orbit_radius_mm <= 0) return fail("--orbit-radius must be > 0 mm");
   if (!o.orbit_center_mm.allFinite() || !o.look_at_mm.allFinite()) return fail("orbit centre / look-at not finite");
   if (!Finite(o.orbit_degrees) || std::abs(o.orbit_degrees) > 3600) return fail("--orbit-degrees must be in +-3600");
-  if (!Finite(o.orbit_start_deg)) return fail("--orbit-start-deg must be finite");
+  if (!Finite(o.orbit_start_deg)) return fail("orbit_start_deg must be finite");
   std::string geometry_why;
   if (!o.geometry.IsValid(&geometry_why)) return fail(geometry_why);
   const OdometryErrorModel& e = o.errors;
@@ -52,7 +52,7 @@ bool ValidateRobotSimOptions(const RobotSimOptions& o, std::string* why) {
   if (!Finite(o.goal_tolerance_mm) || o.goal_tolerance_mm <= 0 || !Finite(o.goal_heading_gain) ||
       o.goal_heading_gain <= 0)
     return fail("goal tolerance and gain must be > 0");
-  if (o.command_timeout_us < 0) return fail("--command-timeout-ms must be >= 0");
+  if (o.command_timeout_us < 0) return fail("command_timeout_us must be >= 0");
   if (!Finite(o.footprint_radius_mm) || o.footprint_radius_mm <= 0 || o.footprint_radius_mm > 5000)
     return fail("--footprint-radius-mm must be in (0, 5000] mm");
   return true;

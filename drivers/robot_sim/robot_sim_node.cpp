@@ -61,6 +61,10 @@ bool ParseList(const std::string& text, size_t count, double* values) {
 }  // namespace
 
 void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
+  // Only what a user sets (issue 27): the scene, mode, frames, rate, seed and orbit, the robot (geometry, footprint,
+  // speed limits), the odometry error model (the README's table), the image encoding, the grey stretch of the tracking
+  // loss tests, lock-step, ground truth, odometry on/off and the channels. Every other field keeps its default here;
+  // tests and tools set the struct directly.
   p.Add("scene", &o->scene, "scene file (drivers/robot_sim/scenes/*.scene; format in drivers/robot_sim/README.md)");
   p.Add("mode", &o->mode, "orbit (scripted circle around the target) or command (follow ROBOT_COMMAND)");
   p.Add("frames", &o->frames, "frames to publish (command mode: 0 = until stopped)");
@@ -68,26 +72,14 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("realtime", &o->realtime, "publish at the rate in wall time (false: as fast as possible)");
   p.Add("seed", &o->seed, "seed (>= 0) of the odometry errors and the image noise");
   p.Add("orbit-radius", &o->orbit_radius_mm, "mm, orbit radius");
-  p.Add("orbit-center", &o->orbit_center, "x,y mm of the orbit centre (empty: target centre projected on the floor)");
   p.Add("orbit-degrees", &o->orbit_degrees, "deg, angle covered over all frames (negative = clockwise)");
-  p.Add("orbit-start-deg", &o->orbit_start_deg, "deg, robot's angle around the orbit centre at frame 0");
-  p.Add("look-at", &o->look_at, "x,y,z mm the camera aims at in orbit mode (empty: the target centre)");
   p.Add("mast-height", &o->mast_height_mm, "mm, height of the pan/tilt axes above the floor");
   p.Add("mast-offset-x", &o->mast_offset_x_mm, "mm, mast position forward of the base centre");
   p.Add("mast-offset-y", &o->mast_offset_y_mm, "mm, mast position left of the base centre");
   p.Add("camera-offset-x", &o->camera_offset_x_mm, "mm, optical centre in front of the tilt axis");
   p.Add("wheel-base", &o->wheel_base_mm, "mm, distance between the drive wheels");
-  p.Add("width", &o->width, "px, image width");
-  p.Add("height", &o->height, "px, image height");
-  p.Add("fx", &o->fx, "px, focal length along u");
-  p.Add("fy", &o->fy, "px, focal length along v");
-  p.Add("cx", &o->cx, "px, principal point u");
-  p.Add("cy", &o->cy, "px, principal point v");
-  p.Add("camera-name", &o->camera_name, "camera_name in image_t and camera_info_t");
-  p.Add("noise-sigma", &o->noise_sigma, "grey levels, std of the Gaussian image noise per channel (0 = none)");
   p.Add("blank-first", &o->blank_first, "first frame rendered as a uniform grey view (tracking loss test; -1 = none)");
   p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
-  p.Add("trilinear", &o->trilinear, "trilinear texture filtering between mip levels (slower)");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
   p.Add("odometry-scale-error", &o->odometry_scale_error, "relative odometry distance error (wheel slip), 0.02 = 2 %");
@@ -102,20 +94,14 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("odometry-origin", &o->odometry_origin, "start (odometry frame = robot start pose) or world");
   p.Add("max-speed", &o->max_speed_mm_s, "mm/s, command mode speed limit");
   p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, command mode yaw rate limit");
-  p.Add("max-head-rate-deg-s", &o->max_head_rate_deg_s, "deg/s, command mode pan/tilt slew limit");
-  p.Add("command-timeout-ms", &o->command_timeout_ms,
-        "ms of sim time without a command before the base stops (0 = never)");
   p.Add("footprint-radius-mm", &o->footprint_radius_mm,
         "mm, radius of the robot base's circular footprint: command mode stops the base before it overlaps an "
         "object; contacts are counted in both modes");
   p.Add("lockstep-channel", &o->lockstep_channel,
-        "publish frame i+1 only after a message with seq >= i - lockstep-lag on this channel (empty = off)");
-  p.Add("lockstep-lag", &o->lockstep_lag, "frames the lockstep consumer may lag behind");
+        "publish frame i+1 only after a message with seq >= i - lockstep_lag on this channel (empty = off)");
   p.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms, "ms, go on after waiting this long for lockstep (0 = forever)");
   p.Add("ground-truth-dir", &o->ground_truth_dir,
         "write target_surface.ply, scene.txt, poses_gt.txt, robot_gt.txt here (empty = off)");
-  p.Add("surface-density", &o->surface_density_per_mm2, "points per mm^2 in target_surface.ply");
-  p.Add("publish-ground-truth", &o->publish_ground_truth, "publish GROUND_TRUTH_POSE");
   p.Add("odometry", &o->publish_odometry,
         "publish ROBOT_ODOMETRY (--odometry=false: images only, to test image-only input; orbit mode only)");
   p.Add("image-channel", &o->image_channel, "output channel for image_t");
@@ -185,8 +171,8 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   int8_t encoding = 0;
   double values[3];
   if (o.scene.empty()) return fail("--scene is required");
-  if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("--orbit-center must be x,y");
-  if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("--look-at must be x,y,z");
+  if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("orbit_center must be x,y");
+  if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
   if (o.seed < 0) return fail("--seed must be >= 0");
   if (!std::isfinite(o.sync_offset_ms) || std::abs(o.sync_offset_ms) > 1e6)
     return fail("--sync-offset-ms out of range");
@@ -196,18 +182,18 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (!ValidateRobotSimOptions(ToRobotSimOptions(o), &sim_why)) return fail(sim_why);
   std::string camera_why;
   if (!ToCamera(o).IsValid(&camera_why)) return fail("camera: " + camera_why);
-  if (o.width > 8192 || o.height > 8192) return fail("--width/--height must be <= 8192");
+  if (o.width > 8192 || o.height > 8192) return fail("width/height must be <= 8192");
   if (!std::isfinite(o.noise_sigma) || o.noise_sigma < 0 || o.noise_sigma > 100)
-    return fail("--noise-sigma must be in [0, 100]");
+    return fail("noise_sigma must be in [0, 100]");
   if (o.blank_first < -1 || o.blank_count < 0) return fail("--blank-first must be >= -1 and --blank-count >= 0");
   if (!EncodingFromName(o.encoding, &encoding)) return fail("--encoding must be rgb8, bgr8, gray8 or jpeg");
   if (o.jpeg_quality < 1 || o.jpeg_quality > 100) return fail("--jpeg-quality must be in 1..100");
-  if (o.lockstep_lag < 0) return fail("--lockstep-lag must be >= 0");
+  if (o.lockstep_lag < 0) return fail("lockstep_lag must be >= 0");
   if (o.lockstep_timeout_ms < 0) return fail("--lockstep-timeout-ms must be >= 0");
-  if (o.command_timeout_ms < 0) return fail("--command-timeout-ms must be >= 0");
+  if (o.command_timeout_ms < 0) return fail("command_timeout_ms must be >= 0");
   if (!std::isfinite(o.surface_density_per_mm2) || o.surface_density_per_mm2 <= 0 || o.surface_density_per_mm2 > 100)
-    return fail("--surface-density must be in (0, 100]");
-  if (o.camera_name.empty()) return fail("--camera-name must not be empty");
+    return fail("surface_density_per_mm2 must be in (0, 100]");
+  if (o.camera_name.empty()) return fail("camera_name must not be empty");
   if (!o.publish_odometry && o.mode == "command")
     return fail("--odometry=false needs --mode orbit: in command mode the planner steers by the odometry");
   if (o.image_channel.empty() || o.info_channel.empty() || o.odometry_channel.empty() ||

@@ -119,7 +119,8 @@ struct RobotSimNodeOptions {
   bool exit_when_finished = true;                          // Finished() turns true after END_OF_STREAM
 };
 
-// Registers every RobotSimNodeOptions field (--scene, --mode, --frames, --rate, --realtime, ...).
+// Registers the RobotSimNodeOptions fields a user sets on the command line (--scene, --mode, --frames, --rate,
+// --realtime, ...; the rest keep their defaults: code and tests set the struct's fields directly).
 void AddRobotSimNodeOptions(OptionParser& parser, RobotSimNodeOptions* options);
 // Checks the option values (not the scene file). False with *why on the first problem.
 bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& options, std::string* why);
