@@ -47,32 +47,36 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
   auto positive = [&e](double v, const char* name) {
     if (!(v > 0) || !std::isfinite(v)) e << name << " must be > 0; ";
   };
-  positive(o.floor_inlier_mm, "floor-inlier-distance");
-  if (!(o.floor_max_tilt_deg > 0 && o.floor_max_tilt_deg < 90)) e << "floor-max-tilt must be in (0, 90); ";
-  if (o.min_floor_points < 3) e << "min-floor-points must be >= 3; ";
-  if (!(o.look_closer_beyond_mm >= 0) || !std::isfinite(o.look_closer_beyond_mm)) e << "look-closer-beyond must be >= 0; ";
-  if (!(o.look_closer_margin >= 0 && o.look_closer_margin <= 1)) e << "look-closer-margin must be in [0, 1]; ";
-  if (o.min_observations < 0) e << "min-observations must be >= 0; ";
-  positive(o.max_reprojection_error_px, "max-reprojection-error");
-  if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min-height must be >= 0; ";
-  if (!(o.max_height_mm > o.min_height_mm) || !std::isfinite(o.max_height_mm)) e << "max-height must be > min-height; ";
+  positive(o.floor_inlier_mm, "floor_inlier_mm");
+  if (!(o.floor_max_tilt_deg > 0 && o.floor_max_tilt_deg < 90)) e << "floor_max_tilt_deg must be in (0, 90); ";
+  if (o.min_floor_points < 3) e << "min_floor_points must be >= 3; ";
+  if (!(o.look_closer_beyond_mm >= 0) || !std::isfinite(o.look_closer_beyond_mm))
+    e << "look_closer_beyond_mm must be >= 0; ";
+  if (!(o.look_closer_margin >= 0 && o.look_closer_margin <= 1)) e << "look_closer_margin must be in [0, 1]; ";
+  if (o.min_observations < 0) e << "min_observations must be >= 0; ";
+  positive(o.max_reprojection_error_px, "max_reprojection_error_px");
+  if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min_height_mm must be >= 0; ";
+  if (!(o.max_height_mm > o.min_height_mm) || !std::isfinite(o.max_height_mm))
+    e << "max_height_mm must be > min_height_mm; ";
   positive(o.cluster_distance_mm, "cluster-distance");
   positive(o.target_min_size_mm, "target-min-size");
   if (!(o.target_max_size_mm >= o.target_min_size_mm) || !std::isfinite(o.target_max_size_mm))
     e << "target-max-size must be >= target-min-size; ";
-  if (!(o.size_tolerance >= 0 && o.size_tolerance < 1)) e << "size-tolerance must be in [0, 1); ";
-  if (!(o.floor_contact_mm >= 0) || !std::isfinite(o.floor_contact_mm)) e << "floor-contact must be >= 0; ";
-  if (!(o.min_texture_density >= 0) || !std::isfinite(o.min_texture_density)) e << "min-texture-density must be >= 0; ";
-  if (o.min_target_points < kMinClusterPoints) e << "min-target-points must be >= 3; ";
-  if (!(o.clearance_mm >= 0) || !std::isfinite(o.clearance_mm)) e << "clearance must be >= 0; ";
-  positive(o.track_match_distance_mm, "track-match-distance");
+  if (!(o.size_tolerance >= 0 && o.size_tolerance < 1)) e << "size_tolerance must be in [0, 1); ";
+  if (!(o.floor_contact_mm >= 0) || !std::isfinite(o.floor_contact_mm)) e << "floor_contact_mm must be >= 0; ";
+  if (!(o.min_texture_density >= 0) || !std::isfinite(o.min_texture_density)) e << "min_texture_density must be >= 0; ";
+  if (o.min_target_points < kMinClusterPoints) e << "min_target_points must be >= 3; ";
+  if (!(o.clearance_mm >= 0) || !std::isfinite(o.clearance_mm)) e << "clearance_mm must be >= 0; ";
+  positive(o.track_match_distance_mm, "track_match_distance_mm");
   if (o.min_views < 1) e << "min-views must be >= 1; ";
-  if (!(o.min_view_baseline_mm >= 0) || !std::isfinite(o.min_view_baseline_mm)) e << "min-view-baseline must be >= 0; ";
-  if (!(o.min_view_bearing_deg >= 0 && o.min_view_bearing_deg <= 180)) e << "min-view-bearing must be in [0, 180]; ";
-  positive(o.max_centre_motion_mm, "max-centre-motion");
-  if (o.lost_after_updates < 1) e << "lost-after-updates must be >= 1; ";
-  positive(o.max_view_distance_mm, "max-view-distance");
-  if (o.drop_after_rejections < 1) e << "drop-after-rejections must be >= 1; ";
+  if (!(o.min_view_baseline_mm >= 0) || !std::isfinite(o.min_view_baseline_mm))
+    e << "min_view_baseline_mm must be >= 0; ";
+  if (!(o.min_view_bearing_deg >= 0 && o.min_view_bearing_deg <= 180))
+    e << "min_view_bearing_deg must be in [0, 180]; ";
+  positive(o.max_centre_motion_mm, "max_centre_motion_mm");
+  if (o.lost_after_updates < 1) e << "lost_after_updates must be >= 1; ";
+  positive(o.max_view_distance_mm, "max_view_distance_mm");
+  if (o.drop_after_rejections < 1) e << "drop_after_rejections must be >= 1; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);

@@ -64,6 +64,9 @@ std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
 }  // namespace
 
 void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
+  // Only what a user sets (issue 27): plumbing and channels (with the final poses and the model that measures
+  // target.json), the TARGET period, the target's size range, and the clustering distance and views to confirm (the
+  // node test's command line). Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.Add("landmarks-channel", &o->landmarks_channel, "input sparse map channel (landmarks_t)");
   p.Add("pose-channel", &o->pose_channel, "input camera pose channel (pose_t)");
@@ -81,34 +84,10 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.Add("model-channel", &o->model_channel,
         "final model (model_t): target.json's box is measured on its voxels (\"\" = the landmarks' box, no wait)");
   ObjectFinderOptions* f = &o->finder;
-  p.Add("floor-inlier-distance", &f->floor_inlier_mm, "mm, max |height| of a floor landmark");
-  p.Add("floor-max-tilt", &f->floor_max_tilt_deg, "deg, max angle of the floor normal from world z");
-  p.Add("min-floor-points", &f->min_floor_points, "floor landmarks needed to accept a floor");
-  p.Add("min-observations", &f->min_observations, "views a landmark needs to be clustered");
-  p.Add("max-reprojection-error", &f->max_reprojection_error_px, "px, landmarks with a larger RMS are not used");
-  p.Add("min-height", &f->min_height_mm, "mm, landmarks at or below this height above the floor are floor");
-  p.Add("max-height", &f->max_height_mm, "mm, landmarks above this height are ignored");
   p.Add("cluster-distance", &f->cluster_distance_mm, "mm, linkage distance of the clustering");
   p.Add("target-min-size", &f->target_min_size_mm, "mm, smallest target (largest horizontal extent and height)");
   p.Add("target-max-size", &f->target_max_size_mm, "mm, largest target (largest horizontal extent and height)");
-  p.Add("size-tolerance", &f->size_tolerance, "fraction the measured size may leave the size range by, [0, 1)");
-  p.Add("look-closer-beyond", &f->look_closer_beyond_mm,
-        "mm: a cluster only seen from farther that fails just the size limits (by <= look-closer-margin) is a "
-        "candidate to look at closer (far views make objects look larger)");
-  p.Add("look-closer-margin", &f->look_closer_margin, "fraction beyond the size range a look-closer cluster may be, [0, 1]");
-  p.Add("floor-contact", &f->floor_contact_mm, "mm, max height of a target's lowest landmark above the floor");
-  p.Add("clearance", &f->clearance_mm, "mm, free space around a target (other landmarks there reject it)");
-  p.Add("min-texture-density", &f->min_texture_density, "landmarks per 100 cm^2 of visible side area a target needs");
-  p.Add("min-target-points", &f->min_target_points, "landmarks a target needs");
-  p.Add("track-match-distance", &f->track_match_distance_mm, "mm, horizontal centre distance continuing a track");
   p.Add("min-views", &f->min_views, "distinct views that confirm a target");
-  p.Add("min-view-baseline", &f->min_view_baseline_mm, "mm, camera distance that makes a view distinct");
-  p.Add("min-view-bearing", &f->min_view_bearing_deg, "deg, viewing direction change that makes a view distinct");
-  p.Add("max-centre-motion", &f->max_centre_motion_mm, "mm, max centre motion over the confirming views");
-  p.Add("lost-after-updates", &f->lost_after_updates, "in-view keyframes without seeing the target before LOST");
-  p.Add("max-view-distance", &f->max_view_distance_mm, "mm, a target farther away is not expected to be seen");
-  p.Add("drop-after-rejections", &f->drop_after_rejections,
-        "in-view keyframes in a row rejecting a confirmed target that drop it");
 }
 
 bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& o, std::string* why) {

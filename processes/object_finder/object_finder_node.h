@@ -92,7 +92,8 @@ struct ObjectFinderNodeOptions {
   ObjectFinderOptions finder;                       // the finder's options
 };
 
-// Registers every option (the finder's without prefix, e.g. --cluster-distance).
+// Registers the options a user sets on the command line (the finder's without prefix, e.g. --cluster-distance; the
+// rest keep their defaults: code and tests set the struct's fields directly).
 void AddObjectFinderNodeOptions(OptionParser& parser, ObjectFinderNodeOptions* options);
 bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& options, std::string* why);
 
