@@ -1339,13 +1339,15 @@ void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   // restarted at frame 554, tried until frame 1454 only, never joined over the 5 000 frames after; the model 390 mm
   // off). Each try costs a grid lookup per landmark of the new map.
   constexpr int kLateJoinRetryFrames = 300;  // 10 s at 30 Hz
-  if (unjoined_first_ < 0 || options_.join_search_mm <= 0) return;
+  if (unjoined_first_ < 0) return;
   unjoined_points_.insert(unjoined_points_.end(), added.begin(), added.end());
   const bool grown_by_half = unjoined_points_.size() >= unjoined_tried_size_ + unjoined_tried_size_ / 2;
   const bool retry_due = f - unjoined_tried_frame_ >= kLateJoinRetryFrames && unjoined_points_.size() > unjoined_tried_size_;
   if (!grown_by_half && !retry_due) return;
   unjoined_tried_size_ = unjoined_points_.size();
   unjoined_tried_frame_ = f;
+  RecheckUnjoinedScale(f);  // the join needs both maps at one scale
+  if (options_.join_search_mm <= 0) return;
   // Landmarks merged or removed since are skipped by JoinToOldMap (it reads points_).
   int pairs = 0;
   std::string message;
@@ -1358,9 +1360,24 @@ void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   std::ostringstream m;
   m << "map restarted at frame " << frames_[unjoined_first_].seq << " " << message << ", " << fused
     << " landmarks fused";
-  notice_ = m.str();
+  notice_ += (notice_.empty() ? "" : "; ") + m.str();
   unjoined_first_ = -1;
   unjoined_points_.clear();
+}
+
+void PoseEstimator::RecheckUnjoinedScale(int f) {
+  constexpr double kMinScaleChange = 0.02;
+  if (options_.model != MotionModel::kSixDof || !options_.use_floor_for_scale || !options_.camera_height_known) return;
+  if (segment_floor_first_ >= 0) return;  // the restart's first floor search still runs (AddKeyframe)
+  double s = 1;
+  if (!RescaleToFloorHeight(unjoined_first_, f, unjoined_points_, unjoined_first_, &s, kMaxLateFloorRescale,
+                            kMinScaleChange))
+    return;
+  std::ostringstream m;
+  m << "map restarted at frame " << frames_[unjoined_first_].seq << " (not joined) rescaled by " << s
+    << " from the camera height above the floor among its " << unjoined_points_.size() << " landmarks, at frame "
+    << frames_[f].seq;
+  notice_ += (notice_.empty() ? "" : "; ") + m.str();
 }
 
 void PoseEstimator::MergeLandmark(int64_t from, int64_t to, int f) {
@@ -1627,7 +1644,7 @@ void PoseEstimator::RescaleSixDof(int first_frame) {
 }
 
 bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids,
-                                         int pivot_frame, double* applied_scale, double max_factor) {
+                                         int pivot_frame, double* applied_scale, double max_factor, double min_change) {
   if (pivot_frame < 0 || !frames_[pivot_frame].posed) return false;
   std::vector<int64_t> floor_ids;
   Eigen::Vector4d plane;
@@ -1659,6 +1676,7 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
   const double s = options_.camera_height_known ? expected / measured : 1.0;
   if (applied_scale) *applied_scale = s;
   if (max_factor > 0 && (s > max_factor || s < 1.0 / max_factor)) return false;
+  if (min_change > 0 && std::abs(s - 1.0) <= min_change) return false;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = c0 - s * c0;
   if (images_only) {
