@@ -147,10 +147,11 @@ ImageRegion ProjectBox(const TargetBox& box, const Eigen::Isometry3d& world_from
 // the object, more on the well-textured and well-seen sides). voxels_mm: the model's voxel centres (world, mm) of
 // voxel_mm; floor: the floor in the same frame; near: the landmarks' box. The voxels more than one voxel above the
 // floor are clustered (single linkage at 2.5 voxels) and the largest cluster is boxed as a landmark cluster is
-// (FitClusterBox: footprint between the 1 % and 99 % quantiles, yaw of the minimum-area rectangle, height from the
-// floor to the top voxel, centre at mid height). False with *why (box untouched) when voxel_mm is not positive, fewer
-// than kMinModelVoxels voxels are left, or the cluster's centre lies outside near's footprint grown by half its
-// size on each side (a model of something else). *voxels_used: the cluster's voxels (may be null).
+// (FitClusterBox: footprint between the 1 % and 99 % quantiles, yaw of the minimum-area rectangle), its height from
+// the floor to the 99 % quantile of the voxels' heights, centre at mid height. False with *why (box untouched) when
+// voxel_mm is not positive, fewer than kMinModelVoxels voxels are left, or the cluster's centre lies outside near's
+// footprint grown by half its size on each side (a model of something else). *voxels_used: the cluster's voxels (may
+// be null).
 constexpr int kMinModelVoxels = 50;
 bool BoxFromModel(const std::vector<Eigen::Vector3d>& voxels_mm, double voxel_mm, const FloorPlane& floor,
                   const TargetBox& near, TargetBox* box, int* voxels_used, std::string* why);

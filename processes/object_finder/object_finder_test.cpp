@@ -612,6 +612,9 @@ TEST(ObjectFinderTest, BoxFromTheDenseModel) {
   for (double x = -half.x() - 20; x <= half.x() + 20; x += kVoxel)  // floor band: at most one voxel up
     for (double y = -half.y() - 20; y <= half.y() + 20; y += kVoxel) add(x, y, 0.5 * kVoxel * ((int(x + y) / 2) % 2));
   for (int i = 0; i < 60; ++i) add(300 + 2 * (i % 6), 2 * (i / 6), 20);  // a stray group
+  const size_t on_box = voxels.size();
+  for (int i = 0; i < 50; ++i)  // carving's fuzz over the flat top: sparse voxels up to 14 mm above it
+    add(-60 + 2.4 * i, 0.8 * i - 20, kBoxSize.z() + 2 + (i % 7) * 2);
   TargetBox near;  // the landmarks' box: 40 mm off, a little too large
   near.centre_mm = world_from_floor * Eigen::Vector3d(centre_xy.x() + 30, centre_xy.y() - 27, 75);
   near.size_mm = Eigen::Vector3d(170, 130, 150);
@@ -627,6 +630,7 @@ TEST(ObjectFinderTest, BoxFromTheDenseModel) {
   EXPECT_NEAR(box.size_mm.z(), kBoxSize.z(), kVoxel);
   EXPECT_NEAR(box.yaw_rad, kBoxYaw, 1 * kDeg);
   EXPECT_GT(used, 1000);
+  EXPECT_LT(50.0 / on_box, 0.01);  // the fuzz is under 1 % of the voxels
 
   const TargetBox untouched = box;
   TargetBox far = near;
