@@ -829,6 +829,10 @@ int Viewer::Run() {
 }  // namespace
 
 void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
+  // Only what a user sets (issue 27): plumbing and channels (the processes' channels can be renamed), the bus or log,
+  // the window and view, playback, the screenshot, the benchmark and the voxel drawing its README documents. The
+  // start-up state the panels change at run time (follow, min votes, landmark colouring, its red error), vsync, the
+  // cube-instance limit and the event budget keep their defaults here; tests and code set the struct directly.
   parser.Add("name", &o->name, "process name (status name, log prefix)");
   parser.Add("lcm-url", &o->lcm_url, "live LCM URL (default: the objscan multicast URL); ignored with --log");
   parser.Add("log", &o->log, "LCM log file to play instead of a live bus");
@@ -849,7 +853,6 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("window-width", &o->window_width, "px, window width");
   parser.Add("window-height", &o->window_height, "px, window height");
   parser.Add("panel-width", &o->panel_width, "px, width of the panel column on the right (0 = no panels)");
-  parser.Add("vsync", &o->vsync, "wait for vertical sync");
   parser.Add("align-truth", &o->align_truth,
              "draw the ground truth in the estimate's frame (Sim(3) fit over matched frames) and measure errors there");
   parser.Add("view", &o->view, "view preset: iso, top, front, side");
@@ -860,7 +863,6 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("view-target-y-mm", &o->view_target_y_mm, "mm, view target y in world");
   parser.Add("view-target-z-mm", &o->view_target_z_mm, "mm, view target z in world");
   parser.Add("view-fov-deg", &o->view_fov_deg, "deg, vertical field of view");
-  parser.Add("follow", &o->follow, "start in follow-camera mode (view target follows the newest pose)");
   parser.Add("speed", &o->speed, "log playback speed");
   parser.Add("paused", &o->paused, "start the log paused");
   parser.Add("screenshot", &o->screenshot, "write a PNG of the window and exit");
@@ -872,9 +874,7 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("benchmark-seconds", &o->benchmark_seconds, "s, benchmark duration");
   parser.Add("benchmark-frames", &o->benchmark_frames, "benchmark: render this many frames instead (0 = use seconds)");
   parser.Add("benchmark-shape", &o->benchmark_shape, "benchmark model: ball (solid) or scatter (no neighbours)");
-  parser.Add("min-votes", &o->min_votes, "initial voxel display threshold (votes)");
-  parser.Add("voxel-style", &o->voxel_style, "voxels as cubes, points, or auto (points above --max-cube-instances)");
-  parser.Add("max-cube-instances", &o->max_cube_instances, "auto style: most visible voxels drawn as cubes");
+  parser.Add("voxel-style", &o->voxel_style, "voxels as cubes, points, or auto (points above max_cube_instances)");
   parser.Add("max-mesh-faces", &o->max_mesh_faces,
              "exposed voxel faces drawn as one static mesh at most (else instanced)");
   parser.Add("cull-hidden-voxels", &o->cull_hidden_voxels, "skip voxel faces hidden by neighbouring voxels");
@@ -884,9 +884,6 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
              "px, auto style: voxels as points while they project at most this wide (0 = by count only)");
   parser.Add("voxel-occlusion-min-points", &o->voxel_occlusion_min_points,
              "points: send only the points a CPU depth pass finds visible, from this many points (0 = off)");
-  parser.Add("landmark-coloring", &o->landmark_coloring, "landmark colours: error, age or rgb");
-  parser.Add("max-reprojection-error-px", &o->max_reprojection_error_px, "px, error drawn full red");
-  parser.Add("max-events-per-frame", &o->max_events_per_frame, "messages handled per rendered frame at most");
 }
 
 bool ValidateViewerOptions(const ViewerOptions& o, std::string* why) {
@@ -908,15 +905,15 @@ bool ValidateViewerOptions(const ViewerOptions& o, std::string* why) {
     return fail("--benchmark needs --log (and no --benchmark-voxels)");
   if (o.voxel_style != "auto" && o.voxel_style != "cubes" && o.voxel_style != "points")
     return fail("--voxel-style must be auto, cubes or points");
-  if (o.max_cube_instances < 0 || o.max_mesh_faces < 0) return fail("--max-cube-instances/--max-mesh-faces >= 0");
+  if (o.max_cube_instances < 0 || o.max_mesh_faces < 0) return fail("max_cube_instances / --max-mesh-faces >= 0");
   if (!(o.voxel_lod_px >= 0) || !(o.voxel_points_px >= 0) || o.voxel_occlusion_min_points < 0)
     return fail("--voxel-lod-px >= 0, --voxel-points-px >= 0, --voxel-occlusion-min-points >= 0");
   if (o.benchmark_shape != "ball" && o.benchmark_shape != "scatter")
     return fail("--benchmark-shape must be ball or scatter");
   if (o.landmark_coloring != "error" && o.landmark_coloring != "age" && o.landmark_coloring != "rgb")
-    return fail("--landmark-coloring must be error, age or rgb");
-  if (!(o.max_reprojection_error_px > 0)) return fail("--max-reprojection-error-px must be > 0");
-  if (o.max_events_per_frame < 1) return fail("--max-events-per-frame must be >= 1");
+    return fail("landmark_coloring must be error, age or rgb");
+  if (!(o.max_reprojection_error_px > 0)) return fail("max_reprojection_error_px must be > 0");
+  if (o.max_events_per_frame < 1) return fail("max_events_per_frame must be >= 1");
   if (o.screenshot.empty() && (o.screenshot_at_utime >= 0 || o.screenshot_after_messages >= 0))
     return fail("--screenshot-at-utime / --screenshot-after-messages need --screenshot");
   if (!std::isfinite(o.view_target_x_mm) || !std::isfinite(o.view_target_y_mm) || !std::isfinite(o.view_target_z_mm))

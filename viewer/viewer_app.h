@@ -66,6 +66,8 @@ struct ViewerOptions {
   int max_events_per_frame = 20000;            // messages handled per rendered frame at most (>= 1)
 };
 
+// Registers the options a user sets on the command line (the rest keep their defaults; code and tests set the
+// struct's fields directly).
 void AddViewerOptions(OptionParser& parser, ViewerOptions* options);
 bool ValidateViewerOptions(const ViewerOptions& options, std::string* why);
 
