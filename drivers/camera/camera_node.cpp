@@ -38,6 +38,10 @@ bool EncodingFromName(const std::string& name, int8_t* encoding) {
 }  // namespace
 
 void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
+  // Only what a user sets (issue 27): the source and what of it is played (calibration, order, rotation, loop, frame
+  // limit, device size), its encoding, pace and lock-step, the recorded odometry switch, and the channels. The
+  // ground truth's unit scale, its publication switch and the camera name keep their defaults here; tests set the
+  // struct directly.
   parser.Add("source", &o->source,
              "image folder (images/ or images in it + calib.yaml [+ poses_gt.txt]), Middlebury folder or "
              "*_par.txt, video file, /dev/videoN or device index");
@@ -60,11 +64,6 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
              "publish frame i+1 only after a message with seq >= i on this channel (empty = off)");
   parser.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms,
              "ms, go on after waiting this long for the lockstep message (0 = wait forever)");
-  parser.Add("gt-position-scale", &o->gt_position_scale,
-             "ground-truth positions (poses_gt.txt, *_par.txt) times this give mm (1000: file in metres); a "
-             "poses_gt.txt with a '# units: mm' comment is read as mm");
-  parser.Add("publish-ground-truth", &o->publish_ground_truth, "publish GROUND_TRUTH_POSE when the source has it");
-  parser.Add("camera-name", &o->camera_name, "camera_name written into image_t and camera_info_t");
   parser.Add("device-width", &o->device_width, "px, V4L2 capture width to request (0 = calibration width)");
   parser.Add("device-height", &o->device_height, "px, V4L2 capture height to request (0 = calibration height)");
   parser.Add("image-channel", &o->image_channel, "output channel for image_t");
@@ -92,9 +91,9 @@ bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
   if (o.jpeg_quality < 1 || o.jpeg_quality > 100) return fail("--jpeg-quality must be in 1..100");
   if (o.max_frames < 0) return fail("--max-frames must be >= 0");
   if (o.lockstep_timeout_ms < 0) return fail("--lockstep-timeout-ms must be >= 0");
-  if (!std::isfinite(o.gt_position_scale) || o.gt_position_scale <= 0) return fail("--gt-position-scale must be > 0");
+  if (!std::isfinite(o.gt_position_scale) || o.gt_position_scale <= 0) return fail("gt_position_scale must be > 0");
   if (o.device_width < 0 || o.device_height < 0) return fail("--device-width/--device-height must be >= 0");
-  if (o.camera_name.empty()) return fail("--camera-name must not be empty");
+  if (o.camera_name.empty()) return fail("camera_name must not be empty");
   if (o.image_channel.empty() || o.info_channel.empty() || o.ground_truth_channel.empty() ||
       o.control_channel.empty() || o.status_channel.empty() || o.odometry_channel.empty())
     return fail("channel names must not be empty");

@@ -70,7 +70,8 @@ struct CameraNodeOptions {
   bool exit_when_finished = true;  // Finished() turns true after END_OF_STREAM (the process exits)
 };
 
-// Registers every CameraNodeOptions field with the parser (names as in the comments: --source, --rate, ...).
+// Registers the options a user sets on the command line (names as in the comments: --source, --rate, ...); the rest
+// (gt_position_scale, publish_ground_truth, camera_name) keep their defaults, code and tests set the fields directly.
 void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* options);
 // Checks the option values (not the source itself). Returns false with *why on the first problem.
 bool ValidateCameraNodeOptions(const CameraNodeOptions& options, std::string* why);
