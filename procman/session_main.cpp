@@ -19,20 +19,17 @@ int main(int argc, char** argv) {
   options.lcm_url = objscan::kDefaultLcmUrl;
   std::string process_list;
   objscan::OptionParser parser("objscan_session", "Starts, watches, logs and stops one objscan session.");
+  // Only what the launcher, the tests or a user set (issue 27); the logger executable, the start and finalize
+  // timeouts and the logger's flush wait keep the SessionOptions defaults.
   parser.Add("out", &options.out_dir, "output folder (session.lcmlog, summary.json, logs/)");
   parser.Add("processes", &process_list, "process list file: 'NAME driver|processor COMMAND ARGS...' per line");
   parser.Add("lcm-url", &options.lcm_url, "live LCM URL of the session");
-  parser.Add("logger", &options.logger, "lcm-logger executable");
   parser.Add("finish-on", &options.finish_on, "process whose COMMAND_FINISHED ends the session ('' = all exited)");
   parser.Add("expected-frames", &options.expected_frames, "frames the driver publishes (for progress)");
   parser.Add("timeout", &options.timeout_s, "s, session time limit");
-  parser.Add("start-timeout", &options.start_timeout_s, "s, time a processor has to report PROCESS_STATUS");
-  parser.Add("flush-wait-ms", &options.flush_wait_ms, "ms to wait after publishers stop before stopping the logger");
   parser.Add("label", &options.label, "text copied into summary.json");
   parser.Add("progress-detail", &options.progress_detail,
              "process whose status detail (e.g. the planner's phase) ends each progress line");
-  parser.Add("finalize-timeout", &options.finalize_timeout_s,
-             "s, after a failure or a stop signal: time each surviving processor has to write its results");
   bool stop_with_parent = false;
   parser.Add("stop-with-parent", &stop_with_parent,
              "end the session in order (as on SIGTERM) when the process that started it dies, even by SIGKILL");

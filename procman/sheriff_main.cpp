@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   double deputy_timeout_s = 3.0;
   char hostname[256] = {0};
   gethostname(hostname, sizeof(hostname) - 1);
+  // This sheriff's name in the orders (user@host pid; no flag, issue 27).
   name = std::string(getenv("USER") ? getenv("USER") : "user") + "@" + hostname + " pid " + std::to_string(getpid());
   OptionParser parser("objscan-sheriff", "procman sheriff: orders the deputies of a config (positional: CONFIG)");
   parser.Add("lcm-url", &lcm_url, "LCM URL of the bus the deputies listen on");
@@ -30,7 +31,6 @@ int main(int argc, char** argv) {
              "steps separated by ';': start|stop|restart|follow TARGET, wait-running|wait-status|wait-exit TARGET "
              "[SECONDS], sleep SECONDS");
   parser.Add("deputy-timeout", &deputy_timeout_s, "s without a report before a deputy is shown SILENT");
-  parser.Add("name", &name, "this sheriff's name in the orders");
   int exit_code = 0;
   if (!ParseCommandLineOrExit(parser, argc, argv, &exit_code, /*allow_positional=*/true)) return exit_code;
   if (parser.positional().size() != 1) {
