@@ -16,7 +16,8 @@
 int main(int argc, char** argv) {
   using namespace objscan;
   FrameSourceOptions source;
-  int frames = 6;
+  constexpr int frames = 6;  // frames looked at from the start (no flag since issue 27)
+  static_assert(frames >= 2, "the mode is measured between frames");
   OptionParser parser("objscan_probe",
                       "Measures how far apart the first frames of an image source are and prints the tracking mode "
                       "to use: 'tracking klt' (video rate) or 'tracking wide' (descriptor tracking).");
@@ -24,13 +25,8 @@ int main(int argc, char** argv) {
   parser.Add("calib", &source.calib_path, "calibration file overriding the source's own (as the camera driver)");
   parser.Add("order", &source.order, "frame order (as the camera driver's --order)");
   parser.Add("rotate-180", &source.rotate_180, "frames to rotate by 180 deg (as the camera driver)");
-  parser.Add("frames", &frames, "frames to look at from the start (>= 2)");
   int exit_code = 0;
   if (!ParseCommandLineOrExit(parser, argc, argv, &exit_code)) return exit_code;
-  if (frames < 2) {
-    std::fprintf(stderr, "objscan_probe: --frames must be at least 2 (got %d)\n", frames);
-    return 2;
-  }
   std::string error;
   std::unique_ptr<FrameSource> src = OpenFrameSource(source, &error);
   if (!src) {
