@@ -19,10 +19,10 @@ int main(int argc, char** argv) {
   options.Add("seconds", &seconds, "s, how long to publish");
   options.Add("rate", &rate, "messages per second (all channels)");
   options.Add("seed", &seed, "random seed");
-  std::string error;
-  if (!options.Parse(argc, argv, &error) || !(seconds > 0) || !(rate > 0)) {
-    std::fprintf(stderr, "objscan_bus_fuzz: %s\n%s", error.empty() ? "--seconds and --rate must be > 0" : error.c_str(),
-                 options.Usage().c_str());
+  int exit_code = 0;  // --help prints the usage (and sends nothing); a bad command line exits 2
+  if (!objscan::ParseCommandLineOrExit(options, argc, argv, &exit_code)) return exit_code;
+  if (!(seconds > 0) || !(rate > 0)) {
+    std::fprintf(stderr, "objscan_bus_fuzz: --seconds and --rate must be > 0\n%s", options.Usage().c_str());
     return 2;
   }
   std::unique_ptr<objscan::Bus> bus;
