@@ -738,7 +738,7 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   VoxelVoteGrid fresh(options_.model.votes);
   AffineDenseOptions dense = DenseOptionsForNow();
   // The region (the TARGET box, the automatic region) was found in the live poses' frame. When the final poses are
-  // the live ones moved as a whole (an unjoined map restart rescaled by its floor: room_02, 8 Dec, final poses 351 mm
+  // the live ones moved as a whole (an unjoined map restart rescaled by its floor: room_02, 7 Dec, final poses 351 mm
   // from the live ones, every re-voted point outside the live region, the model kept in the live frame), the region
   // moves with them.
   std::string region_note;

@@ -333,7 +333,7 @@ TEST_F(NodeFixture, FinalPosesReplaceTheLiveVotes) {
 }
 
 // The live map lies in another frame than the final poses (an unjoined restart rescaled by its floor in the final
-// phase: room_02, 8 Dec, 351 mm), and the TARGET box came in the live frame: the region moves with the final poses,
+// phase: room_02, 7 Dec, 351 mm), and the TARGET box came in the live frame: the region moves with the final poses,
 // the re-vote keeps the model (in the final frame, on the true sphere). Without the move every re-voted point fell
 // outside the live region, the live votes stayed and the model lay 300 mm off trajectory.txt's frame.
 TEST_F(NodeFixture, TheRegionFollowsTheFinalPosesIntoTheirFrame) {

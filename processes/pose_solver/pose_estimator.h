@@ -379,7 +379,7 @@ class PoseEstimator {
   bool RescaleToFloorHeight(int first_frame, int last_frame, const std::vector<int64_t>& point_ids, int pivot_frame,
                             double* applied_scale = nullptr, double max_factor = 0, double min_change = 0);
   // While a restarted map is not joined (at TryLateJoin's tries): its scale measured again from the camera height
-  // above the floor among all its landmarks, applied when more than 2 % off (room_02, 8 Dec: a restart scaled 11 %
+  // above the floor among all its landmarks, applied when more than 2 % off (room_02, 7 Dec: a restart scaled 11 %
   // wrong at its start from a short span's floor; the 3-D join then never matched, the planner's estimate and
   // odometry disagreed by 660 mm, the orbit stalled).
   void RecheckUnjoinedScale(int f);

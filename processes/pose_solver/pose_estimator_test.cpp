@@ -402,7 +402,7 @@ TEST(PoseEstimator, RestartWithoutFloorIsScaledByTheFloorLater) {
 
 // The same restart, but its floor stays out of view beyond the first search (online_scale_frames): the odometry's
 // 20 % scale error stayed for the rest of the run. While the map is not joined, its scale is measured again from the
-// floor among all its landmarks at the late-join tries (room_02, 8 Dec: a restart 11 % off all run, never joined).
+// floor among all its landmarks at the late-join tries (room_02, 7 Dec: a restart 11 % off all run, never joined).
 TEST(PoseEstimator, AnUnjoinedRestartIsRescaledWhenItsFloorComesIntoView) {
   SyntheticOrbitOptions so = SimLikeOdometryErrors();
   so.num_frames = 520;
