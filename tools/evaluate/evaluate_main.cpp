@@ -72,14 +72,15 @@ bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& point
 
 int main(int argc, char** argv) {
   using namespace objscan;
+  const bool help = argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h");
   if (argc < 4) {
-    std::fprintf(stderr,
+    std::fprintf(help ? stdout : stderr,
                  "usage: objscan_evaluate trajectory EST TRUTH [--no-scale] [--max-dt S]\n"
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
                  "[--align EST TRUTH] [--truth-mesh MESH] [--visible-from POSES] [--min-views N] [--no-occlusion] "
                  "[--intrinsics fx,fy,cx,cy,w,h] [--write-aligned F] [--write-visible F] [--write-errors F]\n"
                  "       objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH]\n");
-    return 2;
+    return help ? 0 : 2;
   }
   const std::string command = argv[1];
   std::string error;

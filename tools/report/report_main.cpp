@@ -86,6 +86,11 @@ std::string SummaryStatus(const std::string& json) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf("usage: objscan_report DIR [--pictures-dir D] [--figures CAPTION=FILE]...\n"
+                "       objscan_report views DIR\n");
+    return 0;
+  }
   if (argc >= 2 && std::string(argv[1]) == "views") {
     if (argc != 3) return Usage("views takes DIR");
     return Views(argv[2]);
