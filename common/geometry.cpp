@@ -13,6 +13,15 @@ Eigen::Isometry3d Sim3::Apply(const Eigen::Isometry3d& pose) const {
   return out;
 }
 
+bool AlignSimilarity(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, Sim3* out,
+                     double* rms) {
+  if (!AlignUmeyama(src, dst, true, out)) return false;
+  double sum2 = 0;
+  for (size_t i = 0; i < src.size(); ++i) sum2 += ((*out) * src[i] - dst[i]).squaredNorm();
+  *rms = std::sqrt(sum2 / static_cast<double>(src.size()));
+  return true;
+}
+
 bool AlignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, bool with_scale,
                   Sim3* out) {
   const size_t n = src.size();

@@ -24,6 +24,10 @@ struct Sim3 {
 // Needs >= 3 non-collinear pairs; returns false otherwise.
 bool AlignUmeyama(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, bool with_scale,
                   Sim3* out);
+// AlignUmeyama with scale, and *rms the RMS distance (input unit) of S * src to dst: how well one Sim(3) explains the
+// pairs (a map moved as a whole). False as AlignUmeyama.
+bool AlignSimilarity(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, Sim3* out,
+                     double* rms);
 
 // Angle of a rotation matrix (rad), robust near 0 and pi.
 double RotationAngle(const Eigen::Matrix3d& r);

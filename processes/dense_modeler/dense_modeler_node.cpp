@@ -696,10 +696,8 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
     to.push_back(c.second);
   }
   Sim3 sim;
-  if (from.size() < 10 || !AlignUmeyama(from, to, true, &sim)) return region_;
-  double sum2 = 0;
-  for (size_t i = 0; i < from.size(); ++i) sum2 += (sim * from[i] - to[i]).squaredNorm();
-  const double rms = std::sqrt(sum2 / from.size());
+  double rms = 0;
+  if (from.size() < 10 || !AlignSimilarity(from, to, &sim, &rms)) return region_;
   const Eigen::Vector3d centre = 0.5 * (region_.box_min + region_.box_max);
   const double moved = (sim * centre - centre).norm();
   char text[320];

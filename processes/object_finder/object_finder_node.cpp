@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -13,6 +14,7 @@
 
 #include "common/adapters.h"
 #include "common/bus.h"
+#include "common/geometry.h"
 #include "common/log.h"
 #include "common/options.h"
 #include "common/ply.h"
@@ -500,18 +502,15 @@ void ObjectFinderNode::FinishTarget(const std::string& why) {
       to.push_back(f->second);
     }
     if (from.size() >= 10) {
-      Eigen::Matrix3Xd a(3, from.size()), b(3, to.size());
-      for (size_t i = 0; i < from.size(); ++i) a.col(i) = from[i], b.col(i) = to[i];
-      const Eigen::Matrix4d t = Eigen::umeyama(a, b, true);
-      const Eigen::Matrix3d sr = t.topLeftCorner<3, 3>();
-      const double scale = std::cbrt(sr.determinant());
-      const Eigen::Matrix3d rotation = sr / scale;
-      const Eigen::Vector3d shift = t.topRightCorner<3, 1>();
-      double sum2 = 0;
-      for (size_t i = 0; i < from.size(); ++i) sum2 += (sr * from[i] + shift - to[i]).squaredNorm();
-      const double rms = std::sqrt(sum2 / from.size());
+      Sim3 sim;
+      double rms = std::numeric_limits<double>::infinity();
+      const bool aligned = AlignSimilarity(from, to, &sim, &rms);
+      const double scale = sim.scale;
+      const Eigen::Matrix3d& rotation = sim.rotation;
+      const Eigen::Matrix3d sr = scale * rotation;
+      const Eigen::Vector3d shift = sim.translation;
       char text[256];
-      if (std::isfinite(scale) && scale > 0 && rms <= 20.0) {
+      if (aligned && std::isfinite(scale) && scale > 0 && rms <= 20.0) {
         const Eigen::Vector3d before = r.box.centre_mm;
         const auto apply = [&](TargetBox* box) {
           box->centre_mm = sr * box->centre_mm + shift;
