@@ -356,6 +356,7 @@ BaSummary RunBundleAdjustment(const PinholeCamera& camera, const RobotGeometry& 
   ceres::Solve(so, &problem, &s);
   summary.iterations = static_cast<int>(s.iterations.size());
   summary.message = s.BriefReport();
+  summary.converged = s.termination_type == ceres::CONVERGENCE;
   if (s.termination_type == ceres::FAILURE || !std::isfinite(s.final_cost)) return summary;
   for (int f = 0; f < num_frames; ++f) {
     if (!frame_used[f]) continue;

@@ -81,6 +81,7 @@ struct BaSummary {
   int iterations = 0;
   double initial_rms_px = 0;  // RMS reprojection error over all observations before / after
   double final_rms_px = 0;
+  bool converged = false;  // stopped by a tolerance (not by max_iterations)
   std::string message;
 };
 
