@@ -38,7 +38,7 @@
 #include "objscan/target_t.hpp"
 #include "objscan/voxel_map_t.hpp"
 #include "procman/child_process.h"
-#include "procman/json_writer.h"
+#include "common/json_writer.h"
 #include "procman/log_stats.h"
 
 namespace objscan {

@@ -8,6 +8,7 @@
 
 #include "common/adapters.h"
 #include "common/bus.h"
+#include "common/json_writer.h"
 #include "common/log.h"
 #include "common/options.h"
 #include "common/recorded_run.h"
@@ -452,25 +453,17 @@ void RobotSimNode::WriteOutcome() {
     out << std::setprecision(10) << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
     return out.str();
   };
-  auto quoted = [](const std::string& text) {
-    std::string out = "\"";
-    for (const char c : text) {
-      if (c == '"' || c == '\\') out += '\\';
-      if (static_cast<unsigned char>(c) >= 0x20) out += c;
-    }
-    return out + "\"";
-  };
   std::ofstream file(path);
   file << std::setprecision(10) << "{\n"
-       << "  \"mode\": " << quoted(options_.mode) << ",\n"
+       << "  \"mode\": " << JsonQuoted(options_.mode) << ",\n"
        << "  \"frames\": " << frames_published_ << ",\n"
        << "  \"collisions\": " << sim_->collisions() << ",\n"
        << "  \"blocked_frames\": " << sim_->blocked_frames() << ",\n"
        << "  \"path_length_mm\": " << sim_->path_length_mm() << ",\n"
        << "  \"footprint_radius_mm\": " << options_.footprint_radius_mm << ",\n"
        << "  \"target\": {\n"
-       << "    \"name\": " << quoted(target.name) << ",\n"
-       << "    \"shape\": " << quoted(ShapeName(target.type)) << ",\n"
+       << "    \"name\": " << JsonQuoted(target.name) << ",\n"
+       << "    \"shape\": " << JsonQuoted(ShapeName(target.type)) << ",\n"
        << "    \"center_mm\": " << vec(box.center_mm) << ",\n"
        << "    \"size_mm\": " << vec(box.size_mm) << ",\n"
        << "    \"yaw_rad\": " << box.yaw_rad << ",\n"

@@ -15,6 +15,7 @@
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/geometry.h"
+#include "common/json_writer.h"
 #include "common/log.h"
 #include "common/options.h"
 #include "common/ply.h"
@@ -47,16 +48,6 @@ std::string Describe(const TargetBox& box) {
 }
 
 std::string Views(int views) { return std::to_string(views) + (views == 1 ? " view" : " views"); }
-
-// text as a JSON string (quotes and backslashes escaped, control characters dropped)
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out + "\"";
-}
 
 std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
   return "[" + Format(format, v.x()) + ", " + Format(format, v.y()) + ", " + Format(format, v.z()) + "]";
@@ -142,7 +133,7 @@ std::string TargetJson(const FinderResult& r, int updates, const BoxSource& sour
     j << ",\n  \"landmarks_centre_mm\": " << JsonVector(source.landmarks_box.centre_mm, "%.2f")
       << ",\n  \"landmarks_size_mm\": " << JsonVector(source.landmarks_box.size_mm, "%.2f")
       << ",\n  \"model_voxels\": " << source.model_voxels;
-  if (!source.model_error.empty()) j << ",\n  \"model_box_error\": " << JsonString(source.model_error);
+  if (!source.model_error.empty()) j << ",\n  \"model_box_error\": " << JsonQuoted(source.model_error);
   j << "\n}\n";
   return j.str();
 }

@@ -1,5 +1,6 @@
-// A minimal streaming JSON writer (objects, arrays, strings with escaping, numbers, booleans) for summaries.
-// Non-finite numbers are written as null.
+// JSON output, the one home of its string escaping: JsonQuoted for files written by hand, JsonWriter (a minimal
+// streaming writer: objects, arrays, strings, numbers, booleans; non-finite numbers as null) for summaries.
+// Header-only, no dependencies.
 #pragma once
 
 #include <cmath>
@@ -9,6 +10,30 @@
 #include <vector>
 
 namespace objscan {
+
+// text as a JSON string literal: in quotes, with quotes and backslashes escaped and control characters as \n, \t,
+// \r or \u00XX (bytes >= 0x80 pass unchanged: UTF-8 stays UTF-8).
+inline std::string JsonQuoted(const std::string& text) {
+  std::string out = "\"";
+  for (unsigned char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      case '\r': out += "\\r"; break;
+      default:
+        if (c < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+          out += buf;
+        } else {
+          out += static_cast<char>(c);
+        }
+    }
+  }
+  return out + "\"";
+}
 
 class JsonWriter {
  public:
@@ -79,27 +104,7 @@ class JsonWriter {
     first_.back() = false;
     out_ += '\n' + std::string(2 * first_.size(), ' ');
   }
-  void AppendString(const std::string& s) {
-    out_ += '"';
-    for (unsigned char c : s) {
-      switch (c) {
-        case '"': out_ += "\\\""; break;
-        case '\\': out_ += "\\\\"; break;
-        case '\n': out_ += "\\n"; break;
-        case '\t': out_ += "\\t"; break;
-        case '\r': out_ += "\\r"; break;
-        default:
-          if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-            out_ += buf;
-          } else {
-            out_ += static_cast<char>(c);
-          }
-      }
-    }
-    out_ += '"';
-  }
+  void AppendString(const std::string& s) { out_ += JsonQuoted(s); }
   std::string out_;
   std::vector<bool> first_;
   bool after_key_ = false;
