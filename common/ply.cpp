@@ -1,14 +1,18 @@
 #include "common/ply.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace objscan {
 namespace {
 
-struct PlyProperty {
+struct HeaderProperty {
   std::string name;
   std::string type;
   bool is_list = false;
@@ -17,7 +21,7 @@ struct PlyProperty {
 struct PlyElement {
   std::string name;
   int64_t count = 0;
-  std::vector<PlyProperty> properties;
+  std::vector<HeaderProperty> properties;
 };
 
 int PlyTypeSize(const std::string& t) {
@@ -96,7 +100,7 @@ bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
         *error = "PLY property before element";
         return false;
       }
-      PlyProperty p;
+      HeaderProperty p;
       in >> p.type;
       if (p.type == "list") {
         p.is_list = true;
@@ -164,7 +168,7 @@ bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
     };
     for (int64_t i = 0; i < e.count; ++i) {
       for (size_t k = 0; k < e.properties.size(); ++k) {
-        const PlyProperty& p = e.properties[k];
+        const HeaderProperty& p = e.properties[k];
         if (!p.is_list) {
           if (!read_value(p.type, &values[k])) {
             *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i) + " of " +
@@ -254,6 +258,99 @@ bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices
   }
   *vertices = std::move(ply.points);
   *triangles = std::move(ply.triangles);
+  return true;
+}
+
+std::vector<PlyVertexProperty> PlyXyz() {
+  return {{"x", PlyScalar::kFloat}, {"y", PlyScalar::kFloat}, {"z", PlyScalar::kFloat}};
+}
+
+namespace {
+
+template <typename T>
+void Append(std::string* buf, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  buf->append(bytes, sizeof(T));
+}
+
+template <typename T>
+T ClampTo(double v) {
+  if (!(v == v)) return 0;  // NaN
+  return static_cast<T>(std::clamp(v, static_cast<double>(std::numeric_limits<T>::lowest()),
+                                   static_cast<double>(std::numeric_limits<T>::max())));
+}
+
+const char* ScalarName(PlyScalar t) {
+  switch (t) {
+    case PlyScalar::kUChar: return "uchar";
+    case PlyScalar::kInt: return "int";
+    case PlyScalar::kFloat: return "float";
+  }
+  return "float";
+}
+
+}  // namespace
+
+bool WritePlyFile(const std::string& path, const PlyLayout& layout, size_t num_vertices, const PlyVertexRow& vertex_row,
+                  const std::vector<Eigen::Vector3i>* faces, std::string* error) {
+  std::string buf = std::string("ply\nformat ") + (layout.binary ? "binary_little_endian" : "ascii") + " 1.0\n";
+  for (std::string c : layout.comments) {
+    std::replace(c.begin(), c.end(), '\n', ' ');
+    std::replace(c.begin(), c.end(), '\r', ' ');
+    buf += "comment " + c + "\n";
+  }
+  buf += "element vertex " + std::to_string(num_vertices) + "\n";
+  for (const PlyVertexProperty& p : layout.vertex_properties)
+    buf += std::string("property ") + ScalarName(p.type) + " " + p.name + "\n";
+  if (faces) buf += "element face " + std::to_string(faces->size()) + "\nproperty list uchar int vertex_indices\n";
+  buf += "end_header\n";
+  const size_t n = layout.vertex_properties.size();
+  std::vector<double> row(n);
+  char text[64];
+  for (size_t i = 0; i < num_vertices; ++i) {
+    std::fill(row.begin(), row.end(), 0.0);
+    vertex_row(i, row.data());
+    for (size_t k = 0; k < n; ++k) {
+      const PlyScalar t = layout.vertex_properties[k].type;
+      if (layout.binary) {
+        if (t == PlyScalar::kFloat) Append(&buf, static_cast<float>(row[k]));
+        else if (t == PlyScalar::kInt) Append(&buf, ClampTo<int32_t>(row[k]));
+        else Append(&buf, ClampTo<uint8_t>(row[k]));
+      } else {
+        if (k) buf += ' ';
+        if (t == PlyScalar::kFloat)
+          std::snprintf(text, sizeof(text), layout.ascii_float_format, row[k]);  // as given: text keeps it
+        else if (t == PlyScalar::kInt)
+          std::snprintf(text, sizeof(text), "%d", ClampTo<int32_t>(row[k]));
+        else
+          std::snprintf(text, sizeof(text), "%d", static_cast<int>(ClampTo<uint8_t>(row[k])));
+        buf += text;
+      }
+    }
+    if (!layout.binary) buf += '\n';
+  }
+  if (faces) {
+    for (const Eigen::Vector3i& f : *faces) {
+      if (layout.binary) {
+        Append(&buf, static_cast<uint8_t>(3));
+        for (int k = 0; k < 3; ++k) Append(&buf, static_cast<int32_t>(f[k]));
+      } else {
+        buf += "3 " + std::to_string(f.x()) + " " + std::to_string(f.y()) + " " + std::to_string(f.z()) + "\n";
+      }
+    }
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) {
+    if (error) *error = "cannot write " + path;
+    return false;
+  }
+  out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+  out.close();
+  if (!out) {
+    if (error) *error = "write error on " + path;
+    return false;
+  }
   return true;
 }
 

@@ -1,7 +1,10 @@
 #pragma once
-// PLY reading: the one reader of the project's point clouds and meshes (the dense modeler's and the simulator's
-// files, and any other program's ASCII or binary_little_endian PLY). No LCM.
+// PLY reading and writing: the one home of the format for the project's point clouds and meshes (the dense
+// modeler's, the pose solver's and the simulator's files, and any other program's ASCII or binary_little_endian
+// PLY). No LCM.
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,5 +39,29 @@ bool ReadPlyPoints(const std::string& path, std::vector<Eigen::Vector3d>* points
 // unreadable or malformed file, an index out of range, or no face element.
 bool ReadPlyMesh(const std::string& path, std::vector<Eigen::Vector3d>* vertices,
                  std::vector<Eigen::Vector3i>* triangles, std::string* error);
+
+// Writing. A file is a vertex element with the layout's scalar properties (in order) and, when faces is given, a
+// face element (property list uchar int vertex_indices; written even when empty). Values come as doubles, one row
+// per vertex from vertex_row(i, values[vertex_properties.size()]), and are stored as the property's type (binary
+// float: rounded to float; uchar and int: truncated toward zero after clamping to the type's range, NaN as 0).
+// Binary files are little-endian (the host's order on x86 and ARM); ascii files print float values as given with
+// ascii_float_format and integers as integers.
+enum class PlyScalar { kUChar, kInt, kFloat };
+struct PlyVertexProperty {
+  std::string name;
+  PlyScalar type = PlyScalar::kFloat;
+};
+struct PlyLayout {
+  bool binary = true;                          // binary_little_endian, else ascii
+  std::vector<std::string> comments;           // one "comment" header line each (newlines become spaces)
+  std::vector<PlyVertexProperty> vertex_properties;
+  const char* ascii_float_format = "%.9g";     // printf format of float values in an ascii file
+};
+using PlyVertexRow = std::function<void(size_t vertex, double* values)>;
+// False with *error ("cannot write PATH", "write error on PATH") when the file cannot be written.
+bool WritePlyFile(const std::string& path, const PlyLayout& layout, size_t num_vertices, const PlyVertexRow& vertex_row,
+                  const std::vector<Eigen::Vector3i>* faces, std::string* error);
+// The layout's x y z float properties (the first three of most files).
+std::vector<PlyVertexProperty> PlyXyz();
 
 }  // namespace objscan

@@ -366,34 +366,22 @@ bool LoadMeshFile(const std::string& path, RawMesh* out, std::string* error) {
 
 bool WritePly(const std::string& path, const std::vector<Eigen::Vector3f>& points,
               const std::vector<Eigen::Vector3f>& normals, const std::vector<Eigen::Vector3i>& faces, bool ascii) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return false;
   const bool with_normals = !normals.empty() && normals.size() == points.size();
-  out << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\ncomment objscan robot_sim, mm\n";
-  out << "element vertex " << points.size() << "\nproperty float x\nproperty float y\nproperty float z\n";
-  if (with_normals) out << "property float nx\nproperty float ny\nproperty float nz\n";
-  if (!faces.empty()) out << "element face " << faces.size() << "\nproperty list uchar int vertex_indices\n";
-  out << "end_header\n";
-  if (ascii) {
-    out << std::setprecision(9);
-    for (size_t i = 0; i < points.size(); ++i) {
-      out << points[i].x() << " " << points[i].y() << " " << points[i].z();
-      if (with_normals) out << " " << normals[i].x() << " " << normals[i].y() << " " << normals[i].z();
-      out << "\n";
-    }
-    for (const auto& f : faces) out << "3 " << f.x() << " " << f.y() << " " << f.z() << "\n";
-  } else {
-    for (size_t i = 0; i < points.size(); ++i) {
-      out.write(reinterpret_cast<const char*>(points[i].data()), 12);  // little-endian host (x86/ARM)
-      if (with_normals) out.write(reinterpret_cast<const char*>(normals[i].data()), 12);
-    }
-    for (const auto& f : faces) {
-      const uint8_t n = 3;
-      out.write(reinterpret_cast<const char*>(&n), 1);
-      out.write(reinterpret_cast<const char*>(f.data()), 12);
-    }
-  }
-  return static_cast<bool>(out);
+  PlyLayout layout;
+  layout.binary = !ascii;
+  layout.comments = {"objscan robot_sim, mm"};
+  layout.vertex_properties = PlyXyz();
+  if (with_normals)
+    for (const char* n : {"nx", "ny", "nz"}) layout.vertex_properties.push_back({n, PlyScalar::kFloat});
+  std::string error;
+  return WritePlyFile(
+      path, layout, points.size(),
+      [&](size_t i, double* row) {
+        for (int k = 0; k < 3; ++k) row[k] = points[i][k];
+        if (with_normals)
+          for (int k = 0; k < 3; ++k) row[3 + k] = normals[i][k];
+      },
+      faces.empty() ? nullptr : &faces, &error);
 }
 
 // ---------------------------------------------------------------------------------------------------------------

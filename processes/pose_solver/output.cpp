@@ -1,5 +1,6 @@
 #include "processes/pose_solver/output.h"
 
+#include "common/ply.h"
 #include "common/tum.h"
 
 #include <cmath>
@@ -45,21 +46,28 @@ bool WriteTumTrajectory(const std::string& path, const std::vector<CameraPoseEst
 
 bool WriteLandmarksPly(const std::string& path, const std::vector<Landmark>& landmarks, ScaleSource scale,
                        std::string* error) {
-  std::ofstream out(path);
-  if (!out) return Fail(error, "cannot write " + path);
-  out << "ply\nformat ascii 1.0\ncomment objscan pose_solver landmarks, world frame, "
-      << (IsMetric(scale) ? "mm" : "arbitrary unit") << "\ncomment scale: " << ScaleDescription(scale)
-      << "\nelement vertex "
-      << landmarks.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
-         "property uchar blue\nproperty int nobs\nproperty float error\nend_header\n";
-  out << std::fixed << std::setprecision(3);
-  for (const auto& l : landmarks)
-    out << l.position_mm.x() << ' ' << l.position_mm.y() << ' ' << l.position_mm.z() << " 200 200 200 "
-        << l.num_observations << ' ' << l.reprojection_rms_px << '\n';
-  out.flush();
-  if (!out) return Fail(error, "write error on " + path);
-  return true;
+  PlyLayout layout;
+  layout.binary = false;
+  layout.ascii_float_format = "%.3f";
+  layout.comments = {std::string("objscan pose_solver landmarks, world frame, ") +
+                         (IsMetric(scale) ? "mm" : "arbitrary unit"),
+                     std::string("scale: ") + ScaleDescription(scale)};
+  layout.vertex_properties = PlyXyz();
+  for (const char* c : {"red", "green", "blue"}) layout.vertex_properties.push_back({c, PlyScalar::kUChar});
+  layout.vertex_properties.push_back({"nobs", PlyScalar::kInt});
+  layout.vertex_properties.push_back({"error", PlyScalar::kFloat});
+  std::string why;
+  const bool ok = WritePlyFile(
+      path, layout, landmarks.size(),
+      [&](size_t i, double* row) {
+        const Landmark& l = landmarks[i];
+        for (int k = 0; k < 3; ++k) row[k] = l.position_mm[k];
+        row[3] = row[4] = row[5] = 200;
+        row[6] = l.num_observations;
+        row[7] = l.reprojection_rms_px;
+      },
+      nullptr, &why);
+  return ok ? true : Fail(error, why);
 }
 
 bool WriteColmapText(const std::string& dir, const PinholeCamera& camera, const std::vector<ColmapImage>& images,
