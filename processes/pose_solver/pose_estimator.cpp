@@ -698,7 +698,7 @@ bool ReconstructSpan(const PinholeCamera& camera, const std::vector<std::vector<
   for (int candidate : order) {
     Candidate& c = cand[candidate];
     // Clearly worse after the probe than the accepted one after its full adjustment: not worth the iterations.
-    if (std::isfinite(best_rms) && c.probe_rms_px > 2.0 * best_rms + 0.5) continue;
+    if (std::isfinite(best_rms) && c.probe_rms_px > 1.5 * best_rms + 0.05) continue;
     if (!c.done) {  // adjusted again from the start: the same result as without the probe
       BaOptions bo = ba_options;
       bo.model = MotionModel::kSixDof;

@@ -159,9 +159,9 @@ bool ValidatePoseEstimatorOptions(const PoseEstimatorOptions& options, std::stri
 
 // The preliminary-phase reconstruction of a span: weak-perspective factorization of meas[frame][point] (every point
 // in every frame, undistorted px), perspective upgrade of both depth-reversal candidates (depth 1000 units, scale
-// arbitrary), 6-DOF BA of each (frame 0 fixed, baseline 0..last held; a candidate clearly worse after 10 iterations
-// than the other after all of them is not adjusted further), the candidate with the lower RMS returned in
-// *out (world = the factorization's model frame) with its RMS in *rms_px. With `acceptable`, only candidates it
+// arbitrary), 6-DOF BA of each (frame 0 fixed, baseline 0..last held; a candidate whose RMS after 10 iterations is
+// above 1.5x the other's after all of them + 0.05 px is not adjusted further), the candidate with the lower RMS
+// returned in *out (world = the factorization's model frame) with its RMS in *rms_px. With `acceptable`, only candidates it
 // accepts count (on a short span both fit the pixels alike; the odometry tells them apart: SpanMotionAgreesWith-
 // Odometry); its reason for the last refusal becomes *why. False with *why on failure.
 using SpanCheck = std::function<bool(const BaProblem& candidate, std::string* why)>;
