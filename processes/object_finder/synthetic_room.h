@@ -23,6 +23,7 @@ class SyntheticRoom {
     std::string name;
     int only_update = -1;  // >= 0: observed in that update (Observe call index) only
     bool hidden = false;   // not observed while set (occluded, removed)
+    double error_px = 0.5;  // px, reprojection error of its landmarks (outline points of an untextured object: high)
   };
 
   explicit SyntheticRoom(uint32_t seed = 7) : rng_(seed) {
@@ -184,7 +185,7 @@ class SyntheticRoom {
       l.id = 1000 + static_cast<int64_t>(i);
       l.position_mm = World(points_[i].truth + points_[i].noise);
       l.num_observations = counts_[i];
-      l.reprojection_error_px = 0.5;
+      l.reprojection_error_px = objects_[points_[i].object].error_px;
       in.landmarks.push_back(l);
     }
     return in;
