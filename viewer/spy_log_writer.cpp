@@ -24,7 +24,7 @@
 int main(int argc, char** argv) {
   using namespace objscan;
   const bool garbage = argc == 3 && std::string(argv[2]) == "--with-garbage";
-  if (argc != 2 && !garbage) {
+  if ((argc != 2 && !garbage) || argv[1][0] == '-') {  // an option where OUT belongs is an error, not a file name
     std::fprintf(stderr, "usage: %s OUT.lcmlog [--with-garbage]\n", argv[0]);
     return 2;
   }
