@@ -84,6 +84,33 @@ void OptionParser::Add(const std::string& name, bool* value, const std::string& 
                       [value] { return std::string(*value ? "true" : "false"); }});
 }
 
+void OptionParser::AddChannel(std::string* channel, const std::string& help) {
+  if (channels_.empty())
+    options_.push_back({"channel", "rename a channel: DEFAULT=NAME (repeatable)", false,
+                        [this](const std::string& s) { return RenameChannel(s); },
+                        [this] {
+                          std::string renamed;
+                          for (const Channel& c : channels_)
+                            if (*c.channel != c.default_name)
+                              renamed += (renamed.empty() ? "" : " ") + c.default_name + "=" + *c.channel;
+                          return renamed.empty() ? std::string("none renamed") : renamed;
+                        }});
+  channels_.push_back({*channel, channel, help});
+}
+
+bool OptionParser::RenameChannel(const std::string& rename) {
+  const auto eq = rename.find('=');
+  if (eq == std::string::npos || eq == 0) return false;
+  const std::string from = rename.substr(0, eq), to = rename.substr(eq + 1);
+  bool found = false;
+  for (Channel& c : channels_)
+    if (c.default_name == from) {
+      *c.channel = to;
+      found = true;
+    }
+  return found;
+}
+
 OptionParser::Option* OptionParser::Find(const std::string& name) {
   for (auto& o : options_)
     if (o.name == name) return &o;
@@ -116,6 +143,7 @@ bool OptionParser::ReadFile(const std::string& path, std::string* error) {
     }
     if (!option->set(value)) {
       *error = path + ":" + std::to_string(line_number) + ": bad value '" + value + "' for '" + name + "'";
+      if (name == "channel") *error += ChannelList();
       return false;
     }
   }
@@ -171,6 +199,7 @@ bool OptionParser::ParseArgs(const std::vector<std::string>& args, std::string* 
     }
     if (!option->set(value)) {
       *error = "bad value '" + value + "' for option '--" + name + "'";
+      if (name == "channel") *error += ChannelList();
       return false;
     }
   }
@@ -183,10 +212,23 @@ bool OptionParser::Parse(int argc, char** argv, std::string* error) {
   return ParseArgs(args, error);
 }
 
+std::string OptionParser::ChannelList() const {
+  std::string list = " (DEFAULT=NAME, DEFAULT one of:";
+  for (const Channel& c : channels_) list += " " + c.default_name;
+  return list + ")";
+}
+
 std::string OptionParser::Usage() const {
   std::ostringstream os;
   os << "usage: " << program_ << " [options]\n" << description_ << "\n\noptions:\n";
   for (const auto& o : options_) {
+    if (o.name == "channel") {
+      os << "  --channel DEFAULT=NAME\n      rename a channel (repeatable); the channels and their use:\n";
+      for (const Channel& c : channels_)
+        os << "        " << c.default_name << (*c.channel != c.default_name ? " (now " + *c.channel + ")" : "")
+           << ": " << c.help << "\n";
+      continue;
+    }
     os << "  --" << o.name << (o.is_flag ? "" : " VALUE") << "\n      " << o.help << " (default: " << o.get()
        << ")\n";
   }
@@ -197,7 +239,13 @@ std::string OptionParser::Usage() const {
 std::string OptionParser::Effective() const {
   std::ostringstream os;
   os << program_ << " configuration:\n";
-  for (const auto& o : options_) os << "  " << o.name << " = " << o.get() << "\n";
+  for (const auto& o : options_) {
+    if (o.name != "channel") {
+      os << "  " << o.name << " = " << o.get() << "\n";
+      continue;
+    }
+    for (const Channel& c : channels_) os << "  channel " << c.default_name << " = " << *c.channel << "\n";
+  }
   return os.str();
 }
 

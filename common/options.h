@@ -1,4 +1,5 @@
-// Command-line options: "--name value" or "--name=value", bool flags as "--name" / "--name=false",
+// Command-line options: "--name value" or "--name=value", bool flags as "--name" / "--name=false", channels
+// renamed by "--channel DEFAULT=NAME",
 // "--options-file FILE" reads "name = value" lines (# comments) first; the command line overrides the file.
 // Every option has a one-line help text; Usage() lists them, Effective() prints the values in force.
 #pragma once
@@ -23,6 +24,10 @@ class OptionParser {
   void Add(const std::string& name, int64_t* value, const std::string& help);
   void Add(const std::string& name, double* value, const std::string& help);
   void Add(const std::string& name, bool* value, const std::string& help);
+  // A channel the program reads or writes, its default the current *channel (not empty). All of a program's
+  // channels are renamed through one option, as ROS remaps topics: --channel DEFAULT=NAME (repeatable; an empty
+  // NAME turns an input off where its help says so). An unknown DEFAULT is an error that lists the channels.
+  void AddChannel(std::string* channel, const std::string& help);
 
   // Parses argv. Returns false with *error set on an unknown option, a missing or malformed value, or an
   // unreadable options file. Sets help_requested() on --help / -h (and returns true).
@@ -43,12 +48,20 @@ class OptionParser {
     std::function<bool(const std::string&)> set;
     std::function<std::string()> get;
   };
+  struct Channel {
+    std::string default_name;
+    std::string* channel;
+    std::string help;
+  };
   Option* Find(const std::string& name);
+  bool RenameChannel(const std::string& rename);
+  std::string ChannelList() const;
   bool ReadFile(const std::string& path, std::string* error);
 
   std::string program_;
   std::string description_;
   std::vector<Option> options_;
+  std::vector<Channel> channels_;
   std::vector<std::string> positional_;
   bool help_requested_ = false;
 };

@@ -86,6 +86,38 @@ TEST(OptionsTest, UsageAndEffectiveListEveryOption) {
   EXPECT_NE(effective.find("frames = 10"), std::string::npos);
 }
 
+TEST(OptionsTest, ChannelsAreRenamedByTheirDefaultName) {
+  std::string poses = "CAMERA_POSE", odometry = "ROBOT_ODOMETRY", status = "PROCESS_STATUS";
+  OptionParser parser("prog", "test program");
+  parser.AddChannel(&poses, "input camera poses (pose_t)");
+  parser.AddChannel(&odometry, "input odometry (\"\" = none)");
+  parser.AddChannel(&status, "status out");
+  const std::string usage = parser.Usage();
+  EXPECT_NE(usage.find("--channel DEFAULT=NAME"), std::string::npos) << usage;
+  EXPECT_NE(usage.find("CAMERA_POSE: input camera poses (pose_t)"), std::string::npos) << usage;
+  EXPECT_EQ(usage.find("--camera-pose-channel"), std::string::npos);
+  std::string error;
+  ASSERT_TRUE(parser.ParseArgs({"--channel", "CAMERA_POSE=ROBOT2_POSE", "--channel=ROBOT_ODOMETRY="}, &error)) << error;
+  EXPECT_EQ(poses, "ROBOT2_POSE");
+  EXPECT_EQ(odometry, "");  // an empty name turns the input off
+  EXPECT_EQ(status, "PROCESS_STATUS");
+  EXPECT_NE(parser.Effective().find("channel CAMERA_POSE = ROBOT2_POSE"), std::string::npos) << parser.Effective();
+  // An unknown channel, or no '=', is an error that lists the channels.
+  EXPECT_FALSE(parser.ParseArgs({"--channel", "CAMERA_IMAGE=X"}, &error));
+  EXPECT_NE(error.find("CAMERA_POSE ROBOT_ODOMETRY PROCESS_STATUS"), std::string::npos) << error;
+  EXPECT_FALSE(parser.ParseArgs({"--channel", "CAMERA_POSE"}, &error));
+  EXPECT_FALSE(parser.ParseArgs({"--channel", "=X"}, &error));
+  // In an options file too.
+  const std::string path = ::testing::TempDir() + "objscan_channel_test_" + std::to_string(getpid());
+  {
+    std::ofstream out(path);
+    out << "channel = PROCESS_STATUS=STATUS_2\n";
+  }
+  ASSERT_TRUE(parser.ParseArgs({"--options-file", path}, &error)) << error;
+  EXPECT_EQ(status, "STATUS_2");
+  std::remove(path.c_str());
+}
+
 }  // namespace
 TEST(ParseFiniteNumberTest, WholeFiniteNumbersOnly) {
   double v = -1;

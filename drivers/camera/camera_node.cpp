@@ -66,16 +66,16 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
              "ms, go on after waiting this long for the lockstep message (0 = wait forever)");
   parser.Add("device-width", &o->device_width, "px, V4L2 capture width to request (0 = calibration width)");
   parser.Add("device-height", &o->device_height, "px, V4L2 capture height to request (0 = calibration height)");
-  parser.Add("image-channel", &o->image_channel, "output channel for image_t");
-  parser.Add("info-channel", &o->info_channel, "output channel for camera_info_t");
-  parser.Add("ground-truth-channel", &o->ground_truth_channel, "output channel for the true poses (pose_t)");
-  parser.Add("control-channel", &o->control_channel, "output channel for END_OF_STREAM (control_t)");
-  parser.Add("status-channel", &o->status_channel, "output channel for process_status_t");
+  parser.AddChannel(&o->image_channel, "output channel for image_t");
+  parser.AddChannel(&o->info_channel, "output channel for camera_info_t");
+  parser.AddChannel(&o->ground_truth_channel, "output channel for the true poses (pose_t)");
+  parser.AddChannel(&o->control_channel, "output channel for END_OF_STREAM (control_t)");
+  parser.AddChannel(&o->status_channel, "output channel for process_status_t");
   parser.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
   parser.Add("odometry", &o->odometry,
              "publish an image or video folder's odometry.txt (needs robot.cfg beside it, and timestamps.txt for "
              "images; a video without it uses the container's times); false: the images alone");
-  parser.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
+  parser.AddChannel(&o->odometry_channel, "output channel for odometry_t");
 }
 
 bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {

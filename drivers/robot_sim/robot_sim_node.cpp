@@ -105,13 +105,13 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
         "write target_surface.ply, scene.txt, poses_gt.txt, robot_gt.txt here (empty = off)");
   p.Add("odometry", &o->publish_odometry,
         "publish ROBOT_ODOMETRY (--odometry=false: images only, to test image-only input; orbit mode only)");
-  p.Add("image-channel", &o->image_channel, "output channel for image_t");
-  p.Add("info-channel", &o->info_channel, "output channel for camera_info_t");
-  p.Add("odometry-channel", &o->odometry_channel, "output channel for odometry_t");
-  p.Add("ground-truth-channel", &o->ground_truth_channel, "output channel for the true camera poses (pose_t)");
-  p.Add("command-channel", &o->command_channel, "input channel of robot_command_t (command mode)");
-  p.Add("control-channel", &o->control_channel, "channel of control_t (END_OF_STREAM out, SHUTDOWN in)");
-  p.Add("status-channel", &o->status_channel, "output channel for process_status_t");
+  p.AddChannel(&o->image_channel, "output channel for image_t");
+  p.AddChannel(&o->info_channel, "output channel for camera_info_t");
+  p.AddChannel(&o->odometry_channel, "output channel for odometry_t");
+  p.AddChannel(&o->ground_truth_channel, "output channel for the true camera poses (pose_t)");
+  p.AddChannel(&o->command_channel, "input channel of robot_command_t (command mode)");
+  p.AddChannel(&o->control_channel, "channel of control_t (END_OF_STREAM out, SHUTDOWN in)");
+  p.AddChannel(&o->status_channel, "output channel for process_status_t");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
 }
 

@@ -28,17 +28,17 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   // region and target, voxel size and vote threshold, the mesh refinement switch, and the two options the docs give
   // as command-line examples. Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
-  p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
-  p.Add("info-channel", &o->info_channel, "camera_info_t channel");
-  p.Add("tracks-channel", &o->tracks_channel, "feature_tracks_t channel");
-  p.Add("pose-channel", &o->pose_channel, "live camera pose channel (pose_t)");
-  p.Add("final-pose-channel", &o->final_pose_channel, "final adjusted camera poses (pose_t, \"\" = ignore)");
-  p.Add("target-channel", &o->target_channel, "target_t channel (\"\" = ignore)");
-  p.Add("landmarks-channel", &o->landmarks_channel, "landmarks_t channel for the automatic region (\"\" = ignore)");
-  p.Add("voxel-map-channel", &o->voxel_map_channel, "output voxel_map_t channel");
-  p.Add("model-channel", &o->model_channel, "output model_t channel");
-  p.Add("control-channel", &o->control_channel, "control_t channel (in and out)");
-  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.AddChannel(&o->image_channel, "input image channel (image_t)");
+  p.AddChannel(&o->info_channel, "camera_info_t channel");
+  p.AddChannel(&o->tracks_channel, "feature_tracks_t channel");
+  p.AddChannel(&o->pose_channel, "live camera pose channel (pose_t)");
+  p.AddChannel(&o->final_pose_channel, "final adjusted camera poses (pose_t, \"\" = ignore)");
+  p.AddChannel(&o->target_channel, "target_t channel (\"\" = ignore)");
+  p.AddChannel(&o->landmarks_channel, "landmarks_t channel for the automatic region (\"\" = ignore)");
+  p.AddChannel(&o->voxel_map_channel, "output voxel_map_t channel");
+  p.AddChannel(&o->model_channel, "output model_t channel");
+  p.AddChannel(&o->control_channel, "control_t channel (in and out)");
+  p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("finish-sender", &o->finish_sender, "COMMAND_FINISHED from this sender starts the final phase");
   p.Add("output-dir", &o->output_dir, "directory for model files and vote snapshots (\"\" = none)");
   p.Add("buffer-frames", &o->buffer_frames, "frames kept in the ring buffer (> pair-gap)");

@@ -61,20 +61,20 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   // target.json), the TARGET period, the target's size range, and the clustering distance and views to confirm (the
   // node test's command line). Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
-  p.Add("landmarks-channel", &o->landmarks_channel, "input sparse map channel (landmarks_t)");
-  p.Add("pose-channel", &o->pose_channel, "input camera pose channel (pose_t)");
-  p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
-  p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel (\"\" = none)");
-  p.Add("target-channel", &o->target_channel, "output target_t channel");
-  p.Add("control-channel", &o->control_channel, "control_t channel (end of stream in, finished out)");
-  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.AddChannel(&o->landmarks_channel, "input sparse map channel (landmarks_t)");
+  p.AddChannel(&o->pose_channel, "input camera pose channel (pose_t)");
+  p.AddChannel(&o->info_channel, "input camera_info_t channel");
+  p.AddChannel(&o->odometry_channel, "input odometry_t channel (\"\" = none)");
+  p.AddChannel(&o->target_channel, "output target_t channel");
+  p.AddChannel(&o->control_channel, "control_t channel (end of stream in, finished out)");
+  p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("target-period", &o->target_period_s, "s, the latest TARGET is repeated this often");
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   p.Add("output-dir", &o->output_dir, "write target.json here at end of stream (\"\" = none)");
-  p.Add("final-pose-channel", &o->final_pose_channel,
+  p.AddChannel(&o->final_pose_channel,
         "final poses (pose_t): target.json is re-expressed in their frame (\"\" = keep the online poses' frame)");
-  p.Add("model-channel", &o->model_channel,
+  p.AddChannel(&o->model_channel,
         "final model (model_t): target.json's box is measured on its voxels (\"\" = the landmarks' box, no wait)");
   ObjectFinderOptions* f = &o->finder;
   p.Add("cluster-distance", &f->cluster_distance_mm, "mm, linkage distance of the clustering");

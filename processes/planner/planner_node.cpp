@@ -47,15 +47,15 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   // and the floor-support switch, and the robot (footprint, safety margin, clearance heights, geometry, speed and
   // head limits). Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
-  p.Add("pose-channel", &o->pose_channel, "input camera pose channel (pose_t); one command per pose");
-  p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel");
-  p.Add("target-channel", &o->target_channel, "input target_t channel");
-  p.Add("landmarks-channel", &o->landmarks_channel, "input sparse map channel (landmarks_t)");
-  p.Add("voxel-channel", &o->voxel_channel, "input dense model channel (voxel_map_t)");
-  p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
-  p.Add("command-channel", &o->command_channel, "output robot_command_t channel");
-  p.Add("control-channel", &o->control_channel, "control_t channel (end of stream in; shutdown, finished out)");
-  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.AddChannel(&o->pose_channel, "input camera pose channel (pose_t); one command per pose");
+  p.AddChannel(&o->odometry_channel, "input odometry_t channel");
+  p.AddChannel(&o->target_channel, "input target_t channel");
+  p.AddChannel(&o->landmarks_channel, "input sparse map channel (landmarks_t)");
+  p.AddChannel(&o->voxel_channel, "input dense model channel (voxel_map_t)");
+  p.AddChannel(&o->info_channel, "input camera_info_t channel");
+  p.AddChannel(&o->command_channel, "output robot_command_t channel");
+  p.AddChannel(&o->control_channel, "control_t channel (end of stream in; shutdown, finished out)");
+  p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("driver-name", &o->driver_name, "process name of the driver asked to end the stream when the plan is done");
   p.Add("output-dir", &o->output_dir, "write plan.json here at end of stream (\"\" = none)");
   p.Add("status-period", &o->status_period_s, "s, status publication period");

@@ -25,14 +25,14 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   // settings (scripts/profiles), the scale sources, and the relocalization and map-join switches the tests and the
   // README use. Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
-  p.Add("tracks-channel", &o->tracks_channel, "input feature_tracks_t channel");
-  p.Add("info-channel", &o->info_channel, "input camera_info_t channel");
-  p.Add("odometry-channel", &o->odometry_channel, "input odometry_t channel (\"\" = no odometry)");
-  p.Add("pose-channel", &o->pose_channel, "output pose_t channel (one per frame)");
-  p.Add("final-pose-channel", &o->final_pose_channel, "output pose_t channel for the final poses after global BA");
-  p.Add("landmarks-channel", &o->landmarks_channel, "output landmarks_t channel");
-  p.Add("control-channel", &o->control_channel, "control_t channel (finished in and out)");
-  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.AddChannel(&o->tracks_channel, "input feature_tracks_t channel");
+  p.AddChannel(&o->info_channel, "input camera_info_t channel");
+  p.AddChannel(&o->odometry_channel, "input odometry_t channel (\"\" = no odometry)");
+  p.AddChannel(&o->pose_channel, "output pose_t channel (one per frame)");
+  p.AddChannel(&o->final_pose_channel, "output pose_t channel for the final poses after global BA");
+  p.AddChannel(&o->landmarks_channel, "output landmarks_t channel");
+  p.AddChannel(&o->control_channel, "control_t channel (finished in and out)");
+  p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("finish-on-sender", &o->finish_on_sender, "COMMAND_FINISHED from this sender starts the final phase");
   p.Add("model", &o->model, "camera motion model: 6dof or 4dof (robot on the floor: x, y, yaw, tilt)");
   p.Add("status-period", &o->status_period_s, "s, status publication period");

@@ -20,11 +20,11 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   // descriptor tracking of the wide-baseline profile (scripts/profiles). Every other field keeps its default here;
   // tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
-  p.Add("image-channel", &o->image_channel, "input image channel (image_t)");
-  p.Add("info-channel", &o->info_channel, "optional camera_info_t channel that fixes the image size (\"\" = ignore)");
-  p.Add("tracks-channel", &o->tracks_channel, "output channel for feature_tracks_t");
-  p.Add("control-channel", &o->control_channel, "control_t channel (end of stream in, finished out)");
-  p.Add("status-channel", &o->status_channel, "process_status_t channel");
+  p.AddChannel(&o->image_channel, "input image channel (image_t)");
+  p.AddChannel(&o->info_channel, "optional camera_info_t channel that fixes the image size (\"\" = ignore)");
+  p.AddChannel(&o->tracks_channel, "output channel for feature_tracks_t");
+  p.AddChannel(&o->control_channel, "control_t channel (end of stream in, finished out)");
+  p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
   p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");

@@ -1,5 +1,5 @@
 // objscan_export: dataset export and COLMAP conversion.
-//   objscan_export --log SESSION.lcmlog --out DIR [--every N] [--max-frames N] [--image-channel CH] ...
+//   objscan_export --log SESSION.lcmlog --out DIR [--every N] [--max-frames N] [--channel CAMERA_IMAGE=NAME] ...
 //       LCM log -> dataset folder (images/NNNNNN.png, calib.yaml, timestamps.txt, poses_gt.txt, odometry.txt,
 //       robot.cfg with --robot-file), readable by the
 //       camera driver (--source DIR). Prints a summary as "key value" lines on stdout.

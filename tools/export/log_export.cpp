@@ -29,10 +29,10 @@ bool Decode(const LcmLogEvent& event, Msg* msg) {
 void AddLogExportOptions(OptionParser& parser, LogExportOptions* options) {
   parser.Add("log", &options->log_path, "LCM log file to read");
   parser.Add("out", &options->out_dir, "dataset folder to write (created: images/, calib.yaml, poses_gt.txt, ...)");
-  parser.Add("image-channel", &options->image_channel, "channel of image_t frames");
-  parser.Add("info-channel", &options->info_channel, "channel of camera_info_t (the first one -> calib.yaml)");
-  parser.Add("ground-truth-channel", &options->ground_truth_channel, "channel of true pose_t (-> poses_gt.txt)");
-  parser.Add("odometry-channel", &options->odometry_channel, "channel of odometry_t (-> odometry.txt)");
+  parser.AddChannel(&options->image_channel, "channel of image_t frames");
+  parser.AddChannel(&options->info_channel, "channel of camera_info_t (the first one -> calib.yaml)");
+  parser.AddChannel(&options->ground_truth_channel, "channel of true pose_t (-> poses_gt.txt)");
+  parser.AddChannel(&options->odometry_channel, "channel of odometry_t (-> odometry.txt)");
   parser.Add("every", &options->every, "keep frames whose seq is a multiple of N (1 = all)");
   parser.Add("max-frames", &options->max_frames, "write at most N frames (0 = all)");
   parser.Add("video", &options->video,

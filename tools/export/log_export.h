@@ -18,10 +18,10 @@ class OptionParser;
 struct LogExportOptions {
   std::string log_path;                                    // --log: LCM log file to read
   std::string out_dir;                                     // --out: dataset folder to write (created)
-  std::string image_channel = "CAMERA_IMAGE";              // --image-channel: image_t frames
-  std::string info_channel = "CAMERA_INFO";                // --info-channel: camera_info_t calibration
-  std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // --ground-truth-channel: pose_t true poses
-  std::string odometry_channel = "ROBOT_ODOMETRY";         // --odometry-channel: odometry_t readings
+  std::string image_channel = "CAMERA_IMAGE";              // image_t frames
+  std::string info_channel = "CAMERA_INFO";                // camera_info_t calibration
+  std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // pose_t true poses
+  std::string odometry_channel = "ROBOT_ODOMETRY";         // odometry_t readings
   int every = 1;                                           // --every: keep frames whose seq is a multiple of N
   int64_t max_frames = 0;                                  // --max-frames: write at most N frames (0 = all)
   std::string robot_file;  // --robot-file: the robot's robot.cfg (common/recorded_run.h), checked, -> DIR/robot.cfg
