@@ -240,26 +240,39 @@ void ObjectFinder::UpdateFloor(const FinderInput& input, const std::vector<int>&
 std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput& input, const std::vector<int>& valid,
                                                               const std::vector<char>& fresh) {
   const Eigen::Isometry3d floor_from_world = floor_.FloorFromWorld();
+  // The map's median reprojection error over the landmarks usable at all; points much worse than it are not
+  // points of a textured surface (see max_error_ratio) and are left out.
+  std::vector<double> errors_px;
+  for (int i : valid) {
+    const MapLandmark& l = input.landmarks[i];
+    if (l.num_observations >= options_.min_observations && l.reprojection_error_px <= options_.max_reprojection_error_px)
+      errors_px.push_back(l.reprojection_error_px);
+  }
+  double map_error_px = 0;
+  if (!errors_px.empty()) {
+    std::nth_element(errors_px.begin(), errors_px.begin() + errors_px.size() / 2, errors_px.end());
+    map_error_px = errors_px[errors_px.size() / 2];
+  }
+  const double max_error_px =
+      std::min(options_.max_reprojection_error_px, options_.max_error_ratio * std::max(map_error_px, kMinMapErrorPx));
   std::vector<Eigen::Vector3d> floor_points;
-  std::vector<double> errors_px;  // parallel to floor_points
-  std::vector<int> source;        // index into input.landmarks
-  std::vector<double> all_errors_px;
+  std::vector<int> source;  // index into input.landmarks
+  int inconsistent = 0;
   for (int i : valid) {
     const MapLandmark& l = input.landmarks[i];
     if (l.num_observations < options_.min_observations || l.reprojection_error_px > options_.max_reprojection_error_px)
       continue;
-    all_errors_px.push_back(l.reprojection_error_px);
     const Eigen::Vector3d f = floor_from_world * l.position_mm;
     if (f.z() <= options_.min_height_mm || f.z() > options_.max_height_mm) continue;
+    if (l.reprojection_error_px > max_error_px) {
+      ++inconsistent;
+      continue;
+    }
     floor_points.push_back(f);
-    errors_px.push_back(l.reprojection_error_px);
     source.push_back(i);
   }
-  map_error_px_ = 0;
-  if (!all_errors_px.empty()) {
-    std::nth_element(all_errors_px.begin(), all_errors_px.begin() + all_errors_px.size() / 2, all_errors_px.end());
-    map_error_px_ = all_errors_px[all_errors_px.size() / 2];
-  }
+  result_.points_inconsistent = inconsistent;
+  result_.map_error_px = map_error_px;
   result_.points_used = static_cast<int>(floor_points.size());
   const std::vector<std::vector<int>> groups =
       EuclideanClusters(floor_points, options_.cluster_distance_mm, kMinClusterPoints);
@@ -269,7 +282,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
   std::vector<Cluster> clusters(groups.size());
   for (size_t k = 0; k < groups.size(); ++k) {
     Cluster& c = clusters[k];
-    c.box = FitClusterBox(floor_points, groups[k], floor_, &errors_px);
+    c.box = FitClusterBox(floor_points, groups[k], floor_);
     c.rejection = CheckRule(c.box);
     const bool size_only = (c.rejection == "too large" || c.rejection == "too high") &&
                            CheckRule(c.box, 1 + options_.look_closer_margin).empty();
@@ -282,7 +295,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     }
   }
   std::vector<std::vector<int>> members = groups;
-  MergeFragments(floor_points, errors_px, &label, &members, &clusters);
+  MergeFragments(floor_points, &label, &members, &clusters);
   for (size_t k = 0; k < clusters.size(); ++k) {
     Cluster& c = clusters[k];
     int fresh_members = 0;
@@ -298,8 +311,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
 // (room_01: a 268 mm sphere in pieces of 20, 13 and 3 landmarks, never a candidate). Pieces rejected for such
 // reasons are linked again at twice the distance; a group of pieces that passes the rule as a whole replaces them.
 // Pieces of walls and tables merge into something too large or too high and stay as they were.
-void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_points,
-                                  const std::vector<double>& errors_px, std::vector<int>* label,
+void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
                                   std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const {
   std::vector<int> fragment_points, fragment_of;  // indices into floor_points; the cluster each came from
   for (size_t k = 0; k < clusters->size(); ++k) {
@@ -334,7 +346,7 @@ void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_poin
     if (pieces.size() < 2) continue;
     std::sort(merged.begin(), merged.end());
     Cluster c;
-    c.box = FitClusterBox(floor_points, merged, floor_, &errors_px);
+    c.box = FitClusterBox(floor_points, merged, floor_);
     c.rejection = CheckRule(c.box);
     if (!c.rejection.empty()) continue;
     const int new_label = static_cast<int>(clusters->size());
@@ -377,7 +389,6 @@ std::string ObjectFinder::CheckRule(const ClusterBox& box, double size_scale) co
   if (box.lowest_mm > options_.floor_contact_mm) return "not on the floor";
   if (box.points < options_.min_target_points) return "too few points";
   if (box.texture_density < options_.min_texture_density) return "untextured";
-  if (box.median_error_px > options_.max_error_ratio * std::max(map_error_px_, kMinMapErrorPx)) return "outline only";
   return "";
 }
 
