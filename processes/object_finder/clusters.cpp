@@ -166,7 +166,7 @@ Rectangle2d MinAreaRectangle(const std::vector<Eigen::Vector2d>& points) {
 }
 
 ClusterBox FitClusterBox(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& members,
-                         const FloorPlane& floor) {
+                         const FloorPlane& floor, const std::vector<double>* errors_px) {
   ClusterBox box;
   box.points = static_cast<int>(members.size());
   if (members.empty()) return box;
@@ -186,6 +186,13 @@ ClusterBox FitClusterBox(const std::vector<Eigen::Vector3d>& floor_points, const
   box.centre_mm = floor.FloorFromWorld().inverse() * Eigen::Vector3d(rect.centre.x(), rect.centre.y(), 0.5 * height);
   const double area_mm2 = (rect.extents.x() + rect.extents.y()) * height + rect.extents.x() * rect.extents.y();
   box.texture_density = area_mm2 > 0 ? box.points / (area_mm2 / 10000.0) : 0.0;
+  if (errors_px) {
+    std::vector<double> e;
+    e.reserve(members.size());
+    for (int i : members) e.push_back((*errors_px)[i]);
+    std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+    box.median_error_px = e[e.size() / 2];
+  }
   return box;
 }
 

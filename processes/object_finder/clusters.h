@@ -34,12 +34,14 @@ struct ClusterBox {
   // members per 100 cm^2 of the box's visible side area (x + y) * height + x * y: two adjacent sides and the
   // top, what one view of a box shows at most.
   double texture_density = 0;
+  double median_error_px = 0;  // px, members' median reprojection error (0 without errors)
 };
 
 // floor_points: the members' positions in the floor frame (z = height above the floor). The footprint is robust to
 // stray members from 50 points on (yaw without the farthest 2 %, extents between the 1 % and 99 % quantiles);
-// the height is the highest member's.
+// the height is the highest member's. errors_px (optional, parallel to floor_points): the points' reprojection
+// errors, whose median over the members becomes median_error_px.
 ClusterBox FitClusterBox(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<int>& members,
-                         const FloorPlane& floor);
+                         const FloorPlane& floor, const std::vector<double>* errors_px = nullptr);
 
 }  // namespace objscan

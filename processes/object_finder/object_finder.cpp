@@ -57,6 +57,8 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
   if (o.min_observations < 0) e << "min_observations must be >= 0; ";
   positive(o.max_reprojection_error_px, "max_reprojection_error_px");
   if (!(o.max_error_ratio >= 1) || !std::isfinite(o.max_error_ratio)) e << "max_error_ratio must be >= 1; ";
+  if (!(o.max_point_error_ratio >= o.max_error_ratio) || !std::isfinite(o.max_point_error_ratio))
+    e << "max_point_error_ratio must be >= max_error_ratio; ";
   if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min_height_mm must be >= 0; ";
   if (!(o.max_height_mm > o.min_height_mm) || !std::isfinite(o.max_height_mm))
     e << "max_height_mm must be > min_height_mm; ";
@@ -253,10 +255,12 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     std::nth_element(errors_px.begin(), errors_px.begin() + errors_px.size() / 2, errors_px.end());
     map_error_px = errors_px[errors_px.size() / 2];
   }
-  const double max_error_px =
-      std::min(options_.max_reprojection_error_px, options_.max_error_ratio * std::max(map_error_px, kMinMapErrorPx));
+  const double map_scale_px = std::max(map_error_px, kMinMapErrorPx);
+  const double max_error_px = std::min(options_.max_reprojection_error_px, options_.max_point_error_ratio * map_scale_px);
+  cluster_error_limit_px_ = options_.max_error_ratio * map_scale_px;
   std::vector<Eigen::Vector3d> floor_points;
-  std::vector<int> source;  // index into input.landmarks
+  std::vector<double> point_errors_px;  // parallel to floor_points
+  std::vector<int> source;              // index into input.landmarks
   int inconsistent = 0;
   for (int i : valid) {
     const MapLandmark& l = input.landmarks[i];
@@ -269,6 +273,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
       continue;
     }
     floor_points.push_back(f);
+    point_errors_px.push_back(l.reprojection_error_px);
     source.push_back(i);
   }
   result_.points_inconsistent = inconsistent;
@@ -282,7 +287,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
   std::vector<Cluster> clusters(groups.size());
   for (size_t k = 0; k < groups.size(); ++k) {
     Cluster& c = clusters[k];
-    c.box = FitClusterBox(floor_points, groups[k], floor_);
+    c.box = FitClusterBox(floor_points, groups[k], floor_, &point_errors_px);
     c.rejection = CheckRule(c.box);
     const bool size_only = (c.rejection == "too large" || c.rejection == "too high") &&
                            CheckRule(c.box, 1 + options_.look_closer_margin).empty();
@@ -295,7 +300,7 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
     }
   }
   std::vector<std::vector<int>> members = groups;
-  MergeFragments(floor_points, &label, &members, &clusters);
+  MergeFragments(floor_points, point_errors_px, &label, &members, &clusters);
   for (size_t k = 0; k < clusters.size(); ++k) {
     Cluster& c = clusters[k];
     int fresh_members = 0;
@@ -311,7 +316,8 @@ std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput&
 // (room_01: a 268 mm sphere in pieces of 20, 13 and 3 landmarks, never a candidate). Pieces rejected for such
 // reasons are linked again at twice the distance; a group of pieces that passes the rule as a whole replaces them.
 // Pieces of walls and tables merge into something too large or too high and stay as they were.
-void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
+void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_points,
+                                  const std::vector<double>& point_errors_px, std::vector<int>* label,
                                   std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const {
   std::vector<int> fragment_points, fragment_of;  // indices into floor_points; the cluster each came from
   for (size_t k = 0; k < clusters->size(); ++k) {
@@ -346,7 +352,7 @@ void ObjectFinder::MergeFragments(const std::vector<Eigen::Vector3d>& floor_poin
     if (pieces.size() < 2) continue;
     std::sort(merged.begin(), merged.end());
     Cluster c;
-    c.box = FitClusterBox(floor_points, merged, floor_);
+    c.box = FitClusterBox(floor_points, merged, floor_, &point_errors_px);
     c.rejection = CheckRule(c.box);
     if (!c.rejection.empty()) continue;
     const int new_label = static_cast<int>(clusters->size());
@@ -389,6 +395,7 @@ std::string ObjectFinder::CheckRule(const ClusterBox& box, double size_scale) co
   if (box.lowest_mm > options_.floor_contact_mm) return "not on the floor";
   if (box.points < options_.min_target_points) return "too few points";
   if (box.texture_density < options_.min_texture_density) return "untextured";
+  if (box.median_error_px > cluster_error_limit_px_) return "outline only";
   return "";
 }
 

@@ -11,13 +11,14 @@
 //  2. Floor: RANSAC + least squares (floor_plane.h) on all landmarks; the last good floor is kept when a fit fails.
 //     Nothing else happens before the first floor (state SEARCHING).
 //  3. Points well observed (num_observations >= min_observations, error <= max_reprojection_error_px and <=
-//     max_error_ratio times the map's median error: no silhouette corners) with a height
+//     max_point_error_ratio times the map's median error: no silhouette corners) with a height
 //     above the floor in (min_height_mm, max_height_mm] are clustered (single linkage, cluster_distance_mm) and each
 //     cluster (>= 3 points) gets a box in the floor frame (clusters.h): centre, yaw, extents, height, lowest point,
 //     texture density.
 //  4. Target rule: largest horizontal extent and height within [target_min_size_mm * (1 - size_tolerance),
 //     target_max_size_mm * (1 + size_tolerance)], lowest point <= floor_contact_mm above the floor, at least
-//     min_target_points members and min_texture_density members per 100 cm^2 of visible side area, and free space
+//     min_target_points members and min_texture_density members per 100 cm^2 of visible side area, a median
+//     reprojection error at most max_error_ratio times the map's (not outline points only), and free space
 //     around it: at most max(3, 10 %) other points higher than floor_contact_mm within clearance_mm of its box (the
 //     noisy landmarks where an object meets the floor are no neighbours; sparse walls and pillars
 //     break into target-sized pieces at cluster_distance_mm; their neighbours reject them). Pieces rejected as not
@@ -82,13 +83,15 @@ struct ObjectFinderOptions {
   double clearance_mm = 150.0;        // mm, free space around a target: other landmarks above the floor within
                                       // this margin of its box make it a piece of something larger
   double min_texture_density = 1.0;   // landmarks per 100 cm^2 of the box's visible side area
-  // Points of a textured surface are as consistent as the floor's: a point above the floor is used only when its
-  // reprojection error is at most max_error_ratio times the map's median (all usable landmarks', mostly the floor's;
-  // taken as at least 0.05 px). The others are corners an object's silhouette makes with the background behind it;
-  // they slide as the view moves: an untextured object's only landmarks (room_10: a plain 142 mm sphere, 0.38-0.46 px
-  // against the map's 0.058 px and the textured target's 0.04 px, passed the density rule) and a box's outer ring
-  // (room_05: 0.25-0.95 px, 258 x 218 mm measured 358 x 257 mm, rejected as too large).
+  // Points of a textured surface are as consistent as the floor's; the corners an object's silhouette makes with
+  // the background behind it slide as the view moves. A point above the floor whose reprojection error is above
+  // max_point_error_ratio times the map's median (all usable landmarks', mostly the floor's; taken as at least
+  // 0.05 px) is left out (room_05: a box's outer ring at 0.25-0.95 px against 0.04 px inside made 258 x 218 mm
+  // measure 358 x 257 mm, too large); a cluster whose members' median is above max_error_ratio times it is
+  // "outline only", an untextured object (room_10: a plain 142 mm sphere at 0.38-0.46 px against the map's
+  // 0.058 px passed the density rule). A textured target seen from 3 m: 0.5-4.2x the map's, median 2.3x (room_07).
   double max_error_ratio = 3.0;
+  double max_point_error_ratio = 5.0;
   int min_target_points = 15;         // landmarks a target needs
   // persistence
   double track_match_distance_mm = 100.0;  // mm, horizontal centre distance that continues a track
@@ -169,7 +172,8 @@ struct ClusterReport {  // every cluster of the update (for logs and tests)
   ClusterBox box;
   bool passes = false;
   std::string rejection;  // why the rule rejects it: "too high", "too large", "too low", "too small",
-                          // "not on the floor", "not isolated", "too few points", "untextured" ("" when it passes)
+                          // "not on the floor", "not isolated", "too few points", "untextured", "outline only"
+                          // ("" when it passes)
   bool in_view = false;
   bool observed = false;
 };
@@ -200,7 +204,7 @@ struct FinderResult {
   FloorPlane floor;
   int floor_points = 0;        // inliers of the floor in force
   int points_used = 0;         // well-observed landmarks above the floor that were clustered
-  int points_inconsistent = 0; // landmarks above the floor left out for their reprojection error (max_error_ratio)
+  int points_inconsistent = 0; // landmarks above the floor left out for their error (max_point_error_ratio)
   double map_error_px = 0;     // px, the map's median reprojection error that max_error_ratio scales
   int rejected_landmarks = 0;  // dropped in this update (non-finite, negative counts)
   // Set only in the update that dropped a confirmed target: why (the rule's reason, in how many views in a row, the
@@ -254,8 +258,9 @@ class ObjectFinder {
   void UpdateFloor(const FinderInput& input, const std::vector<int>& valid);
   std::vector<Cluster> FindClusters(const FinderInput& input, const std::vector<int>& valid,
                                     const std::vector<char>& fresh);
-  void MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, std::vector<int>* label,
-                      std::vector<std::vector<int>>* members, std::vector<Cluster>* clusters) const;
+  void MergeFragments(const std::vector<Eigen::Vector3d>& floor_points, const std::vector<double>& point_errors_px,
+                      std::vector<int>* label, std::vector<std::vector<int>>* members,
+                      std::vector<Cluster>* clusters) const;
   // The rule's first failing check ("" when it passes); size_scale widens the upper size limit.
   std::string CheckRule(const ClusterBox& box, double size_scale = 1.0) const;
   // Clustered points outside `members` within clearance_mm of the box (floor frame).
@@ -284,6 +289,7 @@ class ObjectFinder {
   bool floor_valid_ = false;
   FloorPlane floor_;
   int floor_points_ = 0;
+  double cluster_error_limit_px_ = 0;  // px, max_error_ratio x the map's median error in this update
   std::vector<Track> tracks_;  // in creation order (ids ascending)
   int next_track_id_ = 1;
   int target_id_ = -1;  // confirmed (latched) target's track, -1 when none

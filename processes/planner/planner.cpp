@@ -692,6 +692,7 @@ bool Planner::ChooseFrontier(const Eigen::Vector2d* near, double within_mm) {
   int best = -1;
   double best_score = 0;
   reachable_cells_ = 0;
+  frontier_cells_near_visited_ = 0;
   for (int i = 0; i < map_.num_cells(); ++i) {
     if (!cost_field_.Reachable(i)) continue;
     ++reachable_cells_;
@@ -703,7 +704,10 @@ bool Planner::ChooseFrontier(const Eigen::Vector2d* near, double within_mm) {
     if (cost < 250) continue;
     bool visited = false;
     for (const Eigen::Vector2d& g : visited_goals_) visited = visited || (g - c).norm() < 500;
-    if (visited) continue;
+    if (visited) {
+      ++frontier_cells_near_visited_;
+      continue;
+    }
     const double turn = std::abs(WrapAngle(std::atan2(c.y() - base_.y_mm, c.x() - base_.x_mm) - base_.theta_rad));
     double score = cost + 300 * turn;
     if ((c - current_goal).norm() < 200) score *= 0.7;  // keep the goal unless another is clearly nearer
@@ -732,7 +736,19 @@ Planner::Motion Planner::Frontier() {
   }
   if (replan) {
     next_replan_ = now_ + kReplanUs;
-    if (!ChooseFrontier()) {
+    // Frontiers left only near goals given up before (a deadline or a stall while the pose was lost, a goal the
+    // map restart moved): tried again, a few times, before the room counts as explored (room_01: "explored" after
+    // 3.2 m in a 5.3 x 5.9 m room, with the pose lost and the map restarted on the way).
+    bool chosen = ChooseFrontier();
+    if (!chosen && frontier_cells_near_visited_ > 0 && visited_goal_resets_ < kMaxVisitedGoalResets) {
+      ++visited_goal_resets_;
+      Event("frontiers left only near " + std::to_string(visited_goals_.size()) +
+            " goals given up before: trying them again (" + std::to_string(visited_goal_resets_) + " of " +
+            std::to_string(kMaxVisitedGoalResets) + ")");
+      visited_goals_.clear();
+      chosen = ChooseFrontier();
+    }
+    if (!chosen) {
       follower_.Clear();
       const double reachable_m2 = reachable_cells_ * options_.map.cell_mm * options_.map.cell_mm * 1e-6;
       if (views_ == 0 || reachable_m2 < 1.0) {  // no map around the robot yet: look around (again)

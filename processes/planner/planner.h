@@ -321,6 +321,9 @@ class Planner {
   int64_t goal_deadline_ = 0;
   int64_t next_replan_ = 0;
   std::vector<Eigen::Vector2d> visited_goals_;  // frontier goals reached or given up (not chosen again)
+  int frontier_cells_near_visited_ = 0;           // frontier cells the last ChooseFrontier skipped for visited_goals_
+  int visited_goal_resets_ = 0;                   // times visited_goals_ was forgotten because only they were left
+  static constexpr int kMaxVisitedGoalResets = 3;
   std::vector<Eigen::Vector2d> investigate_spots_;
   static constexpr int64_t kInvestigateHoldUs = 5000000;  // µs, a candidate with nowhere to look from: look at it
   int64_t investigate_hold_until_ = -1;  // µs, until then (data time), shuttling on the trail with the head on it
