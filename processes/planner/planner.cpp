@@ -737,11 +737,14 @@ Planner::Motion Planner::Frontier() {
   if (replan) {
     next_replan_ = now_ + kReplanUs;
     // Frontiers left only near goals given up before (a deadline or a stall while the pose was lost, a goal the
-    // map restart moved): tried again, a few times, before the room counts as explored (room_01: "explored" after
+    // map restart moved): tried again, up to 3 times and each after 1 m of driving (a look-around at the start
+    // spent all three at once in room_07), before the room counts as explored (room_01: "explored" after
     // 3.2 m in a 5.3 x 5.9 m room, with the pose lost and the map restarted on the way).
     bool chosen = ChooseFrontier();
-    if (!chosen && frontier_cells_near_visited_ > 0 && visited_goal_resets_ < kMaxVisitedGoalResets) {
+    if (!chosen && frontier_cells_near_visited_ > 0 && visited_goal_resets_ < kMaxVisitedGoalResets &&
+        path_length_mm_ >= path_at_visited_goal_reset_ + kVisitedGoalResetPathMm) {
       ++visited_goal_resets_;
+      path_at_visited_goal_reset_ = path_length_mm_;
       Event("frontiers left only near " + std::to_string(visited_goals_.size()) +
             " goals given up before: trying them again (" + std::to_string(visited_goal_resets_) + " of " +
             std::to_string(kMaxVisitedGoalResets) + ")");

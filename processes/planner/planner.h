@@ -323,7 +323,9 @@ class Planner {
   std::vector<Eigen::Vector2d> visited_goals_;  // frontier goals reached or given up (not chosen again)
   int frontier_cells_near_visited_ = 0;           // frontier cells the last ChooseFrontier skipped for visited_goals_
   int visited_goal_resets_ = 0;                   // times visited_goals_ was forgotten because only they were left
+  double path_at_visited_goal_reset_ = -1e9;     // mm, path_length_mm_ at the last reset
   static constexpr int kMaxVisitedGoalResets = 3;
+  static constexpr double kVisitedGoalResetPathMm = 1000;
   std::vector<Eigen::Vector2d> investigate_spots_;
   static constexpr int64_t kInvestigateHoldUs = 5000000;  // µs, a candidate with nowhere to look from: look at it
   int64_t investigate_hold_until_ = -1;  // µs, until then (data time), shuttling on the trail with the head on it
