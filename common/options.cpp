@@ -85,16 +85,28 @@ void OptionParser::Add(const std::string& name, bool* value, const std::string& 
 }
 
 void OptionParser::AddChannel(std::string* channel, const std::string& help) {
-  if (channels_.empty())
-    options_.push_back({"channel", "rename a channel: DEFAULT=NAME (repeatable)", false,
-                        [this](const std::string& s) { return RenameChannel(s); },
-                        [this] {
-                          std::string renamed;
-                          for (const Channel& c : channels_)
-                            if (*c.channel != c.default_name)
-                              renamed += (renamed.empty() ? "" : " ") + c.default_name + "=" + *c.channel;
-                          return renamed.empty() ? std::string("none renamed") : renamed;
-                        }});
+  if (channels_.empty()) {
+    Option o{"channel", "rename a channel: DEFAULT=NAME (repeatable)", false,
+             [this](const std::string& s) { return RenameChannel(s); }, [] { return std::string(); }};
+    o.usage = [this] {
+      std::string text = "  --channel DEFAULT=NAME\n      rename a channel (repeatable); the channels and their use:\n";
+      for (const Channel& c : channels_)
+        text += "        " + c.default_name + (*c.channel != c.default_name ? " (now " + *c.channel + ")" : "") +
+                ": " + c.help + "\n";
+      return text;
+    };
+    o.effective = [this] {
+      std::string text;
+      for (const Channel& c : channels_) text += "  channel " + c.default_name + " = " + *c.channel + "\n";
+      return text;
+    };
+    o.bad_value_hint = [this] {
+      std::string list = " (DEFAULT=NAME, DEFAULT one of:";
+      for (const Channel& c : channels_) list += " " + c.default_name;
+      return list + ")";
+    };
+    options_.push_back(std::move(o));
+  }
   channels_.push_back({*channel, channel, help});
 }
 
@@ -143,7 +155,7 @@ bool OptionParser::ReadFile(const std::string& path, std::string* error) {
     }
     if (!option->set(value)) {
       *error = path + ":" + std::to_string(line_number) + ": bad value '" + value + "' for '" + name + "'";
-      if (name == "channel") *error += ChannelList();
+      if (option->bad_value_hint) *error += option->bad_value_hint();
       return false;
     }
   }
@@ -199,7 +211,7 @@ bool OptionParser::ParseArgs(const std::vector<std::string>& args, std::string* 
     }
     if (!option->set(value)) {
       *error = "bad value '" + value + "' for option '--" + name + "'";
-      if (name == "channel") *error += ChannelList();
+      if (option->bad_value_hint) *error += option->bad_value_hint();
       return false;
     }
   }
@@ -212,21 +224,12 @@ bool OptionParser::Parse(int argc, char** argv, std::string* error) {
   return ParseArgs(args, error);
 }
 
-std::string OptionParser::ChannelList() const {
-  std::string list = " (DEFAULT=NAME, DEFAULT one of:";
-  for (const Channel& c : channels_) list += " " + c.default_name;
-  return list + ")";
-}
-
 std::string OptionParser::Usage() const {
   std::ostringstream os;
   os << "usage: " << program_ << " [options]\n" << description_ << "\n\noptions:\n";
   for (const auto& o : options_) {
-    if (o.name == "channel") {
-      os << "  --channel DEFAULT=NAME\n      rename a channel (repeatable); the channels and their use:\n";
-      for (const Channel& c : channels_)
-        os << "        " << c.default_name << (*c.channel != c.default_name ? " (now " + *c.channel + ")" : "")
-           << ": " << c.help << "\n";
+    if (o.usage) {
+      os << o.usage();
       continue;
     }
     os << "  --" << o.name << (o.is_flag ? "" : " VALUE") << "\n      " << o.help << " (default: " << o.get()
@@ -239,13 +242,7 @@ std::string OptionParser::Usage() const {
 std::string OptionParser::Effective() const {
   std::ostringstream os;
   os << program_ << " configuration:\n";
-  for (const auto& o : options_) {
-    if (o.name != "channel") {
-      os << "  " << o.name << " = " << o.get() << "\n";
-      continue;
-    }
-    for (const Channel& c : channels_) os << "  channel " << c.default_name << " = " << *c.channel << "\n";
-  }
+  for (const auto& o : options_) os << (o.effective ? o.effective() : "  " + o.name + " = " + o.get() + "\n");
   return os.str();
 }
 

@@ -47,6 +47,9 @@ class OptionParser {
     bool is_flag = false;
     std::function<bool(const std::string&)> set;
     std::function<std::string()> get;
+    // Optional, for an option that stands for several values (--channel): its own lines in Usage() and
+    // Effective(), and what a bad value's error adds.
+    std::function<std::string()> usage, effective, bad_value_hint;
   };
   struct Channel {
     std::string default_name;
@@ -55,7 +58,6 @@ class OptionParser {
   };
   Option* Find(const std::string& name);
   bool RenameChannel(const std::string& rename);
-  std::string ChannelList() const;
   bool ReadFile(const std::string& path, std::string* error);
 
   std::string program_;

@@ -242,42 +242,39 @@ void ObjectFinder::UpdateFloor(const FinderInput& input, const std::vector<int>&
 std::vector<ObjectFinder::Cluster> ObjectFinder::FindClusters(const FinderInput& input, const std::vector<int>& valid,
                                                               const std::vector<char>& fresh) {
   const Eigen::Isometry3d floor_from_world = floor_.FloorFromWorld();
-  // The map's median reprojection error over the landmarks usable at all; points much worse than it are not
-  // points of a textured surface (see max_error_ratio) and are left out.
+  // The landmarks usable at all, and their median reprojection error (the map's, mostly the floor's): points much
+  // worse than it are not points of a textured surface (see max_point_error_ratio) and are left out.
+  std::vector<int> usable;
   std::vector<double> errors_px;
-  for (int i : valid) {
-    const MapLandmark& l = input.landmarks[i];
-    if (l.num_observations >= options_.min_observations && l.reprojection_error_px <= options_.max_reprojection_error_px)
-      errors_px.push_back(l.reprojection_error_px);
-  }
-  double map_error_px = 0;
-  if (!errors_px.empty()) {
-    std::nth_element(errors_px.begin(), errors_px.begin() + errors_px.size() / 2, errors_px.end());
-    map_error_px = errors_px[errors_px.size() / 2];
-  }
-  const double map_scale_px = std::max(map_error_px, kMinMapErrorPx);
-  const double max_error_px = std::min(options_.max_reprojection_error_px, options_.max_point_error_ratio * map_scale_px);
-  cluster_error_limit_px_ = options_.max_error_ratio * map_scale_px;
-  std::vector<Eigen::Vector3d> floor_points;
-  std::vector<double> point_errors_px;  // parallel to floor_points
-  std::vector<int> source;              // index into input.landmarks
-  int inconsistent = 0;
   for (int i : valid) {
     const MapLandmark& l = input.landmarks[i];
     if (l.num_observations < options_.min_observations || l.reprojection_error_px > options_.max_reprojection_error_px)
       continue;
+    usable.push_back(i);
+    errors_px.push_back(l.reprojection_error_px);
+  }
+  result_.map_error_px = 0;
+  if (!errors_px.empty()) {
+    std::nth_element(errors_px.begin(), errors_px.begin() + errors_px.size() / 2, errors_px.end());
+    result_.map_error_px = errors_px[errors_px.size() / 2];
+  }
+  const double max_error_px = options_.max_point_error_ratio * std::max(result_.map_error_px, kMinMapErrorPx);
+  std::vector<Eigen::Vector3d> floor_points;
+  std::vector<double> point_errors_px;  // parallel to floor_points
+  std::vector<int> source;              // index into input.landmarks
+  result_.points_inconsistent = 0;
+  for (int i : usable) {
+    const MapLandmark& l = input.landmarks[i];
     const Eigen::Vector3d f = floor_from_world * l.position_mm;
     if (f.z() <= options_.min_height_mm || f.z() > options_.max_height_mm) continue;
     if (l.reprojection_error_px > max_error_px) {
-      ++inconsistent;
+      ++result_.points_inconsistent;
       continue;
     }
     floor_points.push_back(f);
     point_errors_px.push_back(l.reprojection_error_px);
     source.push_back(i);
   }
-  result_.points_inconsistent = inconsistent;
-  result_.map_error_px = map_error_px;
   result_.points_used = static_cast<int>(floor_points.size());
   const std::vector<std::vector<int>> groups =
       EuclideanClusters(floor_points, options_.cluster_distance_mm, kMinClusterPoints);
@@ -395,7 +392,8 @@ std::string ObjectFinder::CheckRule(const ClusterBox& box, double size_scale) co
   if (box.lowest_mm > options_.floor_contact_mm) return "not on the floor";
   if (box.points < options_.min_target_points) return "too few points";
   if (box.texture_density < options_.min_texture_density) return "untextured";
-  if (box.median_error_px > cluster_error_limit_px_) return "outline only";
+  if (box.median_error_px > options_.max_error_ratio * std::max(result_.map_error_px, kMinMapErrorPx))
+    return "outline only";
   return "";
 }
 

@@ -289,7 +289,6 @@ class ObjectFinder {
   bool floor_valid_ = false;
   FloorPlane floor_;
   int floor_points_ = 0;
-  double cluster_error_limit_px_ = 0;  // px, max_error_ratio x the map's median error in this update
   std::vector<Track> tracks_;  // in creation order (ids ascending)
   int next_track_id_ = 1;
   int target_id_ = -1;  // confirmed (latched) target's track, -1 when none
