@@ -45,7 +45,7 @@ bool ValidateRobotSimOptions(const RobotSimOptions& o, std::string* why) {
       e.heading_noise_rad_per_sqrt_m < 0 || !Finite(e.head_noise_rad) || e.head_noise_rad < 0)
     return fail("odometry noise levels must be >= 0");
   if (o.odometry_origin != "start" && o.odometry_origin != "world")
-    return fail("--odometry-origin must be start or world");
+    return fail("odometry_origin must be start or world");
   if (!Finite(o.max_speed_mm_s) || o.max_speed_mm_s <= 0 || !Finite(o.max_omega_rad_s) || o.max_omega_rad_s <= 0 ||
       !Finite(o.max_head_rate_rad_s) || o.max_head_rate_rad_s <= 0)
     return fail("speed limits must be > 0");

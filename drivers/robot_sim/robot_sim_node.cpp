@@ -63,9 +63,9 @@ bool ParseList(const std::string& text, size_t count, double* values) {
 
 void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   // Only what a user sets (issue 27): the scene, mode, frames, rate, seed and orbit, the robot (geometry, footprint,
-  // speed limits), the odometry error model (the README's table), the image encoding, the grey stretch of the tracking
-  // loss tests, lock-step, ground truth, odometry on/off and the channels. Every other field keeps its default here;
-  // tests and tools set the struct directly.
+  // speed limits), the image encoding, the grey stretch of the tracking loss tests, lock-step, ground truth, odometry
+  // on/off and the channels. Every other field keeps its default here (the odometry error model too, as the image
+  // noise: the simulated robot's sensors, in the README's table); tests and tools set the struct directly.
   p.Add("scene", &o->scene, "scene file (drivers/robot_sim/scenes/*.scene; format in drivers/robot_sim/README.md)");
   p.Add("mode", &o->mode, "orbit (scripted circle around the target) or command (follow ROBOT_COMMAND)");
   p.Add("frames", &o->frames, "frames to publish (command mode: 0 = until stopped)");
@@ -83,16 +83,6 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
-  p.Add("odometry-scale-error", &o->odometry_scale_error, "relative odometry distance error (wheel slip), 0.02 = 2 %");
-  p.Add("odometry-yaw-scale-error", &o->odometry_yaw_scale_error, "relative error of odometry heading changes");
-  p.Add("heading-drift-deg-per-m", &o->heading_drift_deg_per_m, "deg of odometry heading drift per metre travelled");
-  p.Add("distance-noise", &o->distance_noise, "per-frame odometry distance noise std, fraction of the step");
-  p.Add("heading-noise-deg-per-sqrt-m", &o->heading_noise_deg_per_sqrt_m, "odometry heading random walk, deg/sqrt(m)");
-  p.Add("pan-bias-deg", &o->pan_bias_deg, "deg, pan encoder bias");
-  p.Add("tilt-bias-deg", &o->tilt_bias_deg, "deg, tilt encoder bias");
-  p.Add("head-noise-deg", &o->head_noise_deg, "deg, std of the pan/tilt reading noise");
-  p.Add("sync-offset-ms", &o->sync_offset_ms, "ms, odometry utime minus image utime (time-stamping error)");
-  p.Add("odometry-origin", &o->odometry_origin, "start (odometry frame = robot start pose) or world");
   p.Add("max-speed", &o->max_speed_mm_s, "mm/s, command mode speed limit");
   p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, command mode yaw rate limit");
   p.Add("footprint-radius-mm", &o->footprint_radius_mm,
@@ -176,7 +166,7 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
   if (o.seed < 0) return fail("--seed must be >= 0");
   if (!std::isfinite(o.sync_offset_ms) || std::abs(o.sync_offset_ms) > 1e6)
-    return fail("--sync-offset-ms out of range");
+    return fail("sync_offset_ms out of range");
   if (!std::isfinite(o.max_omega_deg_s) || !std::isfinite(o.max_head_rate_deg_s))
     return fail("rate limits must be finite");
   std::string sim_why;
