@@ -15,10 +15,9 @@
 namespace objscan {
 
 void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
-  // Only what a user sets (issue 27): plumbing, the image queue and threads, the track budget and the corner quality
-  // (the replay's help and the docs give them as examples), the LK window (the node test's command line), and the
-  // descriptor tracking of the wide-baseline profile (scripts/profiles). Every other field keeps its default here;
-  // tests and tools set the struct directly.
+  // Only what a user sets (issue 27): plumbing, the image queue and threads, and the descriptor tracking of the
+  // wide-baseline profile (scripts/profiles). Every other field keeps its default here (the status period, the KLT
+  // track budget, corner quality and LK window among them); tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.AddChannel(&o->image_channel, "input image channel (image_t)");
   p.AddChannel(&o->info_channel, "optional camera_info_t channel that fixes the image size (\"\" = ignore)");
@@ -26,12 +25,8 @@ void AddTrackerNodeOptions(OptionParser& p, TrackerNodeOptions* o) {
   p.AddChannel(&o->control_channel, "control_t channel (end of stream in, finished out)");
   p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
-  p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   KltTrackerOptions* k = &o->tracker;
-  p.Add("klt-max-tracks", &k->max_tracks, "upper bound on live tracks per frame");
-  p.Add("klt-quality-level", &k->quality_level, "Shi-Tomasi quality relative to the strongest corner, (0, 1)");
-  p.Add("klt-win-size", &k->win_size, "px, Lucas-Kanade window side (odd)");
   p.Add("threads", &k->threads, "OpenCV threads (cv::setNumThreads)");
   p.Add("descriptor-tracking", &o->descriptor_tracking,
         "off (KLT) | on (descriptor matching only, wide-baseline image sets) | auto (KLT, switch to descriptors "
@@ -51,7 +46,7 @@ bool ValidateTrackerNodeOptions(const TrackerNodeOptions& o, std::string* why) {
   if (o.control_channel.empty()) e << "control-channel must not be empty; ";
   if (o.status_channel.empty()) e << "status-channel must not be empty; ";
   if (o.image_queue_capacity < 1) e << "image-queue-capacity must be >= 1; ";
-  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status_period_s must be > 0; ";
   std::string tracker_why;
   if (!ValidateKltTrackerOptions(o.tracker, &tracker_why)) e << tracker_why << "; ";
   if (o.descriptor_tracking != "off" && o.descriptor_tracking != "on" && o.descriptor_tracking != "auto")

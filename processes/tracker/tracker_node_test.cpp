@@ -348,8 +348,7 @@ TEST(TrackerNodeOptionsTest, ValidationAndParsing) {
   EXPECT_TRUE(ValidateTrackerNodeOptions(o, &why)) << why;
   OptionParser parser("tracker", "test");
   AddTrackerNodeOptions(parser, &o);
-  ASSERT_TRUE(parser.ParseArgs({"--klt-win-size", "15", "--image-queue-capacity", "5", "--threads", "2"}, &why)) << why;
-  EXPECT_EQ(o.tracker.win_size, 15);
+  ASSERT_TRUE(parser.ParseArgs({"--image-queue-capacity", "5", "--threads", "2"}, &why)) << why;
   EXPECT_EQ(o.image_queue_capacity, 5);
   EXPECT_EQ(o.tracker.threads, 2);
   TrackerNodeOptions bad = o;

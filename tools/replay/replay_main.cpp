@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   parser.Add("tracker-only", &tracker_only, "run only the tracker");
   parser.Add("no-dense", &no_dense, "run tracker and pose solver, not the dense modeler");
   parser.Add("pose-model", &options.pose_model, "pose solver camera model: 6dof or 4dof");
-  parser.Add("tracker-args", &options.tracker_args, "extra tracker options, e.g. \"--klt-max-tracks 800\"");
+  parser.Add("tracker-args", &options.tracker_args, "extra tracker options, e.g. \"--descriptor-tracking on\"");
   parser.Add("pose-solver-args", &options.pose_solver_args, "extra pose solver options (as on its command line)");
   parser.Add("dense-modeler-args", &options.dense_modeler_args,
              "extra dense modeler options, e.g. \"--ridge-smoothing-radius 6\"");
