@@ -62,7 +62,7 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
   if (!(o.min_height_mm >= 0) || !std::isfinite(o.min_height_mm)) e << "min_height_mm must be >= 0; ";
   if (!(o.max_height_mm > o.min_height_mm) || !std::isfinite(o.max_height_mm))
     e << "max_height_mm must be > min_height_mm; ";
-  positive(o.cluster_distance_mm, "cluster-distance");
+  positive(o.cluster_distance_mm, "cluster_distance_mm");
   positive(o.target_min_size_mm, "target-min-size");
   if (!(o.target_max_size_mm >= o.target_min_size_mm) || !std::isfinite(o.target_max_size_mm))
     e << "target-max-size must be >= target-min-size; ";
@@ -72,7 +72,7 @@ bool ValidateObjectFinderOptions(const ObjectFinderOptions& o, std::string* why)
   if (o.min_target_points < kMinClusterPoints) e << "min_target_points must be >= 3; ";
   if (!(o.clearance_mm >= 0) || !std::isfinite(o.clearance_mm)) e << "clearance_mm must be >= 0; ";
   positive(o.track_match_distance_mm, "track_match_distance_mm");
-  if (o.min_views < 1) e << "min-views must be >= 1; ";
+  if (o.min_views < 1) e << "min_views must be >= 1; ";
   if (!(o.min_view_baseline_mm >= 0) || !std::isfinite(o.min_view_baseline_mm))
     e << "min_view_baseline_mm must be >= 0; ";
   if (!(o.min_view_bearing_deg >= 0 && o.min_view_bearing_deg <= 180))

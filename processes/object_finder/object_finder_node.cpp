@@ -58,8 +58,8 @@ std::string JsonVector(const Eigen::Vector3d& v, const char* format) {
 
 void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   // Only what a user sets (issue 27): plumbing and channels (with the final poses and the model that measures
-  // target.json), the TARGET period, the target's size range, and the clustering distance and views to confirm (the
-  // node test's command line). Every other field keeps its default here; tests and tools set the struct directly.
+  // target.json) and the target's size range. Every other field keeps its default here (the TARGET and status
+  // periods, the clustering distance and the views to confirm among them); tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.AddChannel(&o->landmarks_channel, "input sparse map channel (landmarks_t)");
   p.AddChannel(&o->pose_channel, "input camera pose channel (pose_t)");
@@ -68,8 +68,6 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.AddChannel(&o->target_channel, "output target_t channel");
   p.AddChannel(&o->control_channel, "control_t channel (end of stream in, finished out)");
   p.AddChannel(&o->status_channel, "process_status_t channel");
-  p.Add("target-period", &o->target_period_s, "s, the latest TARGET is repeated this often");
-  p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   p.Add("output-dir", &o->output_dir, "write target.json here at end of stream (\"\" = none)");
   p.AddChannel(&o->final_pose_channel,
@@ -77,10 +75,8 @@ void AddObjectFinderNodeOptions(OptionParser& p, ObjectFinderNodeOptions* o) {
   p.AddChannel(&o->model_channel,
         "final model (model_t): target.json's box is measured on its voxels (\"\" = the landmarks' box, no wait)");
   ObjectFinderOptions* f = &o->finder;
-  p.Add("cluster-distance", &f->cluster_distance_mm, "mm, linkage distance of the clustering");
   p.Add("target-min-size", &f->target_min_size_mm, "mm, smallest target (largest horizontal extent and height)");
   p.Add("target-max-size", &f->target_max_size_mm, "mm, largest target (largest horizontal extent and height)");
-  p.Add("min-views", &f->min_views, "distinct views that confirm a target");
 }
 
 bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& o, std::string* why) {
@@ -92,8 +88,8 @@ bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& o, std::stri
   if (o.target_channel.empty()) e << "target-channel must not be empty; ";
   if (o.control_channel.empty()) e << "control-channel must not be empty; ";
   if (o.status_channel.empty()) e << "status-channel must not be empty; ";
-  if (!(o.target_period_s > 0.0) || !std::isfinite(o.target_period_s)) e << "target-period must be > 0; ";
-  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  if (!(o.target_period_s > 0.0) || !std::isfinite(o.target_period_s)) e << "target_period_s must be > 0; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status_period_s must be > 0; ";
   std::string finder_why;
   if (!ValidateObjectFinderOptions(o.finder, &finder_why)) e << finder_why << "; ";
   const std::string msg = e.str();

@@ -92,7 +92,7 @@ struct ObjectFinderNodeOptions {
   ObjectFinderOptions finder;                       // the finder's options
 };
 
-// Registers the options a user sets on the command line (the finder's without prefix, e.g. --cluster-distance; the
+// Registers the options a user sets on the command line (the finder's without prefix, e.g. --target-min-size; the
 // rest keep their defaults: code and tests set the struct's fields directly).
 void AddObjectFinderNodeOptions(OptionParser& parser, ObjectFinderNodeOptions* options);
 bool ValidateObjectFinderNodeOptions(const ObjectFinderNodeOptions& options, std::string* why);

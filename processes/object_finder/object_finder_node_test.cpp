@@ -484,17 +484,15 @@ TEST(ObjectFinderNodeOptionsTest, ParsesAndValidates) {
   OptionParser parser("object_finder", "test");
   AddObjectFinderNodeOptions(parser, &o);
   std::string error;
-  ASSERT_TRUE(parser.ParseArgs({"--cluster-distance", "60", "--min-views=4", "--target-max-size", "250"}, &error))
-      << error;
-  EXPECT_EQ(o.finder.cluster_distance_mm, 60);
-  EXPECT_EQ(o.finder.min_views, 4);
+  ASSERT_TRUE(parser.ParseArgs({"--target-min-size", "60", "--target-max-size=250"}, &error)) << error;
+  EXPECT_EQ(o.finder.target_min_size_mm, 60);
   EXPECT_EQ(o.finder.target_max_size_mm, 250);
   EXPECT_TRUE(ValidateObjectFinderNodeOptions(o, &error));
   o.target_period_s = 0;
   o.finder.min_views = 0;
   EXPECT_FALSE(ValidateObjectFinderNodeOptions(o, &error));
-  EXPECT_NE(error.find("target-period"), std::string::npos);
-  EXPECT_NE(error.find("min-views"), std::string::npos);
+  EXPECT_NE(error.find("target_period_s"), std::string::npos);
+  EXPECT_NE(error.find("min_views"), std::string::npos);
 }
 
 }  // namespace
