@@ -45,7 +45,8 @@ const char* kWorld = "world";
 void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   // Only what a user sets (issue 27): plumbing, the mission's radius, speeds, budgets and next views, the map's extent
   // and the floor-support switch, and the robot (footprint, safety margin, clearance heights, geometry, speed and
-  // head limits). Every other field keeps its default here; tests and tools set the struct directly.
+  // head limits). Every other field keeps its default here (the status period among them); tests and tools set the
+  // struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.AddChannel(&o->pose_channel, "input camera pose channel (pose_t); one command per pose");
   p.AddChannel(&o->odometry_channel, "input odometry_t channel");
@@ -58,7 +59,6 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("driver-name", &o->driver_name, "process name of the driver asked to end the stream when the plan is done");
   p.Add("output-dir", &o->output_dir, "write plan.json here at end of stream (\"\" = none)");
-  p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after answering end of stream");
   PlannerOptions* q = &o->planner;
   p.Add("orbit-radius", &q->orbit_radius_mm, "mm, radius of the circle around the target");
@@ -120,7 +120,7 @@ bool ValidatePlannerNodeOptions(const PlannerNodeOptions& o, std::string* why) {
         {&o.command_channel, "command-channel"}, {&o.control_channel, "control-channel"},
         {&o.status_channel, "status-channel"}, {&o.driver_name, "driver-name"}})
     if (value->empty()) e << name << " must not be empty; ";
-  if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status_period_s must be > 0; ";
   PlannerOptions p;
   std::string sub;
   if (!ToPlannerOptions(o, &p, &sub))
