@@ -830,9 +830,10 @@ int Viewer::Run() {
 
 void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   // Only what a user sets (issue 27): plumbing and channels (the processes' channels can be renamed), the bus or log,
-  // the window and view, playback, the screenshot, the benchmark and the voxel drawing its README documents. The
-  // start-up state the panels change at run time (follow, min votes, landmark colouring, its red error), vsync, the
-  // cube-instance limit and the event budget keep their defaults here; tests and code set the struct directly.
+  // the window and view, playback, the screenshot, the benchmark and the voxel drawing paths viewer_render_test
+  // chooses. The start-up state the panels change at run time (follow, min votes, landmark colouring, its red error),
+  // vsync, the cube-instance limit, the event budget, the hidden-face culling and the auto style's point size keep
+  // their defaults here; tests and code set the struct directly.
   parser.Add("name", &o->name, "process name (status name, log prefix)");
   parser.Add("lcm-url", &o->lcm_url, "live LCM URL (default: the objscan multicast URL); ignored with --log");
   parser.Add("log", &o->log, "LCM log file to play instead of a live bus");
@@ -877,11 +878,8 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("voxel-style", &o->voxel_style, "voxels as cubes, points, or auto (points above max_cube_instances)");
   parser.Add("max-mesh-faces", &o->max_mesh_faces,
              "exposed voxel faces drawn as one static mesh at most (else instanced)");
-  parser.Add("cull-hidden-voxels", &o->cull_hidden_voxels, "skip voxel faces hidden by neighbouring voxels");
   parser.Add("voxel-lod-px", &o->voxel_lod_px,
              "px, draw merged 2x2x2.. voxel cells as points while they project at most this wide (0 = off)");
-  parser.Add("voxel-points-px", &o->voxel_points_px,
-             "px, auto style: voxels as points while they project at most this wide (0 = by count only)");
   parser.Add("voxel-occlusion-min-points", &o->voxel_occlusion_min_points,
              "points: send only the points a CPU depth pass finds visible, from this many points (0 = off)");
 }
@@ -907,7 +905,7 @@ bool ValidateViewerOptions(const ViewerOptions& o, std::string* why) {
     return fail("--voxel-style must be auto, cubes or points");
   if (o.max_cube_instances < 0 || o.max_mesh_faces < 0) return fail("max_cube_instances / --max-mesh-faces >= 0");
   if (!(o.voxel_lod_px >= 0) || !(o.voxel_points_px >= 0) || o.voxel_occlusion_min_points < 0)
-    return fail("--voxel-lod-px >= 0, --voxel-points-px >= 0, --voxel-occlusion-min-points >= 0");
+    return fail("--voxel-lod-px >= 0, voxel_points_px >= 0, --voxel-occlusion-min-points >= 0");
   if (o.benchmark_shape != "ball" && o.benchmark_shape != "scatter")
     return fail("--benchmark-shape must be ball or scatter");
   if (o.landmark_coloring != "error" && o.landmark_coloring != "age" && o.landmark_coloring != "rgb")
