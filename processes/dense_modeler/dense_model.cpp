@@ -22,18 +22,14 @@ bool ValidateDenseModelOptions(const DenseModelOptions& o, std::string* why) {
   if (!ValidatePairMatchOptions(o.pair_matches, &w)) e << w << "; ";
   if (!ValidateVoxelVoteOptions(o.votes, &w)) e << w << "; ";
   if (!ValidateSpaceCarvingOptions(o.carving, &w)) e << w << "; ";
-  if (!(o.min_relative_votes >= 0 && o.min_relative_votes <= 1)) e << "min relative votes must be in [0, 1]; ";
   if (o.vote_threshold < 1) e << "vote threshold must be >= 1; ";
   if (!(o.floor_band_mm >= 0)) e << "floor band must be >= 0 mm; ";
   if (!(o.floor_band_normal_deg > 0 && o.floor_band_normal_deg < 90)) e << "floor band normal must be in (0, 90) deg; ";
   if (!(o.crevice_band_mm >= 0)) e << "crevice band must be >= 0 mm; ";
   if (!(o.crevice_normal_deg > 0 && o.crevice_normal_deg < 90)) e << "crevice normal must be in (0, 90) deg; ";
-  if (o.smoothing_passes < 0 || o.smoothing_passes > 5) e << "smoothing passes must be in [0, 5]; ";
-  if (o.surface_method != 0 && o.surface_method != 1) e << "surface method must be 0 (shell) or 1 (ridge); ";
   if (!ValidateRidgeOptions(o.ridge, &w)) e << w << "; ";
   if (!ValidateMeshVisibilityOptions(o.visibility, &w)) e << w << "; ";
   if (!ValidateWeakRefitOptions(o.weak_refit, &w)) e << w << "; ";
-  if (!ValidatePhotometricRefinementOptions(o.refinement, &w)) e << w << "; ";
   const std::string msg = e.str();
   if (msg.empty()) return true;
   if (why) *why = msg.substr(0, msg.size() - 2);
@@ -76,63 +72,48 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
 }
 
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views, const DenseModelOptions& o,
-                           const RegionOfInterest& region, const std::vector<CarvingView>* refinement_views) {
+                           const RegionOfInterest& region) {
   FinalModel model;
   using Clock = std::chrono::steady_clock;
   auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   Clock::time_point t0 = Clock::now();
-  const bool ridge = o.surface_method == 1;
   std::vector<VoxelRecord> seeds = grid.Extract(o.vote_threshold);
   {
     std::vector<VoxelRecord> kept;
-    for (const VoxelRecord& r : seeds) {
-      const Eigen::Vector3d c = grid.CenterOf(r.ijk);
-      if (!region.Contains(c)) continue;
-      if (!ridge && o.min_relative_votes > 0) {
-        int32_t best = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx)
-              if (dx || dy || dz) best = std::max(best, grid.Votes(r.ijk + Eigen::Vector3i(dx, dy, dz)));
-        if (r.votes < o.min_relative_votes * best) continue;
-      }
-      kept.push_back(r);
-    }
+    for (const VoxelRecord& r : seeds)
+      if (region.Contains(grid.CenterOf(r.ijk))) kept.push_back(r);
     seeds.swap(kept);
   }
   model.seeds = static_cast<int64_t>(seeds.size());
-  std::vector<SurfaceVoxel> surface;
-  std::vector<Eigen::Vector3d> normals;
-  if (ridge) {
-    surface = ExtractVoteRidge(grid, seeds, o.ridge, &model.ridge);
-    if (region.valid && region.has_floor && (o.floor_band_mm > 0 || o.crevice_band_mm > 0)) {
-      // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not. Under
-      // an overhang, surface facing down just above the floor is the crevice (see crevice_band_mm).
-      const double min_up_cos = std::cos(o.floor_band_normal_deg * kDegToRad);
-      const double max_down_cos = -std::sin(o.crevice_normal_deg * kDegToRad);
-      std::vector<SurfaceVoxel> kept;
-      kept.reserve(surface.size());
-      for (const SurfaceVoxel& s : surface) {
-        const double height = region.HeightAboveFloor(s.point_in_world), up = s.normal.dot(region.floor_normal);
-        if (height < o.floor_band_mm && up >= min_up_cos)
-          ++model.floor_band_dropped;
-        else if (height < o.crevice_band_mm && up <= max_down_cos)
-          ++model.crevice_band_dropped;
-        else
-          kept.push_back(s);
-      }
-      surface.swap(kept);
-    }
-    seeds.clear();
+  std::vector<SurfaceVoxel> surface = ExtractVoteRidge(grid, seeds, o.ridge, &model.ridge);
+  if (region.valid && region.has_floor && (o.floor_band_mm > 0 || o.crevice_band_mm > 0)) {
+    // Floor a few mm above the fitted plane (its points are biased or the plane is) faces up; walls do not. Under
+    // an overhang, surface facing down just above the floor is the crevice (see crevice_band_mm).
+    const double min_up_cos = std::cos(o.floor_band_normal_deg * kDegToRad);
+    const double max_down_cos = -std::sin(o.crevice_normal_deg * kDegToRad);
+    std::vector<SurfaceVoxel> kept;
+    kept.reserve(surface.size());
     for (const SurfaceVoxel& s : surface) {
-      seeds.push_back(s.voxel);
-      normals.push_back(s.normal);
+      const double height = region.HeightAboveFloor(s.point_in_world), up = s.normal.dot(region.floor_normal);
+      if (height < o.floor_band_mm && up >= min_up_cos)
+        ++model.floor_band_dropped;
+      else if (height < o.crevice_band_mm && up <= max_down_cos)
+        ++model.crevice_band_dropped;
+      else
+        kept.push_back(s);
     }
+    surface.swap(kept);
+  }
+  seeds.clear();
+  std::vector<Eigen::Vector3d> normals;
+  for (const SurfaceVoxel& s : surface) {
+    seeds.push_back(s.voxel);
+    normals.push_back(s.normal);
   }
   model.times.surface_s = since(t0);
   t0 = Clock::now();
   if (o.carve) {
-    model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving, ridge ? &normals : nullptr);
+    model.voxels = CarveVoxels(seeds, grid.voxel_size(), views, o.carving, &model.carving, &normals);
   } else {
     for (const VoxelRecord& r : seeds) {
       CarvedVoxel c;
@@ -145,61 +126,53 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
   }
   model.times.carving_s = since(t0);
   t0 = Clock::now();
-  if (ridge) {
-    // Mesh through the surface points of the voxels that survived carving, coloured as carved.
-    std::unordered_map<uint64_t, const CarvedVoxel*> alive;
-    alive.reserve(model.voxels.size() * 2);
-    for (const CarvedVoxel& v : model.voxels) alive.emplace(VoxelKey(v.ijk), &v);
-    std::vector<SurfaceVoxel> kept;
-    for (SurfaceVoxel& s : surface) {
-      auto it = alive.find(VoxelKey(s.voxel.ijk));
-      if (it == alive.end()) continue;
-      s.voxel.bgr = it->second->bgr;
-      kept.push_back(s);
-    }
-    model.mesh = MeshFromSurfacePoints(
-        SharpenCreases(
-            SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
-            grid.voxel_size(), o.ridge.creases, &model.ridge.crease_points_moved),
-        grid.voxel_size());
-    model.times.meshing_s = since(t0);
-    t0 = Clock::now();
-    // Sheets inside the object, under the surface other pairs built, are hidden from most views.
-    model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
-    model.times.visibility_s = since(t0);
-    t0 = Clock::now();
-    // The rims of holes bend off the surface: curled ones by up to max_rings rings, then all by border_rings.
-    model.ridge.curled_triangles_dropped = TrimCurledBorders(&model.mesh, o.ridge.curled_borders);
-    model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
-    // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
-    model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
-    // Where few points voted (one pair's biased points, the shadowed floor junction) the surface around decides.
-    model.weak_refit = RefitWeakMeshVertices(&model.mesh, model.voxels, grid.voxel_size(), o.weak_refit);
-    // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
-    // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a curled rim or a border ring, or in a
-    // small piece).
-    std::vector<Eigen::Vector3d> vertices;
-    vertices.reserve(model.mesh.vertices.size());
-    for (const Eigen::Vector3f& v : model.mesh.vertices) vertices.push_back(v.cast<double>());
-    const double reach = 1.5 * grid.voxel_size();
-    const PointGrid near_mesh(vertices, reach);
-    std::vector<CarvedVoxel> supported;
-    supported.reserve(model.voxels.size());
-    for (const CarvedVoxel& v : model.voxels) {
-      if (near_mesh.Nearest(grid.CenterOf(v.ijk), 1) <= reach)  // cells of size reach: one ring covers it
-        supported.push_back(v);
-      else
-        ++model.voxels_without_mesh;
-    }
-    model.voxels.swap(supported);
-    model.times.clean_up_s = since(t0);
-    t0 = Clock::now();
-    model.refinement = RefineMeshPhotometric(&model.mesh, refinement_views ? *refinement_views : views, o.refinement);
-    model.times.refinement_s = since(t0);
-  } else {
-    model.mesh = MeshFromVoxels(model.voxels, grid.voxel_size(), o.smoothing_passes);
-    model.times.meshing_s = since(t0);
+  // Mesh through the surface points of the voxels that survived carving, coloured as carved.
+  std::unordered_map<uint64_t, const CarvedVoxel*> alive;
+  alive.reserve(model.voxels.size() * 2);
+  for (const CarvedVoxel& v : model.voxels) alive.emplace(VoxelKey(v.ijk), &v);
+  std::vector<SurfaceVoxel> kept;
+  for (SurfaceVoxel& s : surface) {
+    auto it = alive.find(VoxelKey(s.voxel.ijk));
+    if (it == alive.end()) continue;
+    s.voxel.bgr = it->second->bgr;
+    kept.push_back(s);
   }
+  model.mesh = MeshFromSurfacePoints(
+      SharpenCreases(
+          SmoothSurfacePoints(kept, grid.voxel_size(), o.ridge.smoothing_radius, o.ridge.smoothing_min_normal_cos),
+          grid.voxel_size(), o.ridge.creases, &model.ridge.crease_points_moved),
+      grid.voxel_size());
+  model.times.meshing_s = since(t0);
+  t0 = Clock::now();
+  // Sheets inside the object, under the surface other pairs built, are hidden from most views.
+  model.visibility = RemoveOccludedMeshParts(&model.mesh, views, o.visibility);
+  model.times.visibility_s = since(t0);
+  t0 = Clock::now();
+  // The rims of holes bend off the surface: curled ones by up to max_rings rings, then all by border_rings.
+  model.ridge.curled_triangles_dropped = TrimCurledBorders(&model.mesh, o.ridge.curled_borders);
+  model.ridge.border_triangles_dropped = TrimMeshBorder(&model.mesh, o.ridge.border_rings);
+  // Carving can split pieces off the ridge: those far smaller than the object are stray surface too.
+  model.ridge.mesh_triangles_dropped = RemoveSmallMeshPieces(&model.mesh, o.ridge.min_component_fraction);
+  // Where few points voted (one pair's biased points, the shadowed floor junction) the surface around decides.
+  model.weak_refit = RefitWeakMeshVertices(&model.mesh, model.voxels, grid.voxel_size(), o.weak_refit);
+  // The voxel model (model_voxels.ply, model.bt, the final VOXEL_MAP) is the surface the mesh kept: voxels with
+  // no mesh vertex within 1.5 voxels went with their mesh part (hidden, on a curled rim or a border ring, or in a
+  // small piece).
+  std::vector<Eigen::Vector3d> vertices;
+  vertices.reserve(model.mesh.vertices.size());
+  for (const Eigen::Vector3f& v : model.mesh.vertices) vertices.push_back(v.cast<double>());
+  const double reach = 1.5 * grid.voxel_size();
+  const PointGrid near_mesh(vertices, reach);
+  std::vector<CarvedVoxel> supported;
+  supported.reserve(model.voxels.size());
+  for (const CarvedVoxel& v : model.voxels) {
+    if (near_mesh.Nearest(grid.CenterOf(v.ijk), 1) <= reach)  // cells of size reach: one ring covers it
+      supported.push_back(v);
+    else
+      ++model.voxels_without_mesh;
+  }
+  model.voxels.swap(supported);
+  model.times.clean_up_s = since(t0);
   if (!model.voxels.empty()) {
     Eigen::Vector3i lo = model.voxels[0].ijk, hi = lo;
     for (const CarvedVoxel& v : model.voxels) {

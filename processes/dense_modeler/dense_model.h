@@ -13,7 +13,6 @@
 #include "processes/dense_modeler/marching_cubes.h"
 #include "processes/dense_modeler/mesh_visibility.h"
 #include "processes/dense_modeler/pair_matches.h"
-#include "processes/dense_modeler/photometric_refinement.h"
 #include "processes/dense_modeler/region_of_interest.h"
 #include "processes/dense_modeler/space_carving.h"
 #include "processes/dense_modeler/surface_extraction.h"
@@ -28,30 +27,23 @@ struct DenseModelOptions {
   VoxelVoteOptions votes;           // vote grid
   SpaceCarvingOptions carving;      // final photometric carving
   int vote_threshold = 16;          // votes a voxel needs to seed the final model / appear on VOXEL_MAP (>= 1)
-  double min_relative_votes = 0.5;  // seeds also need votes >= this fraction of their strongest 26-neighbour
-                                    // (thins the voted shell to the surface; 0 = off), [0, 1]
   bool carve = true;                // run space carving in the final phase
-  int smoothing_passes = 1;         // occupancy smoothing passes before meshing (>= 0; shell method only)
-  int surface_method = 1;           // 0 = shell: seeds thinned by min_relative_votes, carved, meshed from occupancy;
-                                    // 1 = ridge: the vote ridge along the normal (ExtractVoteRidge, min_relative_votes
-                                    // unused), carved with its normals, meshed through its sub-voxel surface points
-  RidgeOptions ridge;               // ridge extraction (surface_method 1)
+  RidgeOptions ridge;               // vote ridge extraction (surface_extraction.h)
   double floor_band_mm = 12.0;      // mm, ridge voxels lower than this above the region's floor that face up (normal
                                     // within floor_band_normal_deg of the floor normal) are floor, dropped (0 = off;
-                                    // surface_method 1, region with a floor): the region's hard floor clearance can
+                                    // region with a floor): the region's hard floor clearance can
                                     // then stay low enough to keep the object's walls down to the floor
   double floor_band_normal_deg = 45.0;  // deg, see floor_band_mm, (0, 90)
   double crevice_band_mm = 14.0;  // mm, ridge voxels lower than this above the region's floor that face down (normal
-                                  // more than crevice_normal_deg below the horizontal) are dropped (0 = off; surface
-                                  // method 1, region with a floor): on an object resting on the floor that is the
+                                  // more than crevice_normal_deg below the horizontal) are dropped (0 = off; region
+                                  // with a floor): on an object resting on the floor that is the
                                   // crevice under its overhang, seen at grazing angles past the dark underside, where
                                   // the only dense points are chords of floor-junction triangles (the sim sphere's and
                                   // blob's 4-5.4 mm skirts; a wall standing on the floor is vertical and stays)
   double crevice_normal_deg = 30.0;         // deg, see crevice_band_mm, (0, 90)
-  MeshVisibilityOptions visibility;         // removal of mesh parts no view sees (inner sheets; surface_method 1)
-  WeakRefitOptions weak_refit;              // weakly voted mesh vertices refitted to their strong neighbours' surface
-                                            // (weak_surface_refit.h; surface_method 1)
-  PhotometricRefinementOptions refinement;  // multi-view photometric refinement of the final mesh (surface_method 1)
+  MeshVisibilityOptions visibility;  // removal of mesh parts no view sees (inner sheets)
+  WeakRefitOptions weak_refit;       // weakly voted mesh vertices refitted to their strong neighbours' surface
+                                     // (weak_surface_refit.h)
 };
 
 bool ValidateDenseModelOptions(const DenseModelOptions& options, std::string* why);
@@ -69,28 +61,25 @@ double MedianLandmarkReprojectionPx(const PinholeCamera& camera, const Eigen::Is
 
 // Wall time of the final phase's stages (s; for logs and benchmarks, never part of the model).
 struct FinalPhaseTimes {
-  double surface_s = 0;     // seeds and vote ridge (or shell thinning)
+  double surface_s = 0;     // seeds and vote ridge
   double carving_s = 0;     // photometric space carving
   double meshing_s = 0;     // surface fit and mesh
   double visibility_s = 0;  // hidden mesh parts (mesh_visibility.h)
-  double clean_up_s = 0;    // border rings, small pieces, voxels off the mesh
-  double refinement_s = 0;  // photometric refinement of the mesh (photometric_refinement.h)
+  double clean_up_s = 0;    // border rings, small pieces, weak vertices, voxels off the mesh
 };
 
 struct FinalModel {
   std::vector<CarvedVoxel> voxels;  // final voxels, sorted by (k, j, i)
   TriangleMesh mesh;
   SpaceCarvingStats carving;
-  RidgeStats ridge;                       // surface_method 1 only
-  MeshVisibilityStats visibility;         // surface_method 1 only
-  WeakRefitStats weak_refit;              // surface_method 1 only
-  PhotometricRefinementStats refinement;  // surface_method 1 only
-  int64_t seeds = 0;                      // voxels over the vote threshold (inside the box)
-  int64_t floor_band_dropped = 0;         // ridge voxels dropped as floor (floor_band_mm)
-  int64_t crevice_band_dropped = 0;       // ridge voxels dropped as the crevice under an overhang (crevice_band_mm)
+  RidgeStats ridge;
+  MeshVisibilityStats visibility;
+  WeakRefitStats weak_refit;
+  int64_t seeds = 0;                 // voxels over the vote threshold (inside the box)
+  int64_t floor_band_dropped = 0;    // ridge voxels dropped as floor (floor_band_mm)
+  int64_t crevice_band_dropped = 0;  // ridge voxels dropped as the crevice under an overhang (crevice_band_mm)
   FinalPhaseTimes times;
   int64_t voxels_without_mesh = 0;  // carved voxels dropped because the final mesh has no vertex near them
-                                    // (surface_method 1)
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();  // mm, world, of the final voxels (zero when empty)
   Eigen::Vector3d bbox_max = Eigen::Vector3d::Zero();
 };
@@ -98,16 +87,12 @@ struct FinalModel {
 // Seeds = voxels with votes >= threshold whose centre is inside region (when valid: box and floor half-space).
 // Ridge voxels near the floor that face up are dropped as floor (floor_band_mm), those that face down as the crevice
 // under an overhang (crevice_band_mm).
-// Shell method: seeds also need >= min_relative_votes x their largest neighbour's votes, are carved against the
-// views (when options.carve) and meshed from their occupancy. Ridge method: the seeds' vote ridge (one voxel thick,
-// oriented, sub-voxel points) is carved (when options.carve) and meshed through its points (open where unseen); mesh
-// parts hidden from every view by the mesh itself are removed (mesh_visibility.h), then small mesh pieces; weakly
-// voted vertices move onto the surface of their strong neighbours (weak_surface_refit.h), and the voxels keep only the
-// surface the mesh kept (a mesh vertex within 1.5 voxels); last, the mesh's vertices are refined photometrically along
-// their normals (photometric_refinement.h) in refinement_views (full-resolution images are best; nullptr: views).
+// The seeds' vote ridge (one voxel thick, oriented, sub-voxel points) is carved (when options.carve) and meshed
+// through its points (open where unseen); mesh parts hidden from every view by the mesh itself are removed
+// (mesh_visibility.h), then small mesh pieces; weakly voted vertices move onto the surface of their strong neighbours
+// (weak_surface_refit.h), and the voxels keep only the surface the mesh kept (a mesh vertex within 1.5 voxels).
 FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingView>& views,
-                           const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest(),
-                           const std::vector<CarvingView>* refinement_views = nullptr);
+                           const DenseModelOptions& options, const RegionOfInterest& region = RegionOfInterest());
 
 struct ModelPaths {
   std::string voxels_ply, mesh_ply, octomap;

@@ -25,7 +25,7 @@ namespace objscan {
 
 void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   // Only what a user sets (issue 27): plumbing, the pairing (scripts/profiles), memory and publication bounds, the
-  // region and target, voxel size and vote threshold, the mesh refinement switch, and the two options the docs give
+  // region and target, voxel size and vote threshold, and the two options the docs give
   // as command-line examples. Every other field keeps its default here; tests and tools set the struct directly.
   p.Add("name", &o->name, "process name (status name, sender of control messages)");
   p.AddChannel(&o->image_channel, "input image channel (image_t)");
@@ -67,8 +67,6 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("ridge-border-rings", &m->ridge.border_rings, "rings of triangles peeled off the mesh's open borders");
   p.Add("ridge-smoothing-radius", &m->ridge.smoothing_radius,
         "voxels, radius of the vote-weighted local surface fit of the surface points before meshing (0 = off)");
-  p.Add("refine-mesh", &m->refinement.enabled,
-        "move the final mesh's vertices along their normals to where the views agree");
   p.Add("voxel-size", &m->votes.voxel_size_mm, "mm, voxel edge");
 }
 
@@ -96,7 +94,6 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   if (o.max_stored_matches < 0) e << "max-stored-matches must be >= 0; ";
   if (o.max_central_track_ids < 1) e << "max_central_track_ids must be >= 1; ";
   if (o.max_carving_views < 2) e << "max_carving_views must be >= 2; ";
-  if (o.refinement_downsample < 1 || o.refinement_downsample > 8) e << "refinement_downsample must be in [1, 8]; ";
   if (!(o.target_margin_mm >= 0)) e << "target-margin must be >= 0; ";
   if (o.require_target && (!o.use_target_box || o.target_channel.empty()))
     e << "require-target needs use-target-box and a target channel; ";
@@ -458,10 +455,6 @@ void DenseModelerNode::TryProcess(int64_t seq) {
       StoredView stored;
       stored.seq = seq;
       stored.view = MakeCarvingView(*camera_, slot.pose->world_from_camera, slot.image, options_.carving_downsample);
-      if (options_.model.refinement.enabled && options_.model.surface_method == 1) {
-        stored.refine_view =
-            MakeCarvingView(*camera_, slot.pose->world_from_camera, Gray8(slot.image), options_.refinement_downsample);
-      }
       carving_views_.push_back(std::move(stored));
     }
   }
@@ -803,17 +796,16 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   // recomputed with them, else the live ones (a grid from live poses carved with final ones in another frame lost
   // 80 % of room_01's target).
   const bool use_final_poses = RevoteWithFinalPoses();
-  std::vector<CarvingView> views, refine_views;
+  std::vector<CarvingView> views;
   int final_used = 0;
   for (const StoredView& sv : carving_views_) {
-    CarvingView v = sv.view, r = sv.refine_view;
+    CarvingView v = sv.view;
     auto it = final_poses_.find(sv.seq);
     if (use_final_poses && it != final_poses_.end()) {
-      v.world_from_camera = r.world_from_camera = it->second;
+      v.world_from_camera = it->second;
       ++final_used;
     }
     views.push_back(std::move(v));
-    if (!r.image.empty()) refine_views.push_back(std::move(r));
   }
   final_poses_used_ = final_used;
   // Live votes kept although final poses arrived: how far the final poses lie from the live ones the model was built
@@ -838,9 +830,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   }
   status_.SetValue("live_final_offset_mm", live_final_offset_mm);
   status_.SetValue("model_off_trajectory_frame", live_final_offset_mm > kLiveFinalOffsetWarnMm ? 1 : 0);
-  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_, &refine_views);
-  if (options_.model.surface_method == 1)
-    LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
+  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
+  LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
             std::to_string(model.crevice_band_dropped) + " facing down near the floor dropped, " +
             std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
@@ -851,7 +842,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
             std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
             std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
             std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
-  if (options_.model.surface_method == 1 && options_.model.weak_refit.relative_votes > 0) {
+  if (options_.model.weak_refit.relative_votes > 0) {
     const WeakRefitStats& w = model.weak_refit;
     char line[512];
     std::snprintf(line, sizeof(line),
@@ -866,18 +857,6 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
                   static_cast<long long>(w.poor_fit), static_cast<long long>(w.too_far));
     LogInfo(line);
   }
-  if (options_.model.surface_method == 1 && options_.model.refinement.enabled) {
-    char line[300];
-    std::snprintf(
-        line, sizeof(line),
-        "mesh refinement: %zu views, %lld samples, %lld scored, %lld kept; %lld vertices moved, mean |offset| "
-        "%.2f mm, max %.2f mm",
-        refine_views.size(), static_cast<long long>(model.refinement.samples),
-        static_cast<long long>(model.refinement.samples_scored), static_cast<long long>(model.refinement.samples_kept),
-        static_cast<long long>(model.refinement.vertices_moved), model.refinement.mean_abs_offset_mm,
-        model.refinement.max_abs_offset_mm);
-    LogInfo(line);
-  }
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
           std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
@@ -888,10 +867,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   char times[400];
   std::snprintf(
       times, sizeof(times),
-      "final phase times: surface %.2f s, carving %.2f s, meshing %.2f s, visibility %.2f s, clean-up %.2f s, "
-      "refinement %.2f s",
+      "final phase times: surface %.2f s, carving %.2f s, meshing %.2f s, visibility %.2f s, clean-up %.2f s",
       model.times.surface_s, model.times.carving_s, model.times.meshing_s, model.times.visibility_s,
-      model.times.clean_up_s, model.times.refinement_s);
+      model.times.clean_up_s);
   LogInfo(times);
   if (!pair_ms_.empty()) {
     std::snprintf(times, sizeof(times),
@@ -955,9 +933,6 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   status_.SetValue("final_rim_vertices_removed", static_cast<double>(model.weak_refit.rim_vertices_dropped));
   status_.SetValue("final_carving_s", model.times.carving_s);
   status_.SetValue("final_visibility_s", model.times.visibility_s);
-  status_.SetValue("final_refinement_samples", static_cast<double>(model.refinement.samples_scored));
-  status_.SetValue("final_refined_vertices", static_cast<double>(model.refinement.vertices_moved));
-  status_.SetValue("final_refinement_s", model.times.refinement_s);
   if (model.voxels.empty()) {
     // Loud: a run that ends without a model is a failure, not a success with empty files (the session fails on it).
     std::string why;

@@ -116,8 +116,6 @@ struct DenseModelerNodeOptions {
                                                          // mm) although the orbit's final poses were within 0.45 mm
   int carving_downsample = 2;                            // integer downsampling of the images kept for carving, [1, 8]
   int max_carving_views = 200;                           // images kept for carving at most (>= 2)
-  int refinement_downsample = 1;                         // integer downsampling of the gray copies kept with them for
-                                                         // the mesh's photometric refinement, [1, 8]
   bool use_target_box = true;                            // restrict to the confirmed TARGET box (+ margin)
   bool require_target = false;                           // closed loop (robot searching for its target): nothing is
                                                          // modeled before a confirmed TARGET box; earlier pairs are
@@ -179,8 +177,7 @@ class DenseModelerNode : public Node {
   };
   struct StoredView {
     int64_t seq = 0;
-    CarvingView view;         // colour, carving_downsample
-    CarvingView refine_view;  // gray, refinement_downsample (empty image when the refinement is off)
+    CarvingView view;  // colour, carving_downsample
   };
   struct StoredPair {  // a dense pair's pixel matches, for the final phase's re-triangulation
     int64_t seq_a = 0, seq_b = 0;

@@ -222,8 +222,6 @@ TEST_F(NodeFixture, RingOfViewsGivesModelFilesAndFinished) {
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/votes_snapshot.bin"));
 }
 
-// With --refine-mesh the node keeps full-resolution gray copies of its carving views and the final phase refines
-// the mesh in them (photometric_refinement.h); off (the default) nothing is scored.
 // A second, different pose for a frame (forged, or a second session on the bus) and a second calibration are
 // rejected and counted; the frame takes part in no later pair and the model stays where the object is.
 TEST_F(NodeFixture, ConflictingPoseAndCalibrationAreRejected) {
@@ -258,34 +256,6 @@ TEST_F(NodeFixture, ConflictingPoseAndCalibrationAreRejected) {
   for (int k = 0; k < 2; ++k) {
     EXPECT_GT(m.bbox_min_mm[k], -140);
     EXPECT_LT(m.bbox_max_mm[k], 140);
-  }
-}
-
-TEST_F(NodeFixture, MeshRefinementUsesTheKeptViewsWhenOn) {
-  const int n = 16;
-  const auto features = scene_.SurfacePoints(2000);
-  for (const bool refine : {false, true}) {
-    Restart();
-    DenseModelerNodeOptions options = options_;
-    options.model.refinement.enabled = refine;
-    options.model.refinement.sample_spacing_mm = 6.0;  // fewer samples: the test stays fast
-    DenseModelerNode node(*bus_, options);
-    PublishInfo();
-    PublishTarget();
-    for (int i = 0; i <= n; ++i) PublishFrame(i, n, features);
-    PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
-    ASSERT_TRUE(node.final_phase_done());
-    ASSERT_FALSE(out_.statuses.empty());
-    const process_status_t& last = out_.statuses.back();
-    if (refine) {
-      EXPECT_GT(StatusValue(last, "final_refinement_samples"), 100);
-      EXPECT_GT(StatusValue(last, "final_refined_vertices"), 100);
-    } else {
-      EXPECT_EQ(StatusValue(last, "final_refinement_samples"), 0);
-      EXPECT_EQ(StatusValue(last, "final_refined_vertices"), 0);
-    }
-    ASSERT_EQ(out_.models.size(), 1u);
-    EXPECT_GT(out_.models[0].num_mesh_triangles, 5000);
   }
 }
 
