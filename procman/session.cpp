@@ -273,91 +273,111 @@ std::string FinishSurvivors(bool interrupted, const SessionOptions& options, con
 }
 }  // namespace
 
-int RunSession(const SessionOptions& options, const std::vector<SessionProcess>& processes) {
-  InstallStopSignalHandlers();
-  const int64_t start_us = MonotonicMicros();
-  const auto elapsed_s = [&] { return (MonotonicMicros() - start_us) * 1e-6; };
-  mkdir(options.out_dir.c_str(), 0755);
-  const std::string logs_dir = options.out_dir + "/logs";
-  mkdir(logs_dir.c_str(), 0755);
-  const std::string log_path = options.out_dir + "/session.lcmlog";
-  std::remove(log_path.c_str());
+namespace {
+// One run of the session: the bus and its monitor, lcm-logger and the processes. Run() is RunSession's whole body,
+// in its steps: start, watch, ordered stop, what the log kept, the end-of-run checks, summary.json.
+class SessionRun {
+ public:
+  SessionRun(const SessionOptions& options, const std::vector<SessionProcess>& processes)
+      : options(options),
+        processes(processes),
+        start_us(MonotonicMicros()),
+        logs_dir(options.out_dir + "/logs"),
+        log_path(options.out_dir + "/session.lcmlog") {}
 
+  int Run();
+
+ private:
+  double ElapsedS() const { return (MonotonicMicros() - start_us) * 1e-6; }
+  void Pump(int ms) {
+    const int64_t until = MonotonicMicros() + ms * 1000LL;
+    while (MonotonicMicros() < until) bus->Handle(10);
+  }
+  std::string ForeignSessionFailure() const;
+  // False (with failure set) when another session is heard, a process ended before the session did, or the logger
+  // exited.
+  bool CheckChildren();
+  // lcm-logger, then the processors (each must report on PROCESS_STATUS), then the drivers.
+  void StartProcesses();
+  // Until the session ends (finish_on's FINISHED, or every process exited), fails, times out or is interrupted;
+  // a progress line every progress_period_ms.
+  void Watch();
+  // One line: frame, message rates since the last line (dt_s), drops, rejections, progress_detail's state.
+  void PrintProgress(double dt_s);
+  // Ordered stop (drivers, survivors' results, processors, logger after a flush). Returns why the results are
+  // partial ("" when they are not).
+  std::string StopProcesses();
+  // A process's last status value `name` into *v; false when not reported.
+  bool StatusValue(const char* process, const char* name, double* v) const;
+  // The failures only the end shows: another session, processes in their error state, a model across an unjoined
+  // restart, a model off trajectory.txt's frame. Sets failure (the first that applies).
+  void CheckResults();
+  // What the log kept, against what the monitor saw on the bus.
+  struct LogCheck {
+    std::map<std::string, ChannelStats> logged;  // per channel
+    bool read = false;
+    std::string error;  // when not read
+    bool complete = false;
+    int64_t events = 0;
+  };
+  LogCheck CheckLog() const;
+  // summary.json and the closing lines; returns the exit code (0, 1, or 130 when interrupted).
+  int Report(const std::string& partial, LogCheck log);
+
+  const SessionOptions& options;
+  const std::vector<SessionProcess>& processes;
+  const int64_t start_us;
+  const std::string logs_dir, log_path;
   std::string failure;
   bool interrupted = false;
   std::unique_ptr<Bus> bus;
   std::unique_ptr<Monitor> monitor;
-  try {
-    bus = MakeLcmBus(options.lcm_url);
-    monitor = std::make_unique<Monitor>(*bus);
-  } catch (const std::exception& e) {
-    LogError(std::string("cannot listen on the bus: ") + e.what());
-    return 1;
-  }
-
-  ChildProcess logger("lcm-logger",
-                      {options.logger, "--lcm-url=" + options.lcm_url, "--flush-interval=100", "-f", log_path},
-                      logs_dir + "/lcm-logger.log");
+  std::unique_ptr<ChildProcess> logger;
   std::vector<std::unique_ptr<ChildProcess>> children;
-  for (const auto& p : processes)
-    children.push_back(std::make_unique<ChildProcess>(p.name, p.argv, logs_dir + "/" + p.name + ".log"));
+  std::map<std::string, int64_t> progress_counts;  // messages per channel at the last progress line
+};
 
-  // Our processes are the children we started on this host; a status from any other (host, pid) is foreign.
-  char host_buf[256] = {0};
-  const std::string own_host = gethostname(host_buf, sizeof(host_buf) - 1) == 0 ? host_buf : "";
-  monitor->is_own_ = [&children, own_host](const std::string& name, const std::string& host, int32_t pid) {
-    for (const auto& c : children)
-      if (c->name() == name && c->pid() == pid && host == own_host) return true;
+std::string SessionRun::ForeignSessionFailure() const {
+  return "another session is on this bus (" + options.lcm_url + "): " + monitor->foreign_session_ +
+         " is not one of this run's processes, and the two runs' messages mix (the same channels, frame numbers "
+         "from 0), so neither run's results would be right. Run each session on a bus of its own: leave out "
+         "--lcm-url (objscan run then picks a free port), or give each run another port, e.g. " +
+         std::string("udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304");
+}
+
+bool SessionRun::CheckChildren() {
+  if (!monitor->foreign_session_.empty()) {
+    failure = ForeignSessionFailure();
     return false;
-  };
-  monitor->is_ours_ = [&children](const std::string& name) {
-    return std::any_of(children.begin(), children.end(), [&](const auto& c) { return c->name() == name; });
-  };
-  const auto foreign_session_failure = [&] {
-    return "another session is on this bus (" + options.lcm_url + "): " + monitor->foreign_session_ +
-           " is not one of this run's processes, and the two runs' messages mix (the same channels, frame numbers "
-           "from 0), so neither run's results would be right. Run each session on a bus of its own: leave out "
-           "--lcm-url (objscan run then picks a free port), or give each run another port, e.g. " +
-           std::string("udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304");
-  };
-
-  auto pump = [&](int ms) {
-    const int64_t until = MonotonicMicros() + ms * 1000LL;
-    while (MonotonicMicros() < until) bus->Handle(10);
-  };
-  auto check_children = [&]() -> bool {
-    if (!monitor->foreign_session_.empty()) {
-      failure = foreign_session_failure();
+  }
+  for (size_t i = 0; i < children.size(); ++i) {
+    ChildProcess& c = *children[i];
+    if (!c.started() || c.Running()) continue;
+    auto finished_ok_now = [&]() {
+      return c.exit_code() == 0 &&
+             (processes[i].is_driver || monitor->finished_.count(c.name()) || options.finish_on.empty());
+    };
+    // A processor sends FINISHED and exits at once: its message may still wait in our socket when we see the
+    // exit. Read the bus a little before calling a clean exit a failure.
+    for (int tries = 0; c.exit_code() == 0 && !finished_ok_now() && tries < 20; ++tries) Pump(50);
+    if (!finished_ok_now()) {
+      failure = "process '" + c.name() + "' " + c.DescribeExit() + " before the session ended; last lines of " +
+                c.log_path() + ":\n" + c.LogTail(15);
       return false;
     }
-    for (size_t i = 0; i < children.size(); ++i) {
-      ChildProcess& c = *children[i];
-      if (!c.started() || c.Running()) continue;
-      auto finished_ok_now = [&]() {
-        return c.exit_code() == 0 &&
-               (processes[i].is_driver || monitor->finished_.count(c.name()) || options.finish_on.empty());
-      };
-      // A processor sends FINISHED and exits at once: its message may still wait in our socket when we see the
-      // exit. Read the bus a little before calling a clean exit a failure.
-      for (int tries = 0; c.exit_code() == 0 && !finished_ok_now() && tries < 20; ++tries) pump(50);
-      const bool finished_ok = finished_ok_now();
-      if (!finished_ok) {
-        failure = "process '" + c.name() + "' " + c.DescribeExit() + " before the session ended; last lines of " +
-                  c.log_path() + ":\n" + c.LogTail(15);
-        return false;
-      }
-    }
-    if (logger.started() && !logger.Running()) {
-      failure = "lcm-logger exited early (code " + std::to_string(logger.exit_code()) + "):\n" + logger.LogTail(10);
-      return false;
-    }
-    return true;
-  };
+  }
+  if (logger->started() && !logger->Running()) {
+    failure = "lcm-logger exited early (code " + std::to_string(logger->exit_code()) + "):\n" + logger->LogTail(10);
+    return false;
+  }
+  return true;
+}
 
+void SessionRun::StartProcesses() {
   std::string error;
   std::fprintf(stderr, "[objscan] session in %s, bus %s\n", options.out_dir.c_str(), options.lcm_url.c_str());
-  if (!logger.Start(&error)) failure = error;
-  pump(300);
+  if (!logger->Start(&error)) failure = error;
+  Pump(300);
   // Processors first, each must report on PROCESS_STATUS before the drivers start.
   for (size_t i = 0; failure.empty() && i < children.size(); ++i) {
     if (processes[i].is_driver) continue;
@@ -372,13 +392,13 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
         interrupted = true;
         break;
       }
-      if (!check_children()) break;
-      if (elapsed_s() > options.start_timeout_s) {
+      if (!CheckChildren()) break;
+      if (ElapsedS() > options.start_timeout_s) {
         failure = "process '" + name + "' did not report on PROCESS_STATUS within " +
                   std::to_string(options.start_timeout_s) + " s; last lines of its log:\n" + children[i]->LogTail(15);
         break;
       }
-      pump(50);
+      Pump(50);
     }
     if (interrupted) break;
   }
@@ -387,22 +407,22 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     std::fprintf(stderr, "[objscan] start %s: %s\n", children[i]->name().c_str(), children[i]->CommandLine().c_str());
     if (!children[i]->Start(&error)) failure = error;
   }
+}
 
-  // Main watch loop.
+void SessionRun::Watch() {
   int64_t last_progress = MonotonicMicros();
-  std::map<std::string, int64_t> last_counts;
   while (failure.empty() && !interrupted) {
     bus->Handle(50);
     if (StopRequested()) {
       interrupted = true;
       break;
     }
-    if (!check_children()) break;
+    if (!CheckChildren()) break;
     const bool done = options.finish_on.empty()
                           ? std::none_of(children.begin(), children.end(), [](auto& c) { return c->Running(); })
                           : monitor->finished_.count(options.finish_on) > 0;
     if (done) break;
-    if (elapsed_s() > options.timeout_s) {
+    if (ElapsedS() > options.timeout_s) {
       failure = "session timed out after " + std::to_string(options.timeout_s) + " s";
       break;
     }
@@ -410,33 +430,39 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     if (now - last_progress >= options.progress_period_ms * 1000LL) {
       const double dt = (now - last_progress) * 1e-6;
       last_progress = now;
-      std::ostringstream line;
-      const auto& images = monitor->channels_["CAMERA_IMAGE"];
-      line << "[objscan] frame " << (images.last_seq + 1);
-      if (options.expected_frames > 0) line << "/" << options.expected_frames;
-      for (const char* ch : {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "VOXEL_MAP"}) {
-        auto it = monitor->channels_.find(ch);
-        if (it == monitor->channels_.end()) continue;
-        line << " | " << ch << " " << Hz((it->second.messages - last_counts[ch]) / dt);
-        last_counts[ch] = it->second.messages;
-      }
-      int64_t gaps = 0, rejected = 0, dropped_inputs = 0;
-      for (const auto& kv : monitor->channels_) gaps += kv.second.seq_gaps;
-      for (const auto& kv : monitor->statuses_) {
-        rejected += kv.second.messages_rejected;
-        dropped_inputs += kv.second.dropped_inputs;
-      }
-      line << " | dropped " << gaps << " on bus, " << dropped_inputs << " at inputs | rejected " << rejected;
-      if (!options.progress_detail.empty()) {
-        auto it = monitor->statuses_.find(options.progress_detail);
-        if (it != monitor->statuses_.end() && !it->second.state_detail.empty())
-          line << " | " << options.progress_detail << ": " << it->second.state_detail;
-      }
-      std::fprintf(stderr, "%s\n", line.str().c_str());
+      PrintProgress(dt);
     }
   }
+}
 
-  // Ordered stop: give processes a moment to exit on their own, then drivers, then processors.
+void SessionRun::PrintProgress(double dt) {
+  std::ostringstream line;
+  const auto& images = monitor->channels_["CAMERA_IMAGE"];
+  line << "[objscan] frame " << (images.last_seq + 1);
+  if (options.expected_frames > 0) line << "/" << options.expected_frames;
+  for (const char* ch : {"CAMERA_IMAGE", "FEATURE_TRACKS", "CAMERA_POSE", "VOXEL_MAP"}) {
+    auto it = monitor->channels_.find(ch);
+    if (it == monitor->channels_.end()) continue;
+    line << " | " << ch << " " << Hz((it->second.messages - progress_counts[ch]) / dt);
+    progress_counts[ch] = it->second.messages;
+  }
+  int64_t gaps = 0, rejected = 0, dropped_inputs = 0;
+  for (const auto& kv : monitor->channels_) gaps += kv.second.seq_gaps;
+  for (const auto& kv : monitor->statuses_) {
+    rejected += kv.second.messages_rejected;
+    dropped_inputs += kv.second.dropped_inputs;
+  }
+  line << " | dropped " << gaps << " on bus, " << dropped_inputs << " at inputs | rejected " << rejected;
+  if (!options.progress_detail.empty()) {
+    auto it = monitor->statuses_.find(options.progress_detail);
+    if (it != monitor->statuses_.end() && !it->second.state_detail.empty())
+      line << " | " << options.progress_detail << ": " << it->second.state_detail;
+  }
+  std::fprintf(stderr, "%s\n", line.str().c_str());
+}
+
+std::string SessionRun::StopProcesses() {
+  // Give processes a moment to exit on their own, then drivers, then processors.
   const int64_t wait_until = MonotonicMicros() + (failure.empty() && !interrupted ? 10'000'000 : 0);
   while (MonotonicMicros() < wait_until &&
          std::any_of(children.begin(), children.end(), [](auto& c) { return c->Running(); })) {
@@ -450,8 +476,8 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   for (size_t i = 0; i < children.size(); ++i)
     if (!processes[i].is_driver && children[i]->Running()) children[i]->Stop(3000);
   if (!partial.empty()) {  // the result files themselves say that they hold what the survivors had
-    for (const char* name : {"trajectory.txt", "trajectory_online.txt", "landmarks.ply", "model_voxels.ply",
-                             "model_mesh.ply"}) {
+    for (const char* name :
+         {"trajectory.txt", "trajectory_online.txt", "landmarks.ply", "model_voxels.ply", "model_mesh.ply"}) {
       const std::string path = options.out_dir + "/" + name;
       std::string mark_error;
       if (access(path.c_str(), F_OK) == 0 &&
@@ -459,26 +485,27 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
         LogWarning("cannot mark " + path + " partial: " + mark_error);
     }
   }
-  pump(options.flush_wait_ms);  // the logger writes what is still buffered
-  logger.Stop(5000);
+  Pump(options.flush_wait_ms);  // the logger writes what is still buffered
+  logger->Stop(5000);
+  return partial;
+}
 
-  // What did the log keep?
-  std::map<std::string, ChannelStats> logged;
-  std::string log_error;
-  const bool log_read = ReadLogStats(log_path, &logged, &log_error);
-  bool log_complete = log_read;
-  int64_t logged_events = 0;
-  for (const auto& kv : logged) logged_events += kv.second.count;
-  for (const auto& kv : monitor->channels_) {
-    // LCM's own start-up self test is sent by each udpm instance as it starts, some before the logger listens.
-    if (kv.first == "LCM_SELF_TEST") continue;
-    if (!logged.count(kv.first) || logged[kv.first].count < kv.second.messages) log_complete = false;
-  }
+bool SessionRun::StatusValue(const char* process, const char* name, double* v) const {
+  auto it = monitor->statuses_.find(process);
+  if (it == monitor->statuses_.end()) return false;
+  for (int k = 0; k < it->second.num_values; ++k)
+    if (it->second.value_name[k] == name) {
+      *v = it->second.value[k];
+      return true;
+    }
+  return false;
+}
 
+void SessionRun::CheckResults() {
   // Processes that ended in their error state say why the session failed, the first to fail first: it is usually
   // the cause (the planner found no target, so the dense modeler had nothing to model).
   // Another session heard only while ours stopped: its messages still mixed with ours.
-  if (failure.empty() && !interrupted && !monitor->foreign_session_.empty()) failure = foreign_session_failure();
+  if (failure.empty() && !interrupted && !monitor->foreign_session_.empty()) failure = ForeignSessionFailure();
   if (failure.empty() && !interrupted) {
     for (const std::string& name : monitor->error_order_) {
       const process_status_t& s = monitor->statuses_[name];
@@ -490,23 +517,12 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   // A model built across an unjoined map restart mixes two frames (the pose solver's last unjoined restart inside the
   // frames the dense modeler voted from): the model and the target can be centimetres off while everything else
   // looks fine (room_08: restart at frame 2074 during the orbit, target 306 mm off). Loud, with what to try.
-  // A process's last status value `name` into *v; false when not reported.
-  const auto value = [&](const char* process, const char* name, double* v) {
-    auto it = monitor->statuses_.find(process);
-    if (it == monitor->statuses_.end()) return false;
-    for (int k = 0; k < it->second.num_values; ++k)
-      if (it->second.value_name[k] == name) {
-        *v = it->second.value[k];
-        return true;
-      }
-    return false;
-  };
   std::string mixed_frames;
   {
     double restart = -1, first = -1, last = -1;
-    if (value("pose_solver", "last_unjoined_restart_seq", &restart) && restart >= 0 &&
-        value("dense_modeler", "model_first_seq", &first) && value("dense_modeler", "model_last_seq", &last) &&
-        first >= 0 && first < restart && restart <= last) {
+    if (StatusValue("pose_solver", "last_unjoined_restart_seq", &restart) && restart >= 0 &&
+        StatusValue("dense_modeler", "model_first_seq", &first) &&
+        StatusValue("dense_modeler", "model_last_seq", &last) && first >= 0 && first < restart && restart <= last) {
       char text[512];
       std::snprintf(text, sizeof(text),
                     "the model mixes two frames: the pose solver's map restarted at frame %.0f and was never joined "
@@ -522,8 +538,8 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   // modeler's status model_off_trajectory_frame, by its own limit; room_02: the re-vote kept no point after an
   // unjoined restart, the model 390 mm off).
   double live_final_offset_mm = -1, off_frame = 0;
-  if (failure.empty() && !interrupted && value("dense_modeler", "model_off_trajectory_frame", &off_frame) &&
-      off_frame == 1 && value("dense_modeler", "live_final_offset_mm", &live_final_offset_mm)) {
+  if (failure.empty() && !interrupted && StatusValue("dense_modeler", "model_off_trajectory_frame", &off_frame) &&
+      off_frame == 1 && StatusValue("dense_modeler", "live_final_offset_mm", &live_final_offset_mm)) {
     char text[400];
     std::snprintf(text, sizeof(text),
                   "the model lies %.0f mm off trajectory.txt's frame: the dense modeler kept the votes of the live "
@@ -532,7 +548,23 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
                   live_final_offset_mm);
     failure = text;
   }
+}
 
+SessionRun::LogCheck SessionRun::CheckLog() const {
+  LogCheck log;
+  log.read = ReadLogStats(log_path, &log.logged, &log.error);
+  log.complete = log.read;
+  for (const auto& kv : log.logged) log.events += kv.second.count;
+  for (const auto& kv : monitor->channels_) {
+    // LCM's own start-up self test is sent by each udpm instance as it starts, some before the logger listens.
+    if (kv.first == "LCM_SELF_TEST") continue;
+    auto it = log.logged.find(kv.first);
+    if (it == log.logged.end() || it->second.count < kv.second.messages) log.complete = false;
+  }
+  return log;
+}
+
+int SessionRun::Report(const std::string& partial, LogCheck log) {
   // Summary.
   int64_t bus_gaps = 0;
   for (const auto& kv : monitor->channels_) bus_gaps += kv.second.seq_gaps;
@@ -548,7 +580,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     for (const std::string& f : monitor->foreign_) json.String(f);
     json.EndArray();
   }
-  json.Key("wall_time_s").Number(elapsed_s());
+  json.Key("wall_time_s").Number(ElapsedS());
   json.Key("frames").Int(monitor->channels_["CAMERA_IMAGE"].frames);
   json.Key("expected_frames").Int(options.expected_frames);
   if (monitor->have_scale_) {  // whether the lengths of the result files are mm
@@ -575,7 +607,7 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
     json.Key(kv.first).BeginObject();
     json.Key("messages").Int(c.messages);
     if (c.malformed > 0) json.Key("malformed").Int(c.malformed);
-    json.Key("logged").Int(logged.count(kv.first) ? logged[kv.first].count : 0);
+    json.Key("logged").Int(log.logged.count(kv.first) ? log.logged[kv.first].count : 0);
     json.Key("bytes").Int(c.bytes);
     const double span_s = (c.last_utime - c.first_utime) * 1e-6;
     const int64_t dated = kSequencedChannels.count(kv.first) ? c.frames : c.messages;
@@ -634,9 +666,9 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
   }
   json.Key("log").BeginObject();
   json.Key("path").String(log_path);
-  json.Key("events").Int(logged_events);
-  json.Key("complete").Bool(log_complete);
-  if (!log_read) json.Key("error").String(log_error);
+  json.Key("events").Int(log.events);
+  json.Key("complete").Bool(log.complete);
+  if (!log.read) json.Key("error").String(log.error);
   json.EndObject();
   json.EndObject();
   const std::string summary_path = options.out_dir + "/summary.json";
@@ -651,12 +683,55 @@ int RunSession(const SessionOptions& options, const std::vector<SessionProcess>&
                static_cast<long long>(monitor->channels_["CAMERA_IMAGE"].frames),
                static_cast<long long>(monitor->track_frames_),
                monitor->track_frames_ ? double(monitor->live_tracks_sum_) / monitor->track_frames_ : 0.0,
-               static_cast<long long>(bus_gaps + dropped_inputs), log_complete ? "complete" : "INCOMPLETE",
-               static_cast<long long>(logged_events), elapsed_s(), summary_path.c_str());
+               static_cast<long long>(bus_gaps + dropped_inputs), log.complete ? "complete" : "INCOMPLETE",
+               static_cast<long long>(log.events), ElapsedS(), summary_path.c_str());
   if (monitor->have_scale_) std::fprintf(stderr, "[objscan] scale: %s\n", ScaleDescription(monitor->scale_source_));
   if (!failure.empty()) std::fprintf(stderr, "[objscan] error: %s\n", failure.c_str());
   if (interrupted) return 130;
   return failure.empty() ? 0 : 1;
+}
+
+int SessionRun::Run() {
+  InstallStopSignalHandlers();
+  mkdir(options.out_dir.c_str(), 0755);
+  mkdir(logs_dir.c_str(), 0755);
+  std::remove(log_path.c_str());
+  try {
+    bus = MakeLcmBus(options.lcm_url);
+    monitor = std::make_unique<Monitor>(*bus);
+  } catch (const std::exception& e) {
+    LogError(std::string("cannot listen on the bus: ") + e.what());
+    return 1;
+  }
+  logger = std::make_unique<ChildProcess>(
+      "lcm-logger",
+      std::vector<std::string>{options.logger, "--lcm-url=" + options.lcm_url, "--flush-interval=100", "-f", log_path},
+      logs_dir + "/lcm-logger.log");
+  for (const auto& p : processes)
+    children.push_back(std::make_unique<ChildProcess>(p.name, p.argv, logs_dir + "/" + p.name + ".log"));
+  // Our processes are the children we started on this host; a status from any other (host, pid) is foreign.
+  char host_buf[256] = {0};
+  const std::string own_host = gethostname(host_buf, sizeof(host_buf) - 1) == 0 ? host_buf : "";
+  monitor->is_own_ = [this, own_host](const std::string& name, const std::string& host, int32_t pid) {
+    for (const auto& c : children)
+      if (c->name() == name && c->pid() == pid && host == own_host) return true;
+    return false;
+  };
+  monitor->is_ours_ = [this](const std::string& name) {
+    return std::any_of(children.begin(), children.end(), [&](const auto& c) { return c->name() == name; });
+  };
+
+  StartProcesses();
+  Watch();
+  const std::string partial = StopProcesses();
+  LogCheck log = CheckLog();
+  CheckResults();
+  return Report(partial, std::move(log));
+}
+}  // namespace
+
+int RunSession(const SessionOptions& options, const std::vector<SessionProcess>& processes) {
+  return SessionRun(options, processes).Run();
 }
 
 }  // namespace objscan
