@@ -224,8 +224,9 @@ class DenseModelerNode : public Node {
   // then take the final poses too; otherwise the live ones the kept votes were cast with).
   bool RevoteWithFinalPoses();
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
-  // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). *note: what
-  // was done, for the log ("" when nothing to say).
+  // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_); when the fit is
+  // worse than a voxel RMS, its floor is fitted again among the latest (final) landmarks around it. *note: what was
+  // done, for the log ("" when nothing to say).
   RegionOfInterest RegionInFinalFrame(const std::vector<StoredPair>& pairs, std::string* note) const;
   // revote_final_poses is set and final poses can arrive (final_pose_channel): the pairs' matches are kept.
   bool RevoteEnabled() const { return options_.revote_final_poses && !options_.final_pose_channel.empty(); }
