@@ -1108,10 +1108,9 @@ void PoseEstimator::AddKeyframe(int f) {
     }
   }
   TryLateJoin(f, added);
-  // Tracks waiting for parallax (from a map join or fuse_landmarks), and with fuse_landmarks the new landmarks.
+  // Tracks of a map join waiting for parallax.
   std::vector<int64_t> candidates;
   candidates.swap(fuse_pending_);
-  if (options_.fuse_landmarks) candidates.insert(candidates.end(), added.begin(), added.end());
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
   FuseLandmarks(f, candidates);
@@ -1175,10 +1174,8 @@ int PoseEstimator::TriangulateNew(int f, std::vector<int64_t>* added_ids) {
 
 int PoseEstimator::FuseLandmarks(int f, const std::vector<int64_t>& candidates) {
   if (candidates.empty()) return 0;
-  // The other landmarks. Without fuse_landmarks only a map join's landmarks are fused, and only onto the old map
-  // (last seen before the join's span).
+  // The other landmarks: a map join's landmarks are fused onto the old map only (last seen before the join's span).
   auto is_old = [&](int64_t id) {
-    if (options_.fuse_landmarks) return true;
     auto t = track_frames_.find(id);
     return t == track_frames_.end() || t->second.back() < join_first_frame_;
   };

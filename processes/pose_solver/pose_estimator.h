@@ -39,14 +39,14 @@
 //     join_search_mm agree on, then the least-squares Sim(3) (kFourDof: x, y and yaw only, the robot model fixes
 //     the rest) of the nearest pairs, the radius shrinking to join_max_mm, applied to the new map. The join needs
 //     join_min_landmarks pairs and three times the pairs the same transform finds 6 mm off (chance), else the
-//     odometry chaining stands. The joined span's landmarks are then fused onto the old map's (below, whatever
-//     fuse_landmarks says), so the adjustments tie the two maps together. The first pose after recovery has status
-//     RELOCALIZED.
+//     odometry chaining stands. The joined span's landmarks are then fused onto the old map's (below), so the
+//     adjustments tie the two maps together. The first pose after recovery has status RELOCALIZED.
 //     Fusion (FuseLandmarks): a new landmark becomes an older one when its track was never seen with the old one's
 //     in a frame that still holds observations, they lie within fuse_search_mm, the track's first and last held
 //     (posed, inlier) views see it fuse_min_parallax_deg apart, and the old landmark reprojects within fuse_max_px
-//     in every such view; later frames of the track observe the old landmark. With fuse_landmarks every new
-//     landmark is tried against every older one (loop closure, off by default); otherwise only a join's.
+//     in every such view; later frames of the track observe the old landmark. Only a join's new landmarks are tried,
+//     and only against landmarks last seen before the joined span (fusing every new landmark with every older one,
+//     as a loop closure, was measured worse: docs/benchmarks.md).
 //  4. Finish(): frames never posed get PnP against the final map, then global BA over the active (not frozen)
 //     keyframes (or all posed frames) and landmarks (observations beyond the PnP inlier threshold left out; with
 //     frozen keyframes the two oldest active ones are held), pose refits of the other frames that still have
@@ -128,13 +128,6 @@ struct PoseEstimatorOptions {
                                                // without a map) is relocalized by position: new tracks paired with
                                                // landmarks projected from the last pose moved by the odometry,
                                                // searching a shift up to this (RelocalizeByProjection); 0 = off
-  bool fuse_landmarks = false;                 // loop closure by re-association: a new landmark whose track sees
-                                               // an older landmark (its track ended, never seen in the same frame)
-                                               // within fuse_max_px in every held view becomes that landmark; the
-                                               // track's later frames observe it (see FusedTrackIds). Off: on the
-                                               // rendered sim a re-detected corner is not the same surface point to
-                                               // better than the drift it would correct (docs/benchmarks.md). The
-                                               // landmarks of a map join (join_search_mm) are fused regardless.
   double fuse_search_mm = 5.0;                 // mm, largest distance between the new and the old landmark
   double fuse_min_parallax_deg = 10.0;         // deg, the new track's first and last held view must see it
                                                // this far apart before it is fused (until then it is retried at
@@ -220,7 +213,7 @@ class PoseEstimator {
   // poses sees double walls and phantom obstacles (room_08: 25 k of 39 k obstacle points more than 150 mm from any
   // solid after an unjoined restart, the planner boxed in).
   std::vector<Landmark> Landmarks(bool current_map_only = false) const;
-  // Track ids re-associated with an older landmark (fuse_landmarks), as (track id, landmark id) in the order of
+  // Track ids re-associated with an older landmark (a map join's fusion), as (track id, landmark id) in the order of
   // fusion: the track's observations belong to that landmark (Landmarks() lists it under the landmark id only).
   const std::vector<std::pair<int64_t, int64_t>>& FusedTrackIds() const { return fused_tracks_; }
   // Frame seqs where a restarted map began that was never joined to the map before it (a later restart or the end
@@ -295,9 +288,9 @@ class PoseEstimator {
   void AddKeyframe(int f);
   // Triangulates the tracks of frame f that have no landmark yet; their ids are appended to *added if not null.
   int TriangulateNew(int f, std::vector<int64_t>* added = nullptr);
-  // Re-associates the new landmarks `candidates` (tracked in frame f) with older ones (see the top; without
-  // fuse_landmarks only with landmarks last seen before the joined span); candidates still short of parallax whose
-  // track lives go to fuse_pending_. Returns the number fused.
+  // Re-associates the new landmarks `candidates` (tracked in frame f) with older ones (see the top: only with
+  // landmarks last seen before the joined span); candidates still short of parallax whose track lives go to
+  // fuse_pending_. Returns the number fused.
   int FuseLandmarks(int f, const std::vector<int64_t>& candidates);
   // After a restart: joins the new map (frames first..last, points new_points, chained through odometry) to the old
   // landmarks by the Sim(3) (kFourDof: x, y, yaw) of the landmarks both saw (see the top); false (nothing moved,
@@ -404,8 +397,8 @@ class PoseEstimator {
   std::unordered_map<int64_t, Alias> alias_;                    // live fused tracks (input id -> landmark)
   std::vector<std::pair<int64_t, int64_t>> fused_tracks_;       // every fusion (track id, landmark id)
   std::vector<int64_t> fuse_pending_;  // new landmarks whose tracks lack the parallax to be fused yet
-  int join_first_frame_ = 0;           // first frame of the last joined map (without fuse_landmarks, fusion targets
-                                       // are landmarks last seen before it)
+  int join_first_frame_ = 0;           // first frame of the last joined map (fusion targets are landmarks last seen
+                                       // before it)
   // A restarted map not joined at its start (too few landmarks in common yet: room_07's restarts shared 5-10) is
   // tried again at its keyframes while it grows (TryLateJoin): its first frame (-1: every map joined), its landmarks
   // (Landmarks(true)), and their count and frame at the last try (a new try once it grew by half, or grew at all

@@ -477,38 +477,6 @@ TEST(PoseEstimator, WaitsForTravelBeforeInitializingOnATurnInPlace) {
   EXPECT_LT(std::abs(err.scale - 1.0), 0.01);
 }
 
-// Old points come back into view (floor points behind the sphere, the start of the orbit on the second lap, tracks
-// broken by dropout) under new track ids: with fuse_landmarks their new landmarks are fused with the old ones, so
-// the map holds each point about once and the final BA closes the loop. (Here a re-detected track observes exactly
-// the same point; see the option for why it is off by default.)
-TEST(PoseEstimator, FusedTracksCloseTheLoop) {
-  SyntheticOrbitOptions so = SimLikeOdometryErrors();
-  so.num_frames = 400;
-  so.orbit_fraction = 2.0;
-  const SyntheticOrbit s = MakeSyntheticOrbit(so);
-  PoseEstimatorOptions o;
-  o.fuse_landmarks = true;
-  const RunFigures fused = RunOrbit(s, o);
-  o.fuse_landmarks = false;
-  const RunFigures separate = RunOrbit(s, o);
-  int wrong = 0;
-  for (const auto& [track, landmark] : fused.fused)
-    if (s.point_of_track.at(track) != s.point_of_track.at(landmark)) ++wrong;
-  std::printf(
-      "two laps: %zu tracks fused (%d onto another point), landmarks %d fused / %d separate (%zu true "
-      "points), final ATE %.3f / %.3f mm\n",
-      fused.fused.size(), wrong, fused.landmarks, separate.landmarks, s.points.size(), fused.final_error.ate_rmse,
-      separate.final_error.ate_rmse);
-  EXPECT_GT(fused.fused.size(), s.points.size());
-  // Onto another point: about half of these are onto a point of the random scene less than 3 mm away (the same
-  // pixels to 1 px in every view); 9 of 1414 here.
-  EXPECT_LE(wrong, static_cast<int>(fused.fused.size() / 100));
-  EXPECT_LT(fused.landmarks, 0.6 * separate.landmarks);
-  EXPECT_EQ(fused.final_posed, 400);
-  EXPECT_LE(fused.final_error.ate_rmse, separate.final_error.ate_rmse);
-  EXPECT_LT(fused.online.ate_rmse, 2.0);
-}
-
 // Non-keyframes drop their observations 30 frames after they were posed (the default): the estimator then holds
 // about a third of the memory, and the final poses (which follow the keyframes for those frames) are as accurate as
 // with every frame's observations kept for a pose refit after the final BA.

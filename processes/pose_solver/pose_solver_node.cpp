@@ -58,8 +58,6 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("refine-scale-with-odometry", &e->refine_scale_with_odometry, "6dof: rescale at the end by odometry path");
   p.Add("online-scale-frames", &e->online_scale_frames, "6dof: rescale by odometry path at keyframes this long");
   p.Add("relocalize-after", &e->relocalize_after_lost_frames, "lost frames before the preliminary phase restarts");
-  p.Add("fuse-landmarks", &e->fuse_landmarks,
-        "re-associate a new landmark with an old one whose track ended (loop closure; tracks that come back)");
   p.Add("relocalize-search", &e->relocalize_search_px,
         "px, largest image shift searched when a lost frame is relocalized by position from the odometry's "
         "prediction (larger for poorer odometry; 0 = off)");
