@@ -381,6 +381,7 @@ void DenseModelerNode::OnLandmarks(const landmarks_t& msg) {
     return;
   }
   last_landmarks_seq_ = msg.seq;
+  landmarks_final_ = !final_poses_.empty();
   status_.CountIn();
   landmark_ids_.clear();
   landmark_points_.clear();
@@ -711,25 +712,36 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
                 moved, sim.scale, rms, from.size());
   *note = text;
   RegionOfInterest moved_region = TransformRegion(region_, sim);
-  // The camera centres off the Sim(3) by more than a voxel RMS (room_03, 7 Dec: 18 mm after a restart rescaled in the
-  // orbit): the moved floor can be off by as much, and the floor band then keeps the floor around the object (mesh
-  // p90 29 mm, the floor 5-11 mm up to 100 mm around the target). The floor is fitted again among the final landmarks
-  // (the pose solver's final LANDMARKS arrive before its FINISHED) around the moved region.
-  if (moved_region.has_floor && rms > grid_.voxel_size() && !landmark_points_.empty()) {
+  // The floor. Fitted among the final map's landmarks (the pose solver sends them after its final poses, before its
+  // FINISHED; UpdateRegion fitted region_'s floor among them) it is in the final frame already: moved as well it
+  // would be off by the move's height (room_03, 7 Dec: the region moved 38 mm, Sim(3) 18 mm RMS; the floor band then
+  // kept the floor ring 5-11 mm high up to 100 mm around the cylinder: mesh p90 29.3 mm, max 124 mm, target box +79 /
+  // +45 mm). It is fitted again among them around the moved box (the floor near the live box may be another part of
+  // the room); when none is found there, region_'s (final) floor stays.
+  if (region_.has_floor && landmarks_final_) {
     RegionOfInterest refit = moved_region;
+    refit.has_floor = false;
     const Eigen::Vector3d moved_centre = 0.5 * (moved_region.box_min + moved_region.box_max);
     const int inliers = AddFloorNear(landmark_points_, moved_centre, options_.roi, &refit);
-    char more[200];
-    if (inliers > 0) {
-      refit.floor_clearance_mm = moved_region.floor_clearance_mm;
-      std::snprintf(more, sizeof(more), "; floor fitted again among the final landmarks (%d points): %.1f mm from the "
-                    "moved one at the region's centre", inliers,
-                    std::abs(refit.HeightAboveFloor(moved_centre) - moved_region.HeightAboveFloor(moved_centre)));
-      moved_region = refit;
-    } else {
-      std::snprintf(more, sizeof(more), "; no floor among the final landmarks: the moved one kept");
+    if (inliers == 0) {
+      refit.has_floor = true;
+      refit.floor_normal = region_.floor_normal;
+      refit.floor_offset_mm = region_.floor_offset_mm;
     }
+    refit.floor_clearance_mm = region_.floor_clearance_mm;
+    const double shift_mm =
+        std::abs(refit.HeightAboveFloor(moved_centre) - moved_region.HeightAboveFloor(moved_centre));
+    char more[220];
+    if (inliers > 0)
+      std::snprintf(more, sizeof(more),
+                    "; floor fitted again among the final landmarks around it (%d points), %.1f mm from the moved one "
+                    "at its centre", inliers, shift_mm);
+    else
+      std::snprintf(more, sizeof(more),
+                    "; no floor among the final landmarks around it: the final floor near the live box kept, %.1f mm "
+                    "from the moved one at its centre", shift_mm);
     *note += more;
+    moved_region = refit;
   }
   return moved_region;
 }

@@ -224,9 +224,10 @@ class DenseModelerNode : public Node {
   // then take the final poses too; otherwise the live ones the kept votes were cast with).
   bool RevoteWithFinalPoses();
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
-  // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_); when the fit is
-  // worse than a voxel RMS, its floor is fitted again among the latest (final) landmarks around it. *note: what was
-  // done, for the log ("" when nothing to say).
+  // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). The floor
+  // moves with it only when the landmarks in use are live ones; fitted among the final map's landmarks (they arrive
+  // after the final poses) it is in the final frame already and is fitted again around the moved box instead. *note:
+  // what was done, for the log ("" when nothing to say).
   RegionOfInterest RegionInFinalFrame(const std::vector<StoredPair>& pairs, std::string* note) const;
   // revote_final_poses is set and final poses can arrive (final_pose_channel): the pairs' matches are kept.
   bool RevoteEnabled() const { return options_.revote_final_poses && !options_.final_pose_channel.empty(); }
@@ -272,6 +273,7 @@ class DenseModelerNode : public Node {
   int64_t last_seq_ = -1, last_utime_ = 0;
   int64_t newest_image_seq_ = -1;                       // newest image accepted
   int64_t last_landmarks_seq_ = std::numeric_limits<int64_t>::min();  // seq of the landmark map in use
+  bool landmarks_final_ = false;  // the map in use came after final poses: the pose solver's final map (final frame)
   int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
   int64_t complete_frames_ = 0;
   int final_poses_used_ = 0;
