@@ -19,7 +19,7 @@ std::string Number(double v, int decimals = 3) {
 }  // namespace
 
 std::string PlanOutcome(const PlanSummary& s) {
-  if (s.phase == Phase::kFinish) return "modeled";
+  if (s.phase == Phase::kFinish) return s.coverage < s.min_coverage ? "partial" : "modeled";
   if (s.phase == Phase::kNoTarget) return "no_target";
   return "stopped";
 }
@@ -45,6 +45,7 @@ std::string PlanJson(const PlanSummary& s, int64_t end_utime) {
       << ", \"coverage_after\": " << Number(v.coverage_after, 4) << "}";
   }
   j << (s.next_views.empty() ? "" : "\n  ") << "],\n  \"coverage\": " << Number(s.coverage, 4)
+    << ",\n  \"min_coverage\": " << Number(s.min_coverage, 4)
     << ",\n  \"coverage_samples\": " << s.coverage_samples << ",\n  \"disagreement_max_mm\": "
     << Number(s.max_disagreement.distance_mm, 1) << ",\n  \"disagreement_max_deg\": "
     << Number(s.max_disagreement.angle_rad * 180.0 / M_PI, 2) << ",\n  \"safety_stops\": " << s.safety_stops << ",\n  \"orbit_glances\": " << s.orbit_glances << ",\n  \"relocalizations\": " << s.relocalizations << ",\n  \"map_restarts\": " << s.map_restarts << ",\n  \"contacts\": " << s.contacts

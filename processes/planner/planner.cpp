@@ -90,6 +90,7 @@ bool ValidatePlannerOptions(const PlannerOptions& o, std::string* why) {
   if (!(o.orbit_radius_mm > clear) || !std::isfinite(o.orbit_radius_mm))
     e << "orbit radius must be > footprint radius + safety margin; ";
   if (!(o.coverage_target > 0 && o.coverage_target <= 1)) e << "coverage target must be in (0, 1]; ";
+  if (!(o.min_coverage >= 0 && o.min_coverage <= 1)) e << "min coverage must be in [0, 1]; ";
   if (o.max_next_views < 0) e << "max next views must be >= 0; ";
   positive(o.coverage.sample_mm, "coverage sample spacing");
   positive(o.coverage.max_range_mm, "coverage range");
@@ -292,6 +293,7 @@ void Planner::EnterPhase(Phase phase, const std::string& why) {
   phases_.push_back({phase, now_, -1});
   if (phase == Phase::kFinish || phase == Phase::kNoTarget) phases_.back().end_utime = now_;
   phase_ = phase;
+  last_phase_reason_ = why;
   follower_.Clear();
   if (phase == Phase::kExplore && from == Phase::kExplore)
     Event(std::string("phase ") + PhaseName(phase) + ": " + why);
@@ -1254,6 +1256,8 @@ PlanSummary Planner::Summary() const {
   s.next_views = next_views_;
   s.coverage = coverage_.Fraction();
   s.coverage_samples = coverage_.num_samples();
+  s.min_coverage = options_.min_coverage;
+  s.finish_reason = last_phase_reason_;
   s.max_disagreement = estimator_.max_disagreement();
   s.target_confirmed = confirmed_;
   s.target = target_;

@@ -88,6 +88,10 @@ struct PlannerOptions {
                                                    // gentle forward arc that starts the pose solver's map) goes
                                                    // there; place the robot accordingly
   double coverage_target = 0.95;                   // coverage fraction that ends NEXT_VIEWS
+  double min_coverage = 0.7;                       // a plan that ends (FINISH) with less coverage is "partial", a
+                                                   // failure: the model misses part of the target (room_04, 7 Dec:
+                                                   // orbit and next views unreachable, coverage 52 %, the model 48.5 %
+                                                   // of the target and its centre 26 mm off, with status ok), [0, 1]
   int max_next_views = 12;                         // views NEXT_VIEWS adds at most
   double next_views_budget_s = 240;                // s of NEXT_VIEWS at most
   double lost_search_s = 15;                       // s an ORBIT waits for a LOST target before going on
@@ -126,6 +130,8 @@ struct PlanSummary {
   std::vector<NextViewRecord> next_views;
   double coverage = 0;
   int coverage_samples = 0;
+  double min_coverage = 0;     // the options' min_coverage: FINISH with less coverage is the outcome "partial"
+  std::string finish_reason;   // why the last phase change happened (e.g. "no reachable view adds coverage: ...")
   PoseDisagreement max_disagreement;
   bool target_confirmed = false;
   TargetObservation target;           // last confirmed estimate (or last candidate)
@@ -263,6 +269,7 @@ class Planner {
   Eigen::Vector2d start_position_ = Eigen::Vector2d::Zero();
   Phase phase_ = Phase::kExplore;
   std::string activity_ = "waiting";
+  std::string last_phase_reason_;  // EnterPhase's why, for the summary
   std::vector<PhaseRecord> phases_;
   std::vector<std::string> events_;
   int64_t now_ = 0;             // µs, utime of the current pose

@@ -69,6 +69,9 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
         "deg/s, fastest rotation of the base and of the camera (base + pan): the tracker must keep up");
   p.Add("explore-budget", &q->explore_budget_s, "s of exploring without a confirmed target before NO_TARGET");
   p.Add("coverage-target", &q->coverage_target, "coverage fraction that ends the next views, (0, 1]");
+  p.Add("min-coverage", &q->min_coverage,
+        "coverage fraction below which a finished plan is a failure (outcome partial: the model misses part of the "
+        "target), [0, 1]");
   p.Add("max-next-views", &q->max_next_views, "next views added at most");
   p.Add("next-views-budget", &q->next_views_budget_s, "s spent on next views at most");
   p.Add("next-view-radii", &o->next_view_radii, "mm, comma-separated ring radii of next-view candidates");
@@ -373,6 +376,15 @@ void PlannerNode::OnControl(const control_t& msg) {
                      std::string("no target found ") + travelled +
                          " (room explored or explore budget spent); try a longer --explore-budget and --frames, "
                          "check the object finder's target rule (size, texture), or start the robot nearer the object");
+  } else if (outcome == "partial") {
+    char text[640];
+    std::snprintf(text, sizeof(text),
+                  "the plan ended with %.0f %% of the target's surface seen (--min-coverage %.0f %%) %s: %s. The "
+                  "model misses part of the target; try a smaller --orbit-radius or room around the target (%lld "
+                  "safety stops), a longer --next-views-budget or more --max-next-views",
+                  100 * summary.coverage, 100 * summary.min_coverage, travelled, summary.finish_reason.c_str(),
+                  static_cast<long long>(summary.safety_stops));
+    status_.SetState(+process_status_t::STATE_ERROR, text);
   } else if (outcome == "stopped") {
     status_.SetState(+process_status_t::STATE_ERROR,
                      std::string("the stream ended during ") + PhaseName(summary.phase) + " " + travelled +

@@ -1,6 +1,7 @@
 // Closed-loop tests of the Planner in the toy world (toy_world.h): explore, find, approach, orbit, next views,
 // finish; a room without a target; an obstacle on the orbit circle; a target lost during the orbit.
 #include "processes/planner/planner.h"
+#include "processes/planner/plan_report.h"
 
 #include <gtest/gtest.h>
 
@@ -559,5 +560,30 @@ TEST(PlannerTargetTest, ACandidateWithNowhereToLookFromIsWatchedForFiveSecondsPe
   EXPECT_EQ(world.collisions(), 0);
 }
 
+// A plan that finished with less coverage than min_coverage is "partial" (a failure the session reports: room_04,
+// 7 Dec, ended "modeled" with 52 % coverage, the model 48.5 % of the target and its centre 26 mm off); the rest keep
+// their outcomes, and plan.json carries the limit.
+TEST(PlanReport, AFinishBelowTheMinimumCoverageIsPartial) {
+  PlanSummary s;
+  s.phase = Phase::kFinish;
+  s.min_coverage = 0.7;
+  s.coverage = 0.523;
+  EXPECT_EQ(PlanOutcome(s), "partial");
+  s.coverage = 0.7;
+  EXPECT_EQ(PlanOutcome(s), "modeled");
+  s.phase = Phase::kNoTarget;
+  s.coverage = 0;
+  EXPECT_EQ(PlanOutcome(s), "no_target");
+  s.phase = Phase::kOrbit;
+  EXPECT_EQ(PlanOutcome(s), "stopped");
+  EXPECT_NE(PlanJson(s, 0).find("\"min_coverage\": 0.7000"), std::string::npos) << PlanJson(s, 0);
+  PlannerOptions bad;
+  bad.min_coverage = 1.5;
+  std::string why;
+  EXPECT_FALSE(ValidatePlannerOptions(bad, &why));
+  EXPECT_NE(why.find("min coverage"), std::string::npos) << why;
+}
+
 }  // namespace
+
 }  // namespace objscan
