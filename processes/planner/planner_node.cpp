@@ -9,6 +9,7 @@
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/log.h"
+#include "common/recorded_run.h"
 #include "common/options.h"
 #include "common/time.h"
 #include "objscan/process_status_t.hpp"
@@ -83,13 +84,9 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
   p.Add("obstacle-max-z", &m->obstacle_max_z_mm, "mm, landmarks higher than this do not block the base");
   p.Add("footprint-radius", &m->footprint_radius_mm, "mm, radius of the robot's round footprint");
   p.Add("safety-margin", &m->safety_margin_mm, "mm, planned paths keep footprint + this from obstacles");
-  RobotGeometry* r = &q->robot;
-  p.Add("mast-height", &r->mast_height_mm, "mm, pan/tilt axes above the floor");
-  p.Add("mast-offset-x", &r->mast_offset_x_mm, "mm, mast forward of the base centre");
-  p.Add("mast-offset-y", &r->mast_offset_y_mm, "mm, mast left of the base centre");
-  p.Add("camera-offset-x", &r->camera_offset_mm.x(), "mm, optical centre in the tilt frame, forward");
-  p.Add("camera-offset-y", &r->camera_offset_mm.y(), "mm, optical centre in the tilt frame, left");
-  p.Add("camera-offset-z", &r->camera_offset_mm.z(), "mm, optical centre in the tilt frame, up");
+  p.Add("robot-file", &o->robot_file,
+        "the robot's robot.cfg (common/recorded_run.h: mast height and offsets, camera offset; the pose solver "
+        "takes the same file); none: the simulator's robot");
   p.Add("max-speed", &q->limits.max_speed_mm_s, "mm/s, the base's speed limit");
   p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, the base's yaw-rate limit");
   p.Add("pan-limit-deg", &o->pan_limit_deg, "deg, |pan| limit of the head");
@@ -99,6 +96,11 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
 
 bool ToPlannerOptions(const PlannerNodeOptions& o, PlannerOptions* out, std::string* why) {
   PlannerOptions p = o.planner;
+  if (!o.robot_file.empty()) {
+    RobotDescription robot;
+    if (!ReadRobotFile(o.robot_file, &robot, why)) return false;
+    p.robot = robot.geometry;
+  }
   p.tracking_turn_rad_s = o.tracking_turn_deg_s * kDeg;
   p.limits.max_omega_rad_s = o.max_omega_deg_s * kDeg;
   p.limits.max_pan_rad = o.pan_limit_deg * kDeg;

@@ -285,5 +285,30 @@ TEST(PlannerNodeOptionsTest, ValidatesAndConvertsDegrees) {
   EXPECT_FALSE(ValidatePlannerNodeOptions(o, &why));
 }
 
+// The robot's geometry comes from robot.cfg (the pose solver reads the same file); a missing or bad file is an
+// error that names it.
+TEST(PlannerNodeOptionsTest, RobotGeometryFromTheRobotFile) {
+  const std::string path = ::testing::TempDir() + "planner_node_test_robot.cfg";
+  std::ofstream(path) << "mast_height_mm = 452.5\nmast_offset_x_mm = -30\ncamera_offset_x_mm = 55\n";
+  PlannerNodeOptions o;
+  OptionParser parser("planner", "test");
+  AddPlannerNodeOptions(parser, &o);
+  std::string why;
+  ASSERT_TRUE(parser.ParseArgs({"--robot-file", path}, &why)) << why;
+  EXPECT_TRUE(ValidatePlannerNodeOptions(o, &why)) << why;
+  PlannerOptions p;
+  ASSERT_TRUE(ToPlannerOptions(o, &p, &why)) << why;
+  EXPECT_EQ(p.robot.mast_height_mm, 452.5);
+  EXPECT_EQ(p.robot.mast_offset_x_mm, -30.0);
+  EXPECT_EQ(p.robot.camera_offset_mm.x(), 55.0);
+  std::ofstream(path) << "mast_height_mm = 45cm\n";
+  EXPECT_FALSE(ValidatePlannerNodeOptions(o, &why));
+  EXPECT_NE(why.find(path), std::string::npos) << why;
+  o.robot_file = path + ".missing";
+  EXPECT_FALSE(ValidatePlannerNodeOptions(o, &why));
+  EXPECT_NE(why.find(".missing"), std::string::npos) << why;
+  std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace objscan

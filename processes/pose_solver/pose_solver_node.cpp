@@ -39,15 +39,9 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   p.Add("output-dir", &o->output_dir, "write trajectory.txt, trajectory_online.txt, landmarks.ply, colmap/ here");
   p.Add("robot-file", &o->robot_file,
-        "the robot's robot.cfg (common/recorded_run.h): its geometry replaces --mast-height, --mast-offset-*, "
-        "--camera-offset-*");
+        "the robot's robot.cfg (common/recorded_run.h: mast height and offsets, camera offset; the planner takes the "
+        "same file); none: the simulator's robot");
   PoseEstimatorOptions* e = &o->estimator;
-  p.Add("mast-height", &e->robot.mast_height_mm, "mm, pan/tilt axes above the floor");
-  p.Add("mast-offset-x", &e->robot.mast_offset_x_mm, "mm, mast forward of the base centre");
-  p.Add("mast-offset-y", &e->robot.mast_offset_y_mm, "mm, mast left of the base centre");
-  p.Add("camera-offset-x", &e->robot.camera_offset_mm.x(), "mm, optical centre in the tilt frame, forward");
-  p.Add("camera-offset-y", &e->robot.camera_offset_mm.y(), "mm, optical centre in the tilt frame, left");
-  p.Add("camera-offset-z", &e->robot.camera_offset_mm.z(), "mm, optical centre in the tilt frame, up");
   p.Add("pnp-min-inliers", &e->pnp.min_inliers, "fewer PnP inliers = lost");
   p.Add("tri-min-views", &e->min_triangulation_views, "posed views a track needs to be triangulated");
   p.Add("keyframe-interval", &e->keyframe_interval, "frames, longest gap between keyframes");
