@@ -60,7 +60,6 @@ void AddDenseModelerNodeOptions(OptionParser& p, DenseModelerNodeOptions* o) {
   p.Add("roi-floor-clearance", &r->floor_clearance_mm, "mm, points lower than this above the floor are dropped");
   p.Add("image-queue-capacity", &o->image_queue_capacity, "frames buffered by the image subscription (>= 1)");
   p.Add("threads", &o->threads, "OpenCV threads (cv::setNumThreads)");
-  p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   DenseModelOptions* m = &o->model;
   p.Add("vote-threshold", &m->vote_threshold, "votes a voxel needs for VOXEL_MAP and the final model");
@@ -105,7 +104,7 @@ bool ValidateDenseModelerNodeOptions(const DenseModelerNodeOptions& o, std::stri
   }
   if (o.image_queue_capacity < 1) e << "image-queue-capacity must be >= 1; ";
   if (o.threads < 1) e << "threads must be >= 1; ";
-  if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  if (!(o.status_period_s > 0) || !std::isfinite(o.status_period_s)) e << "status_period_s must be > 0; ";
   std::string model_why;
   if (!ValidateDenseModelOptions(o.model, &model_why)) e << model_why << "; ";
   const std::string msg = e.str();

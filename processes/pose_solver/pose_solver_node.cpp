@@ -35,7 +35,6 @@ void AddPoseSolverNodeOptions(OptionParser& p, PoseSolverNodeOptions* o) {
   p.AddChannel(&o->status_channel, "process_status_t channel");
   p.Add("finish-on-sender", &o->finish_on_sender, "COMMAND_FINISHED from this sender starts the final phase");
   p.Add("model", &o->model, "camera motion model: 6dof or 4dof (robot on the floor: x, y, yaw, tilt)");
-  p.Add("status-period", &o->status_period_s, "s, status publication period");
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after the final phase");
   p.Add("output-dir", &o->output_dir, "write trajectory.txt, trajectory_online.txt, landmarks.ply, colmap/ here");
   p.Add("robot-file", &o->robot_file,
@@ -79,7 +78,7 @@ bool ValidatePoseSolverNodeOptions(const PoseSolverNodeOptions& o, std::string* 
   if (o.pending_tracks_capacity < 0) e << "pending_tracks_capacity must be >= 0; ";
   if (o.tracks_queue_capacity < 1) e << "tracks_queue_capacity must be >= 1; ";
   if (!(o.max_odometry_gap_s >= 0) || !std::isfinite(o.max_odometry_gap_s)) e << "max_odometry_gap_s must be >= 0; ";
-  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status-period must be > 0; ";
+  if (!(o.status_period_s > 0.0) || !std::isfinite(o.status_period_s)) e << "status_period_s must be > 0; ";
   std::string est_why;
   if (!ValidatePoseEstimatorOptions(o.estimator, &est_why)) e << est_why << "; ";
   const std::string msg = e.str();
