@@ -3,6 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "common/options.h"
 
 namespace objscan {
 namespace {
@@ -81,6 +84,50 @@ bool ApplyViewPreset(const std::string& name, OrbitView* view) {
   } else {
     return false;
   }
+  return true;
+}
+
+bool ParseViewSpec(const std::string& spec, OrbitView* view, std::string* why) {
+  auto fail = [&](const std::string& reason) {
+    if (why) *why = "--view '" + spec + "': " + reason;
+    return false;
+  };
+  std::vector<std::string> fields;
+  for (size_t start = 0;;) {
+    const size_t comma = spec.find(',', start);
+    fields.push_back(spec.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  constexpr const char* kForm = "want PRESET (iso, top, front, side) or YAW,PITCH (deg), then optionally ,DISTANCE "
+                                "(mm), then ,X,Y,Z (target, mm), then ,FOV (deg)";
+  OrbitView v;
+  size_t next = 0;  // first field after the angles
+  if (ApplyViewPreset(fields[0], &v)) {
+    next = 1;
+  } else {
+    double yaw = 0, pitch = 0;
+    if (fields.size() < 2) return fail(fields[0].empty() ? kForm : "unknown preset '" + fields[0] + "'; " + kForm);
+    if (!ParseFiniteNumber(fields[0], &yaw)) return fail("yaw '" + fields[0] + "' is no finite number; " + kForm);
+    if (!ParseFiniteNumber(fields[1], &pitch)) return fail("pitch '" + fields[1] + "' is no finite number");
+    v.yaw_rad = yaw * (M_PI / 180);
+    v.pitch_rad = std::clamp(pitch * (M_PI / 180), -kMaxPitch, kMaxPitch);
+    next = 2;
+  }
+  const size_t extra = fields.size() - next;  // 0, 1 (distance), 4 (+ target) or 5 (+ fov)
+  if (extra != 0 && extra != 1 && extra != 4 && extra != 5)
+    return fail(std::to_string(fields.size()) + " values; " + kForm);
+  double values[5] = {v.distance_mm, v.target_mm.x(), v.target_mm.y(), v.target_mm.z(), 50.0};
+  const char* names[5] = {"distance", "target x", "target y", "target z", "fov"};
+  for (size_t i = 0; i < extra; ++i)
+    if (!ParseFiniteNumber(fields[next + i], &values[i]))
+      return fail(std::string(names[i]) + " '" + fields[next + i] + "' is no finite number");
+  if (!(values[0] > 0)) return fail("distance must be > 0 mm");
+  if (!(values[4] >= 1 && values[4] <= 170)) return fail("fov must be in 1..170 deg");
+  v.distance_mm = values[0];
+  v.target_mm = Eigen::Vector3d(values[1], values[2], values[3]);
+  v.fovy_rad = values[4] * (M_PI / 180);
+  *view = v;
   return true;
 }
 

@@ -43,6 +43,13 @@ bool ProjectToWindow(const OrbitView& view, const Viewport& viewport, const Eige
 // Sets the angles only (target and distance unchanged). False for an unknown name.
 bool ApplyViewPreset(const std::string& name, OrbitView* view);
 
+// The viewer's --view option: PRESET or YAW,PITCH (deg), then optionally DISTANCE (mm), then X,Y,Z (the view
+// target in world, mm), then FOV (vertical field of view, deg): "iso", "top,800", "-90,70", "0,25,600,10,0,80,40".
+// A preset sets yaw and pitch as ApplyViewPreset does; omitted values are OrbitView's defaults (distance 3000 mm,
+// target 0,0,0, fov 50 deg). Pitch is clamped to +-88.8 deg as the mouse does. Returns false with *why set for a
+// bad spec: unknown preset, a value that is no finite number, a wrong count, distance <= 0, fov outside 1..170 deg.
+bool ParseViewSpec(const std::string& spec, OrbitView* view, std::string* why);
+
 // Mouse interaction (dx, dy in window pixels): orbit turns yaw/pitch, pan moves the target in the view plane,
 // zoom scales the distance by exp(-steps * 0.1).
 void OrbitBy(OrbitView* view, double dx_px, double dy_px);

@@ -127,6 +127,7 @@ class Viewer {
  public:
   explicit Viewer(const ViewerOptions& options)
       : options_(options), dispatcher_(&state_, options.channels), view_(InitialView(options)) {
+    if (!options.benchmark.empty()) ParseBenchmarkSpec(options.benchmark, &benchmark_, nullptr);  // validated
     ViewerStateOptions state_options;
     state_options.align_truth = options.align_truth;
     state_ = ViewerState(state_options);
@@ -169,6 +170,7 @@ class Viewer {
   ViewerOptions options_;
   ViewerState state_;
   MessageDispatcher dispatcher_;
+  BenchmarkSpec benchmark_;  // model "" = no benchmark
   OrbitView view_;
   SceneOptions scene_;
   std::unique_ptr<SceneRenderer> renderer_;
@@ -202,7 +204,7 @@ bool Viewer::InitWindow() {
   if (window_ == nullptr) return false;
   glfwMakeContextCurrent(window_);
   glfwSwapInterval(
-      options_.vsync && options_.benchmark_voxels <= 0 && !options_.benchmark && options_.screenshot.empty() ? 1 : 0);
+      options_.vsync && benchmark_.model.empty() && options_.screenshot.empty() ? 1 : 0);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;  // deterministic layout, no imgui.ini
@@ -679,10 +681,10 @@ int Viewer::RunBenchmark() {
       view_.target_mm = sum / static_cast<double>(map.ijk.size());
     }
   } else {
-    state_.SetVoxelMap(SyntheticVoxelMap(options_.benchmark_voxels, options_.benchmark_shape));
+    state_.SetVoxelMap(SyntheticVoxelMap(benchmark_.voxels, benchmark_.model));
     view_.target_mm = Eigen::Vector3d(0, 0, 200);
     view_.distance_mm = std::max(view_.distance_mm, 1200.0);
-    model = options_.benchmark_shape;
+    model = benchmark_.model;
   }
   // Warm-up frames (buffer uploads, ImGui layout) outside the timing; the first one builds the voxel buffers.
   const int64_t warm_up_start = MonotonicMicros();
@@ -708,9 +710,7 @@ int Viewer::RunBenchmark() {
   int64_t slowest_us = 0, previous = start;
   // Orbit: the view changes every frame, so every frame is rendered from scratch.
   while (!glfwWindowShouldClose(window_)) {
-    if (options_.benchmark_frames > 0 ? frames >= options_.benchmark_frames
-                                      : MonotonicMicros() - start >= options_.benchmark_seconds * 1e6)
-      break;
+    if (MonotonicMicros() - start >= benchmark_.seconds * 1e6) break;
     glfwPollEvents();
     view_.yaw_rad += 0.01;
     RenderFrame();
@@ -752,7 +752,7 @@ int Viewer::Run() {
     player_->set_playing(!options_.paused);
     LogInfo("log " + options_.log + ": " + std::to_string(player_->num_events()) + " events, " +
             std::to_string((player_->last_utime() - player_->first_utime()) * 1e-6) + " s");
-  } else if (options_.benchmark_voxels <= 0 && !options_.benchmark) {
+  } else if (benchmark_.model.empty()) {
     try {
       bus_ = MakeLcmBus(options_.lcm_url.empty() ? kDefaultLcmUrl : options_.lcm_url);
       bus_->Subscribe(
@@ -769,7 +769,7 @@ int Viewer::Run() {
     LogError("cannot open an OpenGL 3.3 window (is DISPLAY set? try xvfb-run)");
     return 1;
   }
-  if (options_.benchmark_voxels > 0 || options_.benchmark) return RunBenchmark();
+  if (!benchmark_.model.empty()) return RunBenchmark();
 
   auto handler = [this](const std::string& channel, const void* data, int size, int64_t utime) {
     Handle(channel, data, size, utime);
@@ -856,25 +856,20 @@ void AddViewerOptions(OptionParser& parser, ViewerOptions* o) {
   parser.Add("panel-width", &o->panel_width, "px, width of the panel column on the right (0 = no panels)");
   parser.Add("align-truth", &o->align_truth,
              "draw the ground truth in the estimate's frame (Sim(3) fit over matched frames) and measure errors there");
-  parser.Add("view", &o->view, "view preset: iso, top, front, side");
-  parser.Add("view-yaw-deg", &o->view_yaw_deg, "deg, eye azimuth about world z from +x (overrides the preset)");
-  parser.Add("view-pitch-deg", &o->view_pitch_deg, "deg, eye elevation (overrides the preset)");
-  parser.Add("view-distance-mm", &o->view_distance_mm, "mm, eye distance from the view target");
-  parser.Add("view-target-x-mm", &o->view_target_x_mm, "mm, view target x in world");
-  parser.Add("view-target-y-mm", &o->view_target_y_mm, "mm, view target y in world");
-  parser.Add("view-target-z-mm", &o->view_target_z_mm, "mm, view target z in world");
-  parser.Add("view-fov-deg", &o->view_fov_deg, "deg, vertical field of view");
+  parser.Add("view", &o->view,
+             "initial view: a preset (iso, top, front, side) or YAW,PITCH in deg, then optionally ,DISTANCE in mm "
+             "(3000), then ,X,Y,Z the view target in mm (0,0,0), then ,FOV in deg (50); e.g. top,800 or "
+             "-90,70,4000,0,0,100,50");
   parser.Add("speed", &o->speed, "log playback speed");
   parser.Add("paused", &o->paused, "start the log paused");
   parser.Add("screenshot", &o->screenshot, "write a PNG of the window and exit");
   parser.Add("screenshot-at-utime", &o->screenshot_at_utime, "us, take the screenshot once this time is reached");
   parser.Add("screenshot-after-messages", &o->screenshot_after_messages, "take the screenshot after N messages");
   parser.Add("screenshot-timeout-s", &o->screenshot_timeout_s, "s, live: take the screenshot anyway after this");
-  parser.Add("benchmark-voxels", &o->benchmark_voxels, "render a synthetic model of N voxels and print frames/s");
-  parser.Add("benchmark", &o->benchmark, "with --log: orbit the scene at the end of the log and print frames/s");
-  parser.Add("benchmark-seconds", &o->benchmark_seconds, "s, benchmark duration");
-  parser.Add("benchmark-frames", &o->benchmark_frames, "benchmark: render this many frames instead (0 = use seconds)");
-  parser.Add("benchmark-shape", &o->benchmark_shape, "benchmark model: ball (solid) or scatter (no neighbours)");
+  parser.Add("benchmark", &o->benchmark,
+             "orbit the view and print frames/s: log (the scene at the end of --log), ball:N or scatter:N (a "
+             "synthetic model of N voxels, solid or none touching another); @S for S seconds instead of 5, e.g. "
+             "scatter:200000@6");
   parser.Add("voxel-style", &o->voxel_style, "voxels as cubes, points, or auto (points above max_cube_instances)");
   parser.Add("max-mesh-faces", &o->max_mesh_faces,
              "exposed voxel faces drawn as one static mesh at most (else instanced)");
@@ -889,44 +884,70 @@ bool ValidateViewerOptions(const ViewerOptions& o, std::string* why) {
     if (why) *why = reason;
     return false;
   };
-  OrbitView probe;
-  if (!ApplyViewPreset(o.view, &probe)) return fail("--view must be iso, top, front or side");
+  OrbitView view;
+  std::string view_why;
+  if (!ParseViewSpec(o.view, &view, &view_why)) return fail(view_why);
   if (o.window_width < 64 || o.window_height < 64 || o.window_width > 8192 || o.window_height > 8192)
     return fail("--window-width/--window-height must be in 64..8192");
   if (o.panel_width < 0 || o.panel_width > o.window_width - 32) return fail("--panel-width must be in 0..width-32");
-  if (!(o.view_distance_mm > 0)) return fail("--view-distance-mm must be > 0");
-  if (!(o.view_fov_deg >= 1 && o.view_fov_deg <= 170)) return fail("--view-fov-deg must be in 1..170");
   if (!(o.speed > 0)) return fail("--speed must be > 0");
-  if (o.benchmark_voxels < 0 || !(o.benchmark_seconds > 0) || o.benchmark_frames < 0)
-    return fail("--benchmark-voxels >= 0, --benchmark-seconds > 0, --benchmark-frames >= 0");
-  if (o.benchmark && (o.log.empty() || o.benchmark_voxels > 0))
-    return fail("--benchmark needs --log (and no --benchmark-voxels)");
+  if (!o.benchmark.empty()) {
+    BenchmarkSpec benchmark;
+    std::string benchmark_why;
+    if (!ParseBenchmarkSpec(o.benchmark, &benchmark, &benchmark_why)) return fail(benchmark_why);
+    if (benchmark.model == "log" && o.log.empty()) return fail("--benchmark log needs --log");
+    if (benchmark.model != "log" && !o.log.empty())
+      return fail("--benchmark " + benchmark.model + ":N renders a synthetic model, not --log (use --benchmark log)");
+  }
   if (o.voxel_style != "auto" && o.voxel_style != "cubes" && o.voxel_style != "points")
     return fail("--voxel-style must be auto, cubes or points");
   if (o.max_cube_instances < 0 || o.max_mesh_faces < 0) return fail("max_cube_instances / --max-mesh-faces >= 0");
   if (!(o.voxel_lod_px >= 0) || !(o.voxel_points_px >= 0) || o.voxel_occlusion_min_points < 0)
     return fail("--voxel-lod-px >= 0, voxel_points_px >= 0, --voxel-occlusion-min-points >= 0");
-  if (o.benchmark_shape != "ball" && o.benchmark_shape != "scatter")
-    return fail("--benchmark-shape must be ball or scatter");
   if (o.landmark_coloring != "error" && o.landmark_coloring != "age" && o.landmark_coloring != "rgb")
     return fail("landmark_coloring must be error, age or rgb");
   if (!(o.max_reprojection_error_px > 0)) return fail("max_reprojection_error_px must be > 0");
   if (o.max_events_per_frame < 1) return fail("max_events_per_frame must be >= 1");
   if (o.screenshot.empty() && (o.screenshot_at_utime >= 0 || o.screenshot_after_messages >= 0))
     return fail("--screenshot-at-utime / --screenshot-after-messages need --screenshot");
-  if (!std::isfinite(o.view_target_x_mm) || !std::isfinite(o.view_target_y_mm) || !std::isfinite(o.view_target_z_mm))
-    return fail("--view-target-* must be finite");
+  return true;
+}
+
+bool ParseBenchmarkSpec(const std::string& spec, BenchmarkSpec* benchmark, std::string* why) {
+  auto fail = [&](const std::string& reason) {
+    if (why) *why = "--benchmark '" + spec + "': " + reason;
+    return false;
+  };
+  constexpr const char* kForm = "want log, ball:N or scatter:N (N voxels > 0), optionally @SECONDS (> 0)";
+  BenchmarkSpec b;
+  std::string model = spec;
+  const auto at = spec.find('@');
+  if (at != std::string::npos) {
+    model = spec.substr(0, at);
+    if (!ParseFiniteNumber(spec.substr(at + 1), &b.seconds) || !(b.seconds > 0))
+      return fail("seconds '" + spec.substr(at + 1) + "' must be a number > 0; " + kForm);
+  }
+  const auto colon = model.find(':');
+  b.model = model.substr(0, colon);
+  if (b.model == "log") {
+    if (colon != std::string::npos) return fail(std::string("log takes no voxel count; ") + kForm);
+  } else if (b.model == "ball" || b.model == "scatter") {
+    double n = 0;
+    if (colon == std::string::npos) return fail(b.model + " needs its voxel count, e.g. " + b.model + ":200000");
+    const std::string count = model.substr(colon + 1);
+    if (!ParseFiniteNumber(count, &n) || n < 1 || n > 1e8 || n != std::floor(n))
+      return fail("voxel count '" + count + "' must be a whole number in 1..100000000");
+    b.voxels = static_cast<int>(n);
+  } else {
+    return fail("unknown model '" + b.model + "'; " + kForm);
+  }
+  *benchmark = b;
   return true;
 }
 
 OrbitView InitialView(const ViewerOptions& o) {
   OrbitView view;
-  ApplyViewPreset(o.view, &view);
-  if (std::isfinite(o.view_yaw_deg)) view.yaw_rad = o.view_yaw_deg * kDeg;
-  if (std::isfinite(o.view_pitch_deg)) view.pitch_rad = std::clamp(o.view_pitch_deg * kDeg, -1.55, 1.55);
-  view.distance_mm = o.view_distance_mm;
-  view.target_mm = Eigen::Vector3d(o.view_target_x_mm, o.view_target_y_mm, o.view_target_z_mm);
-  view.fovy_rad = o.view_fov_deg * kDeg;
+  if (!ParseViewSpec(o.view, &view, nullptr)) return OrbitView();
   return view;
 }
 

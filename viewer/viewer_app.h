@@ -3,9 +3,9 @@
 // (every channel is subscribed; MessageDispatcher decodes the known ones) or from a log file read directly
 // (LogPlayer: play / pause / step / seek / speed).
 // Headless use: --screenshot FILE.png renders once the chosen log time / message count / end of log is reached,
-// writes the window (scene + panels) as PNG and returns. --benchmark-voxels N renders a synthetic N-voxel model
-// (--benchmark --log FILE: the scene at the end of the log) while orbiting the view, for benchmark_seconds or
-// benchmark_frames, and prints frames/s and CPU time per frame.
+// writes the window (scene + panels) as PNG and returns. --benchmark ball:N / scatter:N renders a synthetic N-voxel
+// model (--benchmark log --log FILE: the scene at the end of the log) while orbiting the view, for 5 s (or
+// MODEL@SECONDS), and prints frames/s and CPU time per frame.
 // Needs an X display (Xvfb works, with Mesa llvmpipe). Run() does not throw; it returns the process exit code.
 #pragma once
 
@@ -33,14 +33,7 @@ struct ViewerOptions {
   int panel_width = 500;                          // px, right-hand panel column (0 = no panels)
   bool vsync = true;                              // wait for vertical sync (interactive use)
   bool align_truth = true;                        // draw the truth in the estimate's frame (Sim(3) fit), errors too
-  std::string view = "iso";                       // view preset: iso, top, front, side
-  double view_yaw_deg = std::numeric_limits<double>::quiet_NaN();    // deg, overrides the preset's yaw
-  double view_pitch_deg = std::numeric_limits<double>::quiet_NaN();  // deg, overrides the preset's pitch
-  double view_distance_mm = 3000.0;                                  // mm, eye distance from the view target (> 0)
-  double view_target_x_mm = 0.0;                                     // mm, view target in world
-  double view_target_y_mm = 0.0;                                     // mm
-  double view_target_z_mm = 0.0;                                     // mm
-  double view_fov_deg = 50.0;                                        // deg, vertical field of view (1..170)
+  std::string view = "iso";                       // PRESET or YAW,PITCH[,DISTANCE[,X,Y,Z[,FOV]]] (ParseViewSpec)
   bool follow = false;                         // start in follow-camera mode (target tracks the newest pose)
   double speed = 1.0;                          // log playback speed (> 0)
   bool paused = false;                         // start the log paused
@@ -48,11 +41,7 @@ struct ViewerOptions {
   int64_t screenshot_at_utime = -1;            // µs, log time to take the screenshot at (-1 = unused)
   int64_t screenshot_after_messages = -1;      // take it after this many messages (-1 = unused)
   double screenshot_timeout_s = 30.0;          // s, live only: take it anyway after this wall time
-  int benchmark_voxels = 0;                    // > 0: render a synthetic model of this many voxels and print fps
-  bool benchmark = false;                      // with log: orbit the scene at the end of the log and print fps
-  double benchmark_seconds = 5.0;              // s, benchmark duration
-  int benchmark_frames = 0;                    // > 0: benchmark this many frames instead of benchmark_seconds
-  std::string benchmark_shape = "ball";        // benchmark model: ball (solid) or scatter (no voxel touches another)
+  std::string benchmark;                       // "" = none; else MODEL[@SECONDS] (ParseBenchmarkSpec)
   int min_votes = 0;                           // initial voxel display threshold (votes)
   bool cull_hidden_voxels = true;              // skip voxel faces hidden by neighbours
   std::string voxel_style = "auto";            // voxels as cubes, points, or auto (points above max_cube_instances)
@@ -71,7 +60,17 @@ struct ViewerOptions {
 void AddViewerOptions(OptionParser& parser, ViewerOptions* options);
 bool ValidateViewerOptions(const ViewerOptions& options, std::string* why);
 
-// The view camera the options describe (preset, then the explicit overrides).
+// The --benchmark option: MODEL[@SECONDS]. MODEL is "log" (the scene at the end of --log) or "ball:N" / "scatter:N"
+// (a synthetic model of N voxels: a solid ball, or voxels none of which touches another); SECONDS (> 0, default 5)
+// is how long the view orbits. False with *why set for a bad spec.
+struct BenchmarkSpec {
+  std::string model;     // "log", "ball" or "scatter"
+  int voxels = 0;        // ball / scatter: voxels of the synthetic model (> 0)
+  double seconds = 5.0;  // s, benchmark duration
+};
+bool ParseBenchmarkSpec(const std::string& spec, BenchmarkSpec* benchmark, std::string* why);
+
+// The view camera the options describe (--view; the default view when it is invalid).
 OrbitView InitialView(const ViewerOptions& options);
 // The scene viewport for a framebuffer: the left part, right of it the panel column.
 Viewport SceneViewport(int framebuffer_width, int framebuffer_height, int panel_width);

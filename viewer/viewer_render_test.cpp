@@ -1,11 +1,14 @@
 // Renders a synthetic log with the real viewer binary under xvfb-run and checks the screenshot: not blank, the
 // estimated and true trajectories and the voxel blob appear where the viewer's own view maths puts them.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -152,8 +155,7 @@ OrbitView TestView() {
 std::string ViewArgs() {
   return " --window-width " + std::to_string(kWidth) + " --window-height " + std::to_string(kHeight) +
          " --panel-width " + std::to_string(kPanel) +
-         " --view iso --view-yaw-deg -90 --view-pitch-deg 70 --view-distance-mm 4000 --view-fov-deg 50"
-         " --view-target-x-mm 0 --view-target-y-mm 0 --view-target-z-mm 0";
+         " --view -90,70,4000,0,0,0,50";  // TestView()
 }
 
 bool Near(const cv::Vec3b& bgr, Rgb rgb, int tolerance) {
@@ -209,6 +211,19 @@ class ViewerRenderTest : public ::testing::Test {
     cv::Mat image = cv::imread(png, cv::IMREAD_COLOR);
     if (std::getenv("OBJSCAN_KEEP_SCREENSHOTS") == nullptr) std::remove(png.c_str());
     return image;
+  }
+  // Runs the viewer under xvfb-run with args; returns its exit code and its stdout + stderr in *output.
+  int Run(const std::string& args, const std::string& name, std::string* output) {
+    const std::string out = prefix_ + "_" + name + ".out";
+    const std::string command = "LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1280x800x24' " + viewer_ + " " +
+                                args + " > " + out + " 2>&1";
+    const int status = std::system(command.c_str());
+    std::ifstream in(out);
+    std::ostringstream text;
+    text << in.rdbuf();
+    *output = text.str();
+    if (std::getenv("OBJSCAN_KEEP_SCREENSHOTS") == nullptr) std::remove(out.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
   std::string viewer_, prefix_, log_;
 };
@@ -304,6 +319,43 @@ TEST_F(ViewerRenderTest, WholeLogShowsTrajectoriesAndVoxels) {
               std::abs(bgr[2] - kBlobRgb[0]) <= 3;
     }
   EXPECT_GE(blue, samples - 1) << "voxel top face colour missing";
+}
+
+TEST_F(ViewerRenderTest, BenchmarkRendersASyntheticModelOrTheLog) {
+  std::string output;
+  EXPECT_EQ(Run("--window-width 640 --window-height 480 --benchmark scatter:3000@0.5", "bench_scatter", &output), 0)
+      << output;
+  EXPECT_NE(output.find("benchmark (scatter, "), std::string::npos) << output;
+  EXPECT_NE(output.find(": 3000 voxels"), std::string::npos) << output;
+  EXPECT_NE(output.find(" frames/s"), std::string::npos) << output;
+  // The log's scene, 0.5 s: its 1000 voxels.
+  EXPECT_EQ(Run("--log " + log_ + " --window-width 640 --window-height 480 --benchmark log@0.5", "bench_log", &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("benchmark (log " + log_), std::string::npos) << output;
+  EXPECT_NE(output.find(": 1000 voxels"), std::string::npos) << output;
+}
+
+TEST_F(ViewerRenderTest, BadViewOrBenchmarkIsAUsageError) {
+  struct Case {
+    std::string args, message;
+  };
+  for (const Case& c : {Case{"--view 10,20,0", "error: --view '10,20,0': distance must be > 0 mm"},
+                        Case{"--view -90,abc", "error: --view '-90,abc': pitch 'abc' is no finite number"},
+                        Case{"--view 1,2,3,4", "error: --view '1,2,3,4': 4 values; want PRESET"},
+                        Case{"--view 1,2,3,4,5,6,180", "fov must be in 1..170 deg"},
+                        Case{"--view sideways", "unknown preset 'sideways'"},
+                        Case{"--benchmark ball", "error: --benchmark 'ball': ball needs its voxel count"},
+                        Case{"--benchmark scatter:-5", "voxel count '-5' must be a whole number"},
+                        Case{"--benchmark ball:100@0", "seconds '0' must be a number > 0"},
+                        Case{"--benchmark log", "error: --benchmark log needs --log"},
+                        Case{"--benchmark ball:100 --log " + log_, "renders a synthetic model, not --log"},
+                        Case{"--view-distance-mm 800", "unknown option '--view-distance-mm'"},
+                        Case{"--benchmark-voxels 100", "unknown option '--benchmark-voxels'"}}) {
+    std::string output;
+    EXPECT_EQ(Run(c.args, "usage", &output), 2) << c.args << "\n" << output;
+    EXPECT_NE(output.find(c.message), std::string::npos) << c.args << "\n" << output;
+  }
 }
 
 TEST_F(ViewerRenderTest, ScreenshotAtUtimeShowsOnlyThePast) {

@@ -404,5 +404,45 @@ TEST(ViewCameraTest, ProjectionMatchesGeometry) {
   EXPECT_FALSE(ApplyViewPreset("nonsense", &view));
 }
 
+TEST(ViewCameraTest, ViewSpecPresetOrAnglesThenDistanceTargetFov) {
+  OrbitView view, iso;
+  std::string why;
+  ASSERT_TRUE(ApplyViewPreset("iso", &iso));
+  ASSERT_TRUE(ParseViewSpec("iso", &view, &why)) << why;  // a preset: its angles, the defaults
+  EXPECT_DOUBLE_EQ(view.yaw_rad, iso.yaw_rad);
+  EXPECT_DOUBLE_EQ(view.pitch_rad, iso.pitch_rad);
+  EXPECT_DOUBLE_EQ(view.distance_mm, 3000);
+  EXPECT_EQ(view.target_mm, Eigen::Vector3d::Zero());
+  EXPECT_DOUBLE_EQ(view.fovy_rad, 50 * M_PI / 180);
+  ASSERT_TRUE(ParseViewSpec("top,800", &view, &why)) << why;  // a preset and a distance
+  EXPECT_DOUBLE_EQ(view.pitch_rad, 1.55);
+  EXPECT_DOUBLE_EQ(view.distance_mm, 800);
+  ASSERT_TRUE(ParseViewSpec("-90,70", &view, &why)) << why;
+  EXPECT_DOUBLE_EQ(view.yaw_rad, -M_PI / 2);
+  EXPECT_DOUBLE_EQ(view.pitch_rad, 70 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(view.distance_mm, 3000);
+  ASSERT_TRUE(ParseViewSpec("180,25,600.5", &view, &why)) << why;
+  EXPECT_DOUBLE_EQ(view.distance_mm, 600.5);
+  EXPECT_EQ(view.target_mm, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(ParseViewSpec("0,85,450,10.5,-20,80", &view, &why)) << why;
+  EXPECT_EQ(view.target_mm, Eigen::Vector3d(10.5, -20, 80));
+  EXPECT_DOUBLE_EQ(view.fovy_rad, 50 * M_PI / 180);
+  ASSERT_TRUE(ParseViewSpec("0,95,450,0,0,0,30", &view, &why)) << why;
+  EXPECT_DOUBLE_EQ(view.pitch_rad, 1.55);  // clamped as the mouse does
+  EXPECT_DOUBLE_EQ(view.fovy_rad, 30 * M_PI / 180);
+
+  // Bad specs: refused with a reason naming the spec, and the view is left alone.
+  const OrbitView before = view;
+  for (const char* bad : {"", "nonsense", "iso,", "10", "10,x", "x,10", "10,20,", "10,20,0", "10,20,-5", "10,20,nan",
+                          "10,20,inf", "10,20,100,1", "10,20,100,1,2", "10,20,100,1,2,3,0", "10,20,100,1,2,3,180",
+                          "10,20,100,1,2,3,50,1", "iso,800,1", "top,0", "1e999,20", "10,20,100,1,2,3,50mm"}) {
+    why.clear();
+    EXPECT_FALSE(ParseViewSpec(bad, &view, &why)) << bad;
+    EXPECT_EQ(why.rfind(std::string("--view '") + bad + "'", 0), 0u) << why;
+    EXPECT_EQ(view.yaw_rad, before.yaw_rad) << bad;
+    EXPECT_EQ(view.distance_mm, before.distance_mm) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace objscan

@@ -69,9 +69,8 @@ int Views(const std::string& dir) {
   // The viewer's field of view is 50 deg: at 3 radii the model fills about 70 % of the picture's height.
   for (const View& v : {View{"model from +x", 0, 25}, View{"model from +y", 90, 25}, View{"model from -x", 180, 25},
                         View{"model from -y", 270, 25}, View{"model from above", 0, 85}})
-    std::printf("%s|--view-yaw-deg %g --view-pitch-deg %g --view-target-x-mm %.1f --view-target-y-mm %.1f "
-                "--view-target-z-mm %.1f --view-distance-mm %.1f\n",
-                v.name, v.yaw_deg, v.pitch_deg, c.x(), c.y(), c.z(), 3 * radius);
+    std::printf("%s|--view %g,%g,%.1f,%.1f,%.1f,%.1f\n",  // yaw, pitch, distance, target
+                v.name, v.yaw_deg, v.pitch_deg, 3 * radius, c.x(), c.y(), c.z());
   return 0;
 }
 
