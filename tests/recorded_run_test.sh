@@ -19,7 +19,8 @@ FAILED=0
 source "$SRC/tests/accuracy_lib.sh"
 
 d="$WORK/sphere"; mkdir -p "$d"
-render_orbit sphere "$d" --mast-height 450
+printf 'mast_height_mm = 450\n' > "$d/robot450.cfg"
+render_orbit sphere "$d" --robot-file "$d/robot450.cfg"
 [ -s "$d/gt/robot.cfg" ] || fail "robot_sim wrote no robot.cfg"
 "$BIN/objscan_export" --log "$d/sim.lcmlog" --out "$d/folder" --robot-file "$d/gt/robot.cfg" > "$d/export.out" 2>&1 \
   || { cat "$d/export.out"; fail "objscan_export"; }

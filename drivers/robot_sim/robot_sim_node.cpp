@@ -74,11 +74,9 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("seed", &o->seed, "seed (>= 0) of the odometry errors and the image noise");
   p.Add("orbit-radius", &o->orbit_radius_mm, "mm, orbit radius");
   p.Add("orbit-degrees", &o->orbit_degrees, "deg, angle covered over all frames (negative = clockwise)");
-  p.Add("mast-height", &o->mast_height_mm, "mm, height of the pan/tilt axes above the floor");
-  p.Add("mast-offset-x", &o->mast_offset_x_mm, "mm, mast position forward of the base centre");
-  p.Add("mast-offset-y", &o->mast_offset_y_mm, "mm, mast position left of the base centre");
-  p.Add("camera-offset-x", &o->camera_offset_x_mm, "mm, optical centre in front of the tilt axis");
-  p.Add("wheel-base", &o->wheel_base_mm, "mm, distance between the drive wheels");
+  p.Add("robot-file", &o->robot_file,
+        "robot.cfg (common/recorded_run.h): the simulated robot's geometry (mast height and offsets, camera offset, "
+        "wheel base; the pose solver and planner take the same file); none: mast 400 mm, camera 40 mm forward");
   p.Add("blank-first", &o->blank_first, "first frame rendered as a uniform grey view (tracking loss test; -1 = none)");
   p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
@@ -123,6 +121,9 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.geometry.mast_offset_y_mm = o.mast_offset_y_mm;
   s.geometry.camera_offset_mm = Eigen::Vector3d(o.camera_offset_x_mm, 0, 0);
   s.geometry.wheel_base_mm = o.wheel_base_mm;
+  RobotDescription robot;
+  std::string robot_why;
+  if (!o.robot_file.empty() && ReadRobotFile(o.robot_file, &robot, &robot_why)) s.geometry = robot.geometry;
   s.errors.scale_error = o.odometry_scale_error;
   s.errors.yaw_scale_error = o.odometry_yaw_scale_error;
   s.errors.heading_drift_rad_per_mm = o.heading_drift_deg_per_m * kDeg / 1000.0;
@@ -165,6 +166,11 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("orbit_center must be x,y");
   if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
   if (o.seed < 0) return fail("--seed must be >= 0");
+  if (!o.robot_file.empty()) {
+    RobotDescription robot;
+    std::string robot_why;
+    if (!ReadRobotFile(o.robot_file, &robot, &robot_why)) return fail("--robot-file: " + robot_why);
+  }
   if (!std::isfinite(o.sync_offset_ms) || std::abs(o.sync_offset_ms) > 1e6)
     return fail("sync_offset_ms out of range");
   if (!std::isfinite(o.max_omega_deg_s) || !std::isfinite(o.max_head_rate_deg_s))
@@ -248,8 +254,8 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
               << sim_->start_state().y_mm << "," << sim_->start_state().theta_rad * 180 / 3.14159265358979323846
               << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx
               << " fy=" << camera_.fy << " cx=" << camera_.cx << " cy=" << camera_.cy
-              << " noise_sigma=" << options_.noise_sigma << "\n# robot: mast_height=" << options_.mast_height_mm
-              << " camera_offset_x=" << options_.camera_offset_x_mm
+              << " noise_sigma=" << options_.noise_sigma << "\n# robot: mast_height=" << sim_options_.geometry.mast_height_mm
+              << " camera_offset_x=" << sim_options_.geometry.camera_offset_mm.x()
               << "\n# odometry errors: scale=" << options_.odometry_scale_error
               << " yaw_scale=" << options_.odometry_yaw_scale_error
               << " heading_drift_deg_per_m=" << options_.heading_drift_deg_per_m

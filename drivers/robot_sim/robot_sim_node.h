@@ -62,7 +62,8 @@ struct RobotSimNodeOptions {
   double orbit_degrees = 360;    // deg, angle covered over the frames (negative = clockwise)
   double orbit_start_deg = -90;  // deg, robot's angle around the centre at frame 0
   std::string look_at;           // "x,y,z" mm the camera aims at; empty = the target centre
-  // robot geometry
+  // robot geometry (robot_file, when set, replaces these five)
+  std::string robot_file;          // robot.cfg (common/recorded_run.h): the robot's geometry; "" = the fields below
   double mast_height_mm = 400;     // mm, pan/tilt axes above the floor
   double mast_offset_x_mm = 0;     // mm, mast forward of the base centre
   double mast_offset_y_mm = 0;     // mm, mast left of the base centre
