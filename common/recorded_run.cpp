@@ -151,6 +151,11 @@ bool WriteRobotFile(const std::string& path, const RobotDescription& robot, std:
   std::fprintf(out, "wheel_base_mm = %.17g\n", g.wheel_base_mm);
   std::fprintf(out, "pan_sign = %g\ntilt_sign = %g\npan_zero_rad = %.17g\ntilt_zero_rad = %.17g\n", robot.pan_sign,
                robot.tilt_sign, robot.pan_zero_rad, robot.tilt_zero_rad);
+  std::fprintf(out,
+               "footprint_radius_mm = %.17g\nmax_speed_mm_s = %.17g\nmax_omega_deg_s = %.17g\npan_limit_deg = %.17g\n"
+               "tilt_min_deg = %.17g\ntilt_max_deg = %.17g\n",
+               robot.footprint_radius_mm, robot.max_speed_mm_s, robot.max_omega_deg_s, robot.pan_limit_deg,
+               robot.tilt_min_deg, robot.tilt_max_deg);
   return CloseFile(out, path, error);
 }
 
@@ -170,6 +175,12 @@ bool ReadRobotFile(const std::string& path, RobotDescription* robot, std::string
       {"tilt_sign", &r.tilt_sign},
       {"pan_zero_rad", &r.pan_zero_rad},
       {"tilt_zero_rad", &r.tilt_zero_rad},
+      {"footprint_radius_mm", &r.footprint_radius_mm},
+      {"max_speed_mm_s", &r.max_speed_mm_s},
+      {"max_omega_deg_s", &r.max_omega_deg_s},
+      {"pan_limit_deg", &r.pan_limit_deg},
+      {"tilt_min_deg", &r.tilt_min_deg},
+      {"tilt_max_deg", &r.tilt_max_deg},
   };
   std::set<std::string> seen;
   std::string line;
@@ -197,6 +208,12 @@ bool ReadRobotFile(const std::string& path, RobotDescription* robot, std::string
     return Fail(error, path + ": pan_sign and tilt_sign must be 1 or -1");
   std::string why;
   if (!r.geometry.IsValid(&why)) return Fail(error, path + ": " + why);
+  if (!(r.footprint_radius_mm > 0) || !(r.max_speed_mm_s > 0) || !(r.max_omega_deg_s > 0))
+    return Fail(error, path + ": footprint_radius_mm, max_speed_mm_s and max_omega_deg_s must be > 0");
+  if (!(r.pan_limit_deg > 0 && r.pan_limit_deg <= 180))
+    return Fail(error, path + ": pan_limit_deg must be in (0, 180]");
+  if (!(r.tilt_min_deg < r.tilt_max_deg && r.tilt_min_deg >= -90 && r.tilt_max_deg <= 90))
+    return Fail(error, path + ": tilt_min_deg < tilt_max_deg, both in [-90, 90], is required");
   *robot = r;
   return true;
 }

@@ -58,13 +58,21 @@ struct RobotDescription {
   RobotGeometry geometry;
   double pan_sign = 1, tilt_sign = 1;          // +1 or -1
   double pan_zero_rad = 0, tilt_zero_rad = 0;  // rad, encoder readings of the straight-ahead, level camera
+  // The base's and the head's limits: the planner plans within them, the simulator enforces them.
+  double footprint_radius_mm = 200;  // mm, radius of the base's round footprint (> 0)
+  double max_speed_mm_s = 400;       // mm/s, base speed (> 0)
+  double max_omega_deg_s = 90;       // deg/s, base yaw rate (> 0)
+  double pan_limit_deg = 170;        // deg, |pan| at most, (0, 180]
+  double tilt_min_deg = 0;           // deg, lowest tilt (positive = looking down), < tilt_max_deg
+  double tilt_max_deg = 60;          // deg, highest tilt, <= 90
 
   // A reading in objscan's convention (pan > 0 = left, tilt > 0 = down, 0 = straight ahead and level).
   OdometryReading ToObjscanConvention(const OdometryReading& encoder_reading) const;
 };
 bool WriteRobotFile(const std::string& path, const RobotDescription& robot, std::string* error);
 // Reads robot.cfg; mast_height_mm is required, the rest default to RobotDescription's values. Rejects unknown and
-// repeated names, non-numbers, signs other than +-1 and an invalid geometry (RobotGeometry::IsValid).
+// repeated names, non-numbers, signs other than +-1, an invalid geometry (RobotGeometry::IsValid) and limits out of
+// their ranges.
 bool ReadRobotFile(const std::string& path, RobotDescription* robot, std::string* error);
 
 }  // namespace objscan

@@ -98,6 +98,9 @@ TEST_F(RecordedRunTest, RobotFileReadsBackAndMapsTheEncoderConvention) {
   robot.geometry.camera_offset_mm = Eigen::Vector3d(35, -2, 4);
   robot.pan_sign = -1;
   robot.tilt_zero_rad = 0.1;
+  robot.footprint_radius_mm = 260;
+  robot.max_speed_mm_s = 350;
+  robot.tilt_max_deg = 45;
   std::string error;
   const std::string path = (root_ / "robot.cfg").string();
   ASSERT_TRUE(WriteRobotFile(path, robot, &error)) << error;
@@ -107,6 +110,15 @@ TEST_F(RecordedRunTest, RobotFileReadsBackAndMapsTheEncoderConvention) {
   EXPECT_EQ(read.geometry.camera_offset_mm, robot.geometry.camera_offset_mm);
   EXPECT_EQ(read.pan_sign, -1);
   EXPECT_EQ(read.tilt_zero_rad, 0.1);
+  EXPECT_EQ(read.footprint_radius_mm, 260);
+  EXPECT_EQ(read.max_speed_mm_s, 350);
+  EXPECT_EQ(read.max_omega_deg_s, 90);  // the default, written and read back
+  EXPECT_EQ(read.tilt_max_deg, 45);
+  RobotDescription bad;
+  EXPECT_FALSE(ReadRobotFile(Write("limits1.cfg", "mast_height_mm = 400\nfootprint_radius_mm = 0\n"), &bad, &error));
+  EXPECT_NE(error.find("footprint_radius_mm"), std::string::npos) << error;
+  EXPECT_FALSE(ReadRobotFile(Write("limits2.cfg", "mast_height_mm = 400\ntilt_min_deg = 70\n"), &bad, &error));
+  EXPECT_NE(error.find("tilt_min_deg < tilt_max_deg"), std::string::npos) << error;
 
   OdometryReading encoder;
   encoder.pan_rad = 0.3;  // this robot's encoder: positive = right

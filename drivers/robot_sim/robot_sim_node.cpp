@@ -76,16 +76,12 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("orbit-degrees", &o->orbit_degrees, "deg, angle covered over all frames (negative = clockwise)");
   p.Add("robot-file", &o->robot_file,
         "robot.cfg (common/recorded_run.h): the simulated robot's geometry (mast height and offsets, camera offset, "
-        "wheel base; the pose solver and planner take the same file); none: mast 400 mm, camera 40 mm forward");
+        "wheel base) and limits (footprint, speed, yaw rate); the pose solver and planner take the same file; none: "
+        "mast 400 mm, camera 40 mm forward, footprint 200 mm, 400 mm/s, 90 deg/s");
   p.Add("blank-first", &o->blank_first, "first frame rendered as a uniform grey view (tracking loss test; -1 = none)");
   p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
-  p.Add("max-speed", &o->max_speed_mm_s, "mm/s, command mode speed limit");
-  p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, command mode yaw rate limit");
-  p.Add("footprint-radius-mm", &o->footprint_radius_mm,
-        "mm, radius of the robot base's circular footprint: command mode stops the base before it overlaps an "
-        "object; contacts are counted in both modes");
   p.Add("lockstep-channel", &o->lockstep_channel,
         "publish frame i+1 only after a message with seq >= i - lockstep_lag on this channel (empty = off)");
   p.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms, "ms, go on after waiting this long for lockstep (0 = forever)");
@@ -123,7 +119,8 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.geometry.wheel_base_mm = o.wheel_base_mm;
   RobotDescription robot;
   std::string robot_why;
-  if (!o.robot_file.empty() && ReadRobotFile(o.robot_file, &robot, &robot_why)) s.geometry = robot.geometry;
+  const bool from_file = !o.robot_file.empty() && ReadRobotFile(o.robot_file, &robot, &robot_why);
+  if (from_file) s.geometry = robot.geometry;
   s.errors.scale_error = o.odometry_scale_error;
   s.errors.yaw_scale_error = o.odometry_yaw_scale_error;
   s.errors.heading_drift_rad_per_mm = o.heading_drift_deg_per_m * kDeg / 1000.0;
@@ -135,11 +132,11 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.errors.sync_offset_us = std::isfinite(o.sync_offset_ms) ? std::llround(o.sync_offset_ms * 1000.0) : 0;
   s.odometry_origin = o.odometry_origin;
   s.seed = static_cast<uint64_t>(o.seed);
-  s.max_speed_mm_s = o.max_speed_mm_s;
-  s.max_omega_rad_s = o.max_omega_deg_s * kDeg;
+  s.max_speed_mm_s = from_file ? robot.max_speed_mm_s : o.max_speed_mm_s;
+  s.max_omega_rad_s = (from_file ? robot.max_omega_deg_s : o.max_omega_deg_s) * kDeg;
   s.max_head_rate_rad_s = o.max_head_rate_deg_s * kDeg;
   s.command_timeout_us = static_cast<int64_t>(o.command_timeout_ms) * 1000;
-  s.footprint_radius_mm = o.footprint_radius_mm;
+  s.footprint_radius_mm = from_file ? robot.footprint_radius_mm : o.footprint_radius_mm;
   return s;
 }
 
@@ -222,8 +219,8 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
     const double clearance = sim_->footprint().Clearance(Eigen::Vector2d(start.x_mm, start.y_mm), &object);
     if (clearance < 0)
       LogWarning("the robot starts overlapping '" + scene_->objects.at(static_cast<size_t>(object)).name + "' by " +
-                 std::to_string(-clearance) + " mm (footprint radius " + std::to_string(options_.footprint_radius_mm) +
-                 " mm)");
+                 std::to_string(-clearance) + " mm (footprint radius " +
+                 std::to_string(sim_options_.footprint_radius_mm) + " mm)");
   }
 
   if (!options_.ground_truth_dir.empty()) {
@@ -250,7 +247,7 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
               << " orbit_center=" << sim_->orbit_center().x() << "," << sim_->orbit_center().y()
               << " orbit_degrees=" << options_.orbit_degrees << " orbit_start_deg=" << options_.orbit_start_deg
               << " look_at=" << sim_->look_at().x() << "," << sim_->look_at().y() << "," << sim_->look_at().z()
-              << " footprint_radius=" << options_.footprint_radius_mm << " start=" << sim_->start_state().x_mm << ","
+              << " footprint_radius=" << sim_options_.footprint_radius_mm << " start=" << sim_->start_state().x_mm << ","
               << sim_->start_state().y_mm << "," << sim_->start_state().theta_rad * 180 / 3.14159265358979323846
               << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx
               << " fy=" << camera_.fy << " cx=" << camera_.cx << " cy=" << camera_.cy
@@ -269,6 +266,9 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
     // reports its head angles in objscan's convention.
     RobotDescription robot;
     robot.geometry = sim_->options().geometry;
+    robot.footprint_radius_mm = sim_->options().footprint_radius_mm;
+    robot.max_speed_mm_s = sim_->options().max_speed_mm_s;
+    robot.max_omega_deg_s = sim_->options().max_omega_rad_s / kDeg;
     std::string robot_error;
     if (!WriteRobotFile(dir + "/" + kRobotFileName, robot, &robot_error)) throw std::runtime_error(robot_error);
     poses_gt_.open(dir + "/poses_gt.txt");
@@ -456,7 +456,7 @@ void RobotSimNode::WriteOutcome() {
        << "  \"collisions\": " << sim_->collisions() << ",\n"
        << "  \"blocked_frames\": " << sim_->blocked_frames() << ",\n"
        << "  \"path_length_mm\": " << sim_->path_length_mm() << ",\n"
-       << "  \"footprint_radius_mm\": " << options_.footprint_radius_mm << ",\n"
+       << "  \"footprint_radius_mm\": " << sim_options_.footprint_radius_mm << ",\n"
        << "  \"target\": {\n"
        << "    \"name\": " << JsonQuoted(target.name) << ",\n"
        << "    \"shape\": " << JsonQuoted(ShapeName(target.type)) << ",\n"

@@ -343,7 +343,7 @@ TEST(RobotSimNodeTest, CommandModeStopsAtAnObstacleCountsItAndWritesTheOutcome) 
   std::string why;
   options.footprint_radius_mm = -5;
   EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why));
-  EXPECT_NE(why.find("--footprint-radius-mm"), std::string::npos) << why;
+  EXPECT_NE(why.find("footprint_radius_mm"), std::string::npos) << why;
   options.footprint_radius_mm = 200;
   options.ground_truth_dir = dir + "/gt";
   RobotSimNode node(*bus, options);

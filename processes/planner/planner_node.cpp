@@ -82,30 +82,33 @@ void AddPlannerNodeOptions(OptionParser& p, PlannerNodeOptions* o) {
         "mm, free floor needs a floor landmark this close (0 = view rays alone, for untextured floors)");
   p.Add("obstacle-min-z", &m->obstacle_min_z_mm, "mm, landmarks at least this high are obstacles");
   p.Add("obstacle-max-z", &m->obstacle_max_z_mm, "mm, landmarks higher than this do not block the base");
-  p.Add("footprint-radius", &m->footprint_radius_mm, "mm, radius of the robot's round footprint");
   p.Add("safety-margin", &m->safety_margin_mm, "mm, planned paths keep footprint + this from obstacles");
   p.Add("robot-file", &o->robot_file,
-        "the robot's robot.cfg (common/recorded_run.h: mast height and offsets, camera offset; the pose solver "
-        "takes the same file); none: the simulator's robot");
-  p.Add("max-speed", &q->limits.max_speed_mm_s, "mm/s, the base's speed limit");
-  p.Add("max-omega-deg-s", &o->max_omega_deg_s, "deg/s, the base's yaw-rate limit");
-  p.Add("pan-limit-deg", &o->pan_limit_deg, "deg, |pan| limit of the head");
-  p.Add("tilt-min-deg", &o->tilt_min_deg, "deg, lowest tilt (positive = down)");
-  p.Add("tilt-max-deg", &o->tilt_max_deg, "deg, highest tilt (positive = down)");
+        "the robot's robot.cfg (common/recorded_run.h: mast height and offsets, camera offset, footprint, speed, "
+        "yaw rate, pan and tilt limits; the pose solver and the simulator take the same file); none: the "
+        "simulator's robot");
 }
 
 bool ToPlannerOptions(const PlannerNodeOptions& o, PlannerOptions* out, std::string* why) {
   PlannerOptions p = o.planner;
-  if (!o.robot_file.empty()) {
+  double max_omega_deg_s = o.max_omega_deg_s, pan_limit_deg = o.pan_limit_deg, tilt_min_deg = o.tilt_min_deg,
+         tilt_max_deg = o.tilt_max_deg;
+  if (!o.robot_file.empty()) {  // the robot's geometry and limits
     RobotDescription robot;
     if (!ReadRobotFile(o.robot_file, &robot, why)) return false;
     p.robot = robot.geometry;
+    p.map.footprint_radius_mm = robot.footprint_radius_mm;
+    p.limits.max_speed_mm_s = robot.max_speed_mm_s;
+    max_omega_deg_s = robot.max_omega_deg_s;
+    pan_limit_deg = robot.pan_limit_deg;
+    tilt_min_deg = robot.tilt_min_deg;
+    tilt_max_deg = robot.tilt_max_deg;
   }
   p.tracking_turn_rad_s = o.tracking_turn_deg_s * kDeg;
-  p.limits.max_omega_rad_s = o.max_omega_deg_s * kDeg;
-  p.limits.max_pan_rad = o.pan_limit_deg * kDeg;
-  p.limits.min_tilt_rad = o.tilt_min_deg * kDeg;
-  p.limits.max_tilt_rad = o.tilt_max_deg * kDeg;
+  p.limits.max_omega_rad_s = max_omega_deg_s * kDeg;
+  p.limits.max_pan_rad = pan_limit_deg * kDeg;
+  p.limits.min_tilt_rad = tilt_min_deg * kDeg;
+  p.limits.max_tilt_rad = tilt_max_deg * kDeg;
   p.coverage.max_incidence_deg = o.max_incidence_deg;
   p.next_view.azimuth_step_deg = o.azimuth_step_deg;
   if (!ParseRadii(o.next_view_radii, &p.next_view.radii_mm)) {

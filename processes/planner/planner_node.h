@@ -56,7 +56,8 @@ class OptionParser;
 
 struct PlannerNodeOptions {
   std::string name = "planner";                     // process name (status name, control sender)
-  std::string robot_file;                           // robot.cfg (common/recorded_run.h): replaces planner.robot
+  std::string robot_file;  // robot.cfg (common/recorded_run.h): replaces planner.robot, the footprint, speed, yaw rate
+                           // and head limits (planner.map, planner.limits and the four fields below)
   std::string pose_channel = "CAMERA_POSE";         // pose_t in
   std::string odometry_channel = "ROBOT_ODOMETRY";  // odometry_t in
   std::string target_channel = "TARGET";            // target_t in

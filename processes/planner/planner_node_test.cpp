@@ -289,7 +289,8 @@ TEST(PlannerNodeOptionsTest, ValidatesAndConvertsDegrees) {
 // error that names it.
 TEST(PlannerNodeOptionsTest, RobotGeometryFromTheRobotFile) {
   const std::string path = ::testing::TempDir() + "planner_node_test_robot.cfg";
-  std::ofstream(path) << "mast_height_mm = 452.5\nmast_offset_x_mm = -30\ncamera_offset_x_mm = 55\n";
+  std::ofstream(path) << "mast_height_mm = 452.5\nmast_offset_x_mm = -30\ncamera_offset_x_mm = 55\n"
+                          "footprint_radius_mm = 250\nmax_speed_mm_s = 300\npan_limit_deg = 120\n";
   PlannerNodeOptions o;
   OptionParser parser("planner", "test");
   AddPlannerNodeOptions(parser, &o);
@@ -301,6 +302,10 @@ TEST(PlannerNodeOptionsTest, RobotGeometryFromTheRobotFile) {
   EXPECT_EQ(p.robot.mast_height_mm, 452.5);
   EXPECT_EQ(p.robot.mast_offset_x_mm, -30.0);
   EXPECT_EQ(p.robot.camera_offset_mm.x(), 55.0);
+  EXPECT_EQ(p.map.footprint_radius_mm, 250.0);
+  EXPECT_EQ(p.limits.max_speed_mm_s, 300.0);
+  EXPECT_NEAR(p.limits.max_pan_rad, 120 * kDeg, 1e-12);
+  EXPECT_NEAR(p.limits.max_omega_rad_s, 90 * kDeg, 1e-12);  // not in the file: the default
   std::ofstream(path) << "mast_height_mm = 45cm\n";
   EXPECT_FALSE(ValidatePlannerNodeOptions(o, &why));
   EXPECT_NE(why.find(path), std::string::npos) << why;
