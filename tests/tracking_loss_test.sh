@@ -14,7 +14,7 @@ FAILED=0
 fail() { echo "FAIL: $*"; exit 1; }
 
 source "$SRC/tests/accuracy_lib.sh"
-render_orbit sphere "$WORK" --blank-first 80 --blank-count 20
+render_orbit sphere "$WORK" --blank 80,20
 GT="$WORK/gt/poses_gt.txt"
 
 for model in 6dof 4dof; do

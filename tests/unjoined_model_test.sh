@@ -19,7 +19,7 @@ run() {  # NAME PORT POSE_SOLVER_ARGS: the session's exit code in $WORK/NAME.rc
 tracker processor $BIN/tracker --lcm-url '$url'
 pose_solver processor $BIN/pose_solver --lcm-url '$url' --output-dir '$out' $3
 dense_modeler processor $BIN/dense_modeler --lcm-url '$url' --output-dir '$out'
-robot_sim driver $BIN/robot_sim --lcm-url '$url' --scene '$SRC/drivers/robot_sim/scenes/sphere.scene' --frames 200 --blank-first 80 --blank-count 20 --realtime=false --lockstep-channel CAMERA_POSE
+robot_sim driver $BIN/robot_sim --lcm-url '$url' --scene '$SRC/drivers/robot_sim/scenes/sphere.scene' --frames 200 --blank 80,20 --realtime=false --lockstep-channel CAMERA_POSE
 PROCS
   in_ns "$NS" "$BIN/objscan_session" --out "$out" --processes "$WORK/$name.procs" --lcm-url "$url" \
     --finish-on dense_modeler --expected-frames 200 > "$WORK/$name.out" 2>&1 || rc=$?

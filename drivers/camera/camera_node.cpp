@@ -1,5 +1,6 @@
 #include "drivers/camera/camera_node.h"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <filesystem>
@@ -64,8 +65,7 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
              "publish frame i+1 only after a message with seq >= i on this channel (empty = off)");
   parser.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms,
              "ms, go on after waiting this long for the lockstep message (0 = wait forever)");
-  parser.Add("device-width", &o->device_width, "px, V4L2 capture width to request (0 = calibration width)");
-  parser.Add("device-height", &o->device_height, "px, V4L2 capture height to request (0 = calibration height)");
+  parser.Add("device-size", &o->device_size, "WxH px, V4L2 capture size to request (\"\" = the calibration's size)");
   parser.AddChannel(&o->image_channel, "output channel for image_t");
   parser.AddChannel(&o->info_channel, "output channel for camera_info_t");
   parser.AddChannel(&o->ground_truth_channel, "output channel for the true poses (pose_t)");
@@ -76,6 +76,23 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
              "publish an image or video folder's odometry.txt (needs robot.cfg beside it, and timestamps.txt for "
              "images; a video without it uses the container's times); false: the images alone");
   parser.AddChannel(&o->odometry_channel, "output channel for odometry_t");
+}
+
+bool ParseDeviceSize(const std::string& text, int* width, int* height) {
+  *width = *height = 0;
+  if (text.empty()) return true;
+  const size_t x = text.find('x');
+  if (x == std::string::npos || x == 0 || x + 1 == text.size()) return false;
+  const std::string w = text.substr(0, x), h = text.substr(x + 1);
+  const auto digits = [](const std::string& s) {
+    return s.size() <= 5 && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  if (!digits(w) || !digits(h)) return false;
+  const int wv = std::stoi(w), hv = std::stoi(h);
+  if (wv <= 0 || hv <= 0) return false;
+  *width = wv;
+  *height = hv;
+  return true;
 }
 
 bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
@@ -92,7 +109,9 @@ bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
   if (o.max_frames < 0) return fail("--max-frames must be >= 0");
   if (o.lockstep_timeout_ms < 0) return fail("--lockstep-timeout-ms must be >= 0");
   if (!std::isfinite(o.gt_position_scale) || o.gt_position_scale <= 0) return fail("gt_position_scale must be > 0");
-  if (o.device_width < 0 || o.device_height < 0) return fail("--device-width/--device-height must be >= 0");
+  int width = 0, height = 0;
+  if (!ParseDeviceSize(o.device_size, &width, &height))
+    return fail("--device-size must be WxH in px, e.g. 640x480 (got '" + o.device_size + "')");
   if (o.camera_name.empty()) return fail("camera_name must not be empty");
   if (o.image_channel.empty() || o.info_channel.empty() || o.ground_truth_channel.empty() ||
       o.control_channel.empty() || o.status_channel.empty() || o.odometry_channel.empty())
@@ -112,8 +131,7 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
   source_options.rotate_180 = options_.rotate_180;
   source_options.gt_position_scale = options_.gt_position_scale;
   source_options.camera_name = options_.camera_name;
-  source_options.device_width = options_.device_width;
-  source_options.device_height = options_.device_height;
+  ParseDeviceSize(options_.device_size, &source_options.device_width, &source_options.device_height);
   source_ = OpenFrameSource(source_options, &why);
   if (!source_) throw std::runtime_error(why);
 

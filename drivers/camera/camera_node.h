@@ -58,8 +58,7 @@ struct CameraNodeOptions {
   double gt_position_scale = 1000;     // ground-truth positions (TUM, Middlebury) times this = mm (m -> mm)
   bool publish_ground_truth = true;    // publish GROUND_TRUTH_POSE when the source has true poses
   std::string camera_name = "camera";  // camera_name in image_t / camera_info_t
-  int device_width = 0;                // px, V4L2 capture width to request (0 = calibration width)
-  int device_height = 0;               // px, V4L2 capture height to request (0 = calibration height)
+  std::string device_size;             // "WxH" px, V4L2 capture size to request ("" = the calibration's size)
   std::string image_channel = "CAMERA_IMAGE";              // output channel of image_t
   std::string info_channel = "CAMERA_INFO";                // output channel of camera_info_t
   std::string ground_truth_channel = "GROUND_TRUTH_POSE";  // output channel of the true poses
@@ -74,6 +73,9 @@ struct CameraNodeOptions {
 // (gt_position_scale, publish_ground_truth, camera_name) keep their defaults, code and tests set the fields directly.
 void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* options);
 // Checks the option values (not the source itself). Returns false with *why on the first problem.
+// Parses a device size "WxH" (positive px, e.g. "640x480") into *width, *height; "" gives 0 x 0 (the calibration's
+// size). False for anything else.
+bool ParseDeviceSize(const std::string& text, int* width, int* height);
 bool ValidateCameraNodeOptions(const CameraNodeOptions& options, std::string* why);
 
 class CameraNode : public Node {

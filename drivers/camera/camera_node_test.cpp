@@ -586,10 +586,8 @@ TEST(CameraNodeTest, TheCommandLineOptionsAreRegistered) {
                                 "FEATURE_TRACKS",
                                 "--lockstep-timeout-ms",
                                 "0",
-                                "--device-width",
-                                "320",
-                                "--device-height",
-                                "240",
+                                "--device-size",
+                                "320x240",
                                 "--channel",
                                 "CAMERA_IMAGE=A",
                                 "--channel",
@@ -608,7 +606,21 @@ TEST(CameraNodeTest, TheCommandLineOptionsAreRegistered) {
   EXPECT_EQ(options.rotate_180, "2");
   EXPECT_EQ(options.max_frames, 9);
   EXPECT_EQ(options.lockstep_timeout_ms, 0);
-  EXPECT_EQ(options.device_height, 240);
+  EXPECT_EQ(options.device_size, "320x240");
+  int width = 0, height = 0;
+  EXPECT_TRUE(ParseDeviceSize(options.device_size, &width, &height));
+  EXPECT_EQ(width, 320);
+  EXPECT_EQ(height, 240);
+  EXPECT_TRUE(ParseDeviceSize("", &width, &height));
+  EXPECT_EQ(width, 0);
+  for (const char* bad : {"320", "320x", "x240", "320x-240", "0x240", "320x240x3", "3.5x2", "320 x 240"}) {
+    EXPECT_FALSE(ParseDeviceSize(bad, &width, &height)) << bad;
+    CameraNodeOptions o = options;
+    o.device_size = bad;
+    std::string why;
+    EXPECT_FALSE(ValidateCameraNodeOptions(o, &why)) << bad;
+    EXPECT_NE(why.find("--device-size"), std::string::npos) << why;
+  }
   EXPECT_EQ(options.status_channel, "E");
   EXPECT_FALSE(options.exit_when_finished);
   // Settings without a flag (issue 27) are refused on the command line.

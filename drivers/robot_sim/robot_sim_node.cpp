@@ -59,6 +59,19 @@ bool ParseList(const std::string& text, size_t count, double* values) {
   return n == count;
 }
 
+// "FIRST,COUNT" (whole numbers >= 0) into *first, *count; "" = none (count 0).
+bool ParseBlank(const std::string& text, int64_t* first, int64_t* count) {
+  *first = *count = 0;
+  if (text.empty()) return true;
+  double values[2];
+  if (!ParseList(text, 2, values)) return false;
+  for (double v : values)
+    if (v < 0 || v > 1e12 || v != std::floor(v)) return false;
+  *first = static_cast<int64_t>(values[0]);
+  *count = static_cast<int64_t>(values[1]);
+  return true;
+}
+
 }  // namespace
 
 void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
@@ -78,8 +91,7 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
         "robot.cfg (common/recorded_run.h): the simulated robot's geometry (mast height and offsets, camera offset, "
         "wheel base) and limits (footprint, speed, yaw rate); the pose solver and planner take the same file; none: "
         "mast 400 mm, camera 40 mm forward, footprint 200 mm, 400 mm/s, 90 deg/s");
-  p.Add("blank-first", &o->blank_first, "first frame rendered as a uniform grey view (tracking loss test; -1 = none)");
-  p.Add("blank-count", &o->blank_count, "frames rendered grey from --blank-first on");
+  p.Add("blank", &o->blank, "FIRST,COUNT: frames rendered as a uniform grey view (tracking loss test; \"\" = none)");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
   p.Add("lockstep-channel", &o->lockstep_channel,
@@ -179,7 +191,9 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (o.width > 8192 || o.height > 8192) return fail("width/height must be <= 8192");
   if (!std::isfinite(o.noise_sigma) || o.noise_sigma < 0 || o.noise_sigma > 100)
     return fail("noise_sigma must be in [0, 100]");
-  if (o.blank_first < -1 || o.blank_count < 0) return fail("--blank-first must be >= -1 and --blank-count >= 0");
+  int64_t blank_first = 0, blank_count = 0;
+  if (!ParseBlank(o.blank, &blank_first, &blank_count))
+    return fail("--blank must be FIRST,COUNT: two whole numbers >= 0, e.g. 80,20 (got '" + o.blank + "')");
   if (!EncodingFromName(o.encoding, &encoding)) return fail("--encoding must be rgb8, bgr8, gray8 or jpeg");
   if (o.jpeg_quality < 1 || o.jpeg_quality > 100) return fail("--jpeg-quality must be in 1..100");
   if (o.lockstep_lag < 0) return fail("lockstep_lag must be >= 0");
@@ -202,6 +216,7 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   std::string why;
   if (!ValidateRobotSimNodeOptions(options_, &why)) throw std::invalid_argument(why);
   EncodingFromName(options_.encoding, &encoding_);
+  ParseBlank(options_.blank, &blank_first_, &blank_count_);
   sim_options_ = ToRobotSimOptions(options_);
   camera_ = ToCamera(options_);
   scene_ = std::make_unique<Scene>(LoadScene(options_.scene));
@@ -408,8 +423,7 @@ void RobotSimNode::PublishFrame() {
   image.seq = frame.seq;
   image.camera_name = camera_.name;
   image.image = render_.rgb;
-  if (options_.blank_first >= 0 && frame.seq >= options_.blank_first &&
-      frame.seq < static_cast<int64_t>(options_.blank_first) + options_.blank_count)
+  if (frame.seq >= blank_first_ && frame.seq < blank_first_ + blank_count_)
     image.image = cv::Mat(render_.rgb.size(), render_.rgb.type(), cv::Scalar::all(128));
   Publish(options_.image_channel, ImageToMessage(image, encoding_, options_.jpeg_quality));
 

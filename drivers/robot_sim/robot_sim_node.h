@@ -76,9 +76,8 @@ struct RobotSimNodeOptions {
   double cx = 319.5, cy = 239.5;    // px
   std::string camera_name = "sim";  // camera_name in image_t / camera_info_t
   double noise_sigma = 2.0;         // grey levels, image noise std per channel
-  int blank_first = -1;             // first frame of a stretch rendered as a uniform grey view (lens covered,
-                                    // texture-less wall: a tracking loss test); -1 = none
-  int blank_count = 0;              // frames in that stretch
+  std::string blank;                // "FIRST,COUNT": frames FIRST..FIRST+COUNT-1 rendered as a uniform grey view
+                                    // (lens covered, texture-less wall: a tracking loss test); "" = none
   bool trilinear = false;           // trilinear texture filtering (slower)
   std::string encoding = "rgb8";    // rgb8, bgr8, gray8 or jpeg
   int jpeg_quality = 90;            // 1..100 for jpeg
@@ -167,6 +166,7 @@ class RobotSimNode : public Node {
   RobotSimOptions sim_options_;
   PinholeCamera camera_;
   int8_t encoding_ = 1;
+  int64_t blank_first_ = 0, blank_count_ = 0;  // options_.blank: frames rendered grey
   std::unique_ptr<Scene> scene_;
   std::unique_ptr<Renderer> renderer_;
   std::unique_ptr<RobotSimulator> sim_;

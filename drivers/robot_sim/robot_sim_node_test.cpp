@@ -218,6 +218,30 @@ TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {
   }
 }
 
+// --blank FIRST,COUNT renders frames FIRST..FIRST+COUNT-1 grey (the tracking loss tests); anything else is refused.
+TEST(RobotSimNodeTest, BlankFramesAreGreyAndBadSpecsRefused) {
+  RobotSimNodeOptions options = FastOptions(4);
+  std::string why;
+  for (const char* bad : {"80", "80,", "-1,5", "80,2.5", "a,b", "1,2,3"}) {
+    options.blank = bad;
+    EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why)) << bad;
+    EXPECT_NE(why.find("--blank"), std::string::npos) << why;
+  }
+  options.blank = "1,2";
+  ASSERT_TRUE(ValidateRobotSimNodeOptions(options, &why)) << why;
+  auto bus = MakeLcmBus("memq://");
+  Recorder rec(*bus);
+  RobotSimNode node(*bus, options);
+  RunToEnd(*bus, node);
+  ASSERT_EQ(rec.images.size(), 4u);
+  for (size_t i = 0; i < rec.images.size(); ++i) {
+    const image_t& m = rec.images[i];
+    const auto [lo, hi] = std::minmax_element(m.data.begin(), m.data.end());
+    const bool grey = *lo == *hi;
+    EXPECT_EQ(grey, i == 1 || i == 2) << "frame " << i;
+  }
+}
+
 TEST(RobotSimNodeTest, LockstepWaitsForTheConsumerAndTimesOut) {
   auto bus = MakeLcmBus("memq://");
   Recorder rec(*bus);
