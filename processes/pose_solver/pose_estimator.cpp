@@ -456,14 +456,16 @@ void PoseEstimator::ApplySimilarity(double scale, const Eigen::Isometry3d& t, in
   }
 }
 
-bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_t>& common) {
+bool PoseEstimator::ReconstructSpanFromTracks(int first, int last, const std::vector<int64_t>& common,
+                                              BaProblem* best_out, double* best_rms_out) {
   const int nf = last - first + 1;
   const int np = static_cast<int>(common.size());
   std::vector<std::vector<Eigen::Vector2d>> meas(nf, std::vector<Eigen::Vector2d>(np));
   for (int f = 0; f < nf; ++f)
     for (int p = 0; p < np; ++p) meas[f][p] = frames_[first + f].pixels[frames_[first + f].Find(common[p])];
-  BaProblem best;
-  double best_rms = std::numeric_limits<double>::infinity();
+  BaProblem& best = *best_out;
+  double& best_rms = *best_rms_out;
+  best_rms = std::numeric_limits<double>::infinity();
   // The reconstruction's motion against the odometry's (SpanMotionAgreesWithOdometry), when every frame has it.
   std::vector<Eigen::Isometry3d> odometry;
   for (int f = first; f <= last && frames_[f].has_odometry; ++f)
@@ -485,6 +487,13 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     last_message_ = "initialization: span BA RMS " + std::to_string(best_rms) + " px too large";
     return false;
   }
+  return true;
+}
+
+std::vector<int64_t> PoseEstimator::CommitSpan(int first, int last, const std::vector<int64_t>& common,
+                                               const BaProblem& best) {
+  const int nf = last - first + 1;
+  const int np = static_cast<int>(common.size());
   // Commit the span.
   std::vector<int64_t> new_points;
   for (int f = 0; f < nf; ++f) {
@@ -504,6 +513,11 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
   TriangulateNew(last);
   for (const auto& kv : points_)
     if (!existing.count(kv.first)) new_points.push_back(kv.first);
+  return new_points;
+}
+
+PoseEstimator::SpanPlacement PoseEstimator::PlaceSpanByOdometry(int first, int last,
+                                                                const std::vector<int64_t>& new_points) {
   // Metric scale and world frame from odometry. Scale: median over the span's steps of odometry / visual step
   // length (robust to a time-stamping offset of the odometry, which corrupts the steps next to a clamped reading).
   const Frame& a = frames_[first];
@@ -528,6 +542,13 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
     const Eigen::Isometry3d t = (have_anchor ? anchor : a.world_from_camera) * scaled.inverse();
     ApplySimilarity(scale, t, first, last, new_points);
   }
+  return SpanPlacement{anchor, have_anchor, scale_source_before};
+}
+
+void PoseEstimator::LevelAndScaleSpanByFloor(int first, int last, const std::vector<int64_t>& new_points,
+                                             const SpanPlacement& placement) {
+  const Eigen::Isometry3d& anchor = placement.anchor;
+  const bool have_anchor = placement.have_anchor;
   // kSixDof: the camera height above a floor plane seen in the span fixes the scale far better than the odometry
   // over a short span (about the first camera: the anchor is kept).
   segment_floor_first_ = -1;
@@ -588,6 +609,18 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       ApplySimilarity(1.0, lift, first, last, new_points);
     }
   }
+}
+
+bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_t>& common) {
+  // The span's reconstruction, committed; its metric frame from the odometry, then from the floor.
+  BaProblem best;
+  double best_rms = 0;
+  if (!ReconstructSpanFromTracks(first, last, common, &best, &best_rms)) return false;
+  const int np = static_cast<int>(common.size());
+  std::vector<int64_t> new_points = CommitSpan(first, last, common, best);
+  const SpanPlacement placement = PlaceSpanByOdometry(first, last, new_points);
+  const ScaleSource scale_source_before = placement.scale_source_before;
+  LevelAndScaleSpanByFloor(first, last, new_points, placement);
   const bool was_recovering = recovering_;
   gauge_frame_ = gauge_frame_ < 0 ? first : gauge_frame_;
   if (gauge_frame_b_ < 0) gauge_frame_b_ = last;

@@ -280,7 +280,28 @@ class PoseEstimator {
   enum class Phase { kInitializing, kTracking, kLost };
 
   bool TryInitialize(int newest);
+  // The preliminary phase on frames first..last and their common tracks: reconstruction, commit, the metric frame
+  // from the odometry and the floor, then (after a loss) the join to the old map. False with last_message_.
   bool InitializeSpan(int first, int last, const std::vector<int64_t>& common);
+  // Factorization + BA of the span's common tracks (both depth-reversal candidates, the odometry's veto); false with
+  // last_message_ when none succeeds or the RMS is over twice max_landmark_error_px.
+  bool ReconstructSpanFromTracks(int first, int last, const std::vector<int64_t>& common, BaProblem* best,
+                                 double* best_rms);
+  // Poses the span's frames (keyframes every keyframe_interval and the last), adds the common tracks' points and
+  // triangulates the rest of frame last's tracks; returns the new landmarks' ids (common ones sorted first).
+  std::vector<int64_t> CommitSpan(int first, int last, const std::vector<int64_t>& common, const BaProblem& best);
+  struct SpanPlacement {
+    Eigen::Isometry3d anchor = Eigen::Isometry3d::Identity();  // desired world_from_camera of the span's first frame
+    bool have_anchor = false;                                   // from the odometry (chained after a loss)
+    ScaleSource scale_source_before = ScaleSource::kNone;       // the map's before the span (a join restores it)
+  };
+  // Scales the new span by the odometry's step lengths and places frame first at the anchor.
+  SpanPlacement PlaceSpanByOdometry(int first, int last, const std::vector<int64_t>& new_points);
+  // 6-DOF: rescale to the camera height above a floor seen in the span (else retried at keyframes after a loss);
+  // 4-DOF: level on the floor, scale to the model height, re-anchor in the floor plane at the anchor, or lift to the
+  // model height.
+  void LevelAndScaleSpanByFloor(int first, int last, const std::vector<int64_t>& new_points,
+                                const SpanPlacement& placement);
   bool Track(int f, FrameResult* result);
   // PnP (RANSAC + refinement from prior, may be null) of frame f against the current landmarks; on success f is
   // posed with its inlier count, RMS and outlier flags set (status untouched). False with *why (frame untouched).
