@@ -809,37 +809,7 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   return true;
 }
 
-void DenseModelerNode::RunFinalPhase(int64_t utime) {
-  if (finished_) return;
-  const int64_t start_us = MonotonicMicros();
-  UpdateRegion(true);
-  RunWaitingPairs(true);
-  if (region_.valid) {
-    std::ostringstream r;
-    r << "region of interest (source " << region_source_ << "): box [" << region_.box_min.transpose() << "] .. ["
-      << region_.box_max.transpose() << "] mm";
-    if (region_.has_floor)
-      r << ", floor normal [" << region_.floor_normal.transpose() << "] offset " << region_.floor_offset_mm << " mm";
-    LogInfo(r.str());
-  } else {
-    LogWarning("no region of interest: the model is not restricted");
-  }
-  // Carving and the mesh's views take the poses the votes were cast with: the final ones when the votes were
-  // recomputed with them, else the live ones (a grid from live poses carved with final ones in another frame lost
-  // 80 % of room_01's target).
-  const bool use_final_poses = RevoteWithFinalPoses();
-  std::vector<CarvingView> views;
-  int final_used = 0;
-  for (const StoredView& sv : carving_views_) {
-    CarvingView v = sv.view;
-    auto it = final_poses_.find(sv.seq);
-    if (use_final_poses && it != final_poses_.end()) {
-      v.world_from_camera = it->second;
-      ++final_used;
-    }
-    views.push_back(std::move(v));
-  }
-  final_poses_used_ = final_used;
+void DenseModelerNode::ReportLiveFinalOffset(bool use_final_poses) {
   // Live votes kept although final poses arrived: how far the final poses lie from the live ones the model was built
   // with (median camera centre offset over the views that have both). Far off, the model is not in trajectory.txt's
   // frame (room_02, 7 Dec: a re-vote that kept no point after an unjoined restart, the model 390 mm off): loud.
@@ -862,7 +832,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   }
   status_.SetValue("live_final_offset_mm", live_final_offset_mm);
   status_.SetValue("model_off_trajectory_frame", live_final_offset_mm > kLiveFinalOffsetWarnMm ? 1 : 0);
-  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
+}
+
+void DenseModelerNode::LogFinalModel(const FinalModel& model, size_t views, int final_used) const {
   LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
             " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
             std::to_string(model.crevice_band_dropped) + " facing down near the floor dropped, " +
@@ -891,7 +863,7 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   }
   LogInfo("final phase: " + std::to_string(model.seeds) + " seeds, " + std::to_string(model.voxels.size()) +
           " voxels after carving (" + std::to_string(model.carving.removed) + " carved) with " +
-          std::to_string(views.size()) + " views (" + std::to_string(final_used) + " with final poses), " +
+          std::to_string(views) + " views (" + std::to_string(final_used) + " with final poses), " +
           std::to_string(model.mesh.triangles.size()) + " triangles; scale " + ScaleDescription(scale_source_));
   std::string per_pass;
   for (int64_t r : model.carving.removed_per_iteration) per_pass += (per_pass.empty() ? "" : " ") + std::to_string(r);
@@ -914,42 +886,9 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
                   static_cast<long long>(refine_full_searches_));
     LogInfo(times);
   }
-  ModelPaths paths;
-  if (!options_.output_dir.empty()) {
-    std::string error;
-    if (!WriteModelFiles(options_.output_dir, model, grid_.voxel_size(), scale_source_, &paths, &error)) {
-      LogError("writing the model failed: " + error);
-      paths = ModelPaths{};
-    }
-  }
-  std::vector<VoxelRecord> final_records;
-  for (const CarvedVoxel& v : model.voxels) {
-    VoxelRecord r;
-    r.ijk = v.ijk;
-    r.votes = v.votes;
-    r.bgr = v.bgr;
-    final_records.push_back(r);
-  }
-  const int64_t data_utime = last_seq_ >= 0 ? last_utime_ : utime;
-  PublishVoxelMap(data_utime, last_seq_, true, &final_records);
-  model_t m;
-  m.utime = data_utime;
-  m.voxels_ply_path = paths.voxels_ply;
-  m.mesh_ply_path = paths.mesh_ply;
-  m.octomap_path = paths.octomap;
-  m.voxel_size_mm = grid_.voxel_size();
-  m.num_voxels = static_cast<int32_t>(model.voxels.size());
-  m.num_voxels_carved = static_cast<int32_t>(model.carving.removed);
-  m.num_mesh_triangles = static_cast<int32_t>(model.mesh.triangles.size());
-  m.num_views = static_cast<int32_t>(views.size());
-  for (int k = 0; k < 3; ++k) {
-    m.bbox_min_mm[k] = model.bbox_min[k];
-    m.bbox_max_mm[k] = model.bbox_max[k];
-  }
-  if (bus_.PublishMessage(options_.model_channel, m)) status_.CountOut();
-  PublishFinished(bus_, status_, options_.control_channel, options_.name, data_utime, last_seq_,
-                  paths.voxels_ply.empty() ? "" : options_.output_dir);
-  finished_ = true;
+}
+
+void DenseModelerNode::ReportFinalState(const FinalModel& model, int64_t start_us) {
   status_.SetValue("final_ms", (MonotonicMicros() - start_us) * 1e-3);
   status_.SetValue("final_voxels", static_cast<double>(model.voxels.size()));
   status_.SetValue("final_seeds", static_cast<double>(model.seeds));
@@ -986,6 +925,79 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     status_.SetState(+process_status_t::STATE_FINISHED, "model written");
   }
   status_.PublishIfDue(WallTimeMicros(), true);
+}
+
+void DenseModelerNode::RunFinalPhase(int64_t utime) {
+  if (finished_) return;
+  const int64_t start_us = MonotonicMicros();
+  UpdateRegion(true);
+  RunWaitingPairs(true);
+  if (region_.valid) {
+    std::ostringstream r;
+    r << "region of interest (source " << region_source_ << "): box [" << region_.box_min.transpose() << "] .. ["
+      << region_.box_max.transpose() << "] mm";
+    if (region_.has_floor)
+      r << ", floor normal [" << region_.floor_normal.transpose() << "] offset " << region_.floor_offset_mm << " mm";
+    LogInfo(r.str());
+  } else {
+    LogWarning("no region of interest: the model is not restricted");
+  }
+  // Carving and the mesh's views take the poses the votes were cast with: the final ones when the votes were
+  // recomputed with them, else the live ones (a grid from live poses carved with final ones in another frame lost
+  // 80 % of room_01's target).
+  const bool use_final_poses = RevoteWithFinalPoses();
+  std::vector<CarvingView> views;
+  int final_used = 0;
+  for (const StoredView& sv : carving_views_) {
+    CarvingView v = sv.view;
+    auto it = final_poses_.find(sv.seq);
+    if (use_final_poses && it != final_poses_.end()) {
+      v.world_from_camera = it->second;
+      ++final_used;
+    }
+    views.push_back(std::move(v));
+  }
+  final_poses_used_ = final_used;
+  ReportLiveFinalOffset(use_final_poses);
+  const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
+  LogFinalModel(model, views.size(), final_used);
+  ModelPaths paths;
+  if (!options_.output_dir.empty()) {
+    std::string error;
+    if (!WriteModelFiles(options_.output_dir, model, grid_.voxel_size(), scale_source_, &paths, &error)) {
+      LogError("writing the model failed: " + error);
+      paths = ModelPaths{};
+    }
+  }
+  std::vector<VoxelRecord> final_records;
+  for (const CarvedVoxel& v : model.voxels) {
+    VoxelRecord r;
+    r.ijk = v.ijk;
+    r.votes = v.votes;
+    r.bgr = v.bgr;
+    final_records.push_back(r);
+  }
+  const int64_t data_utime = last_seq_ >= 0 ? last_utime_ : utime;
+  PublishVoxelMap(data_utime, last_seq_, true, &final_records);
+  model_t m;
+  m.utime = data_utime;
+  m.voxels_ply_path = paths.voxels_ply;
+  m.mesh_ply_path = paths.mesh_ply;
+  m.octomap_path = paths.octomap;
+  m.voxel_size_mm = grid_.voxel_size();
+  m.num_voxels = static_cast<int32_t>(model.voxels.size());
+  m.num_voxels_carved = static_cast<int32_t>(model.carving.removed);
+  m.num_mesh_triangles = static_cast<int32_t>(model.mesh.triangles.size());
+  m.num_views = static_cast<int32_t>(views.size());
+  for (int k = 0; k < 3; ++k) {
+    m.bbox_min_mm[k] = model.bbox_min[k];
+    m.bbox_max_mm[k] = model.bbox_max[k];
+  }
+  if (bus_.PublishMessage(options_.model_channel, m)) status_.CountOut();
+  PublishFinished(bus_, status_, options_.control_channel, options_.name, data_utime, last_seq_,
+                  paths.voxels_ply.empty() ? "" : options_.output_dir);
+  finished_ = true;
+  ReportFinalState(model, start_us);
 }
 
 bool DenseModelerNode::SaveSnapshot(const std::string& path) {

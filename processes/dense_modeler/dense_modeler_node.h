@@ -223,6 +223,14 @@ class DenseModelerNode : public Node {
   // frames without) when revote_final_poses is set and every pair was stored. True when it did (the carving views
   // then take the final poses too; otherwise the live ones the kept votes were cast with).
   bool RevoteWithFinalPoses();
+  // Final phase, when the live votes were kept although final poses arrived: the median camera centre offset between
+  // the two (status live_final_offset_mm, model_off_trajectory_frame; a warning beyond kLiveFinalOffsetWarnMm).
+  void ReportLiveFinalOffset(bool use_final_poses);
+  // Final phase: the model's figures (ridge, mesh clean-up, weak vertices, carving, times, pair times) to the log.
+  void LogFinalModel(const FinalModel& model, size_t views, int final_used) const;
+  // Final phase: the final_* status values and the end state (an empty model is the error state, saying why and
+  // what to try), published at once.
+  void ReportFinalState(const FinalModel& model, int64_t start_us);
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
   // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). The floor
   // moves with it only when the landmarks in use are live ones; fitted among the final map's landmarks (they arrive
