@@ -70,6 +70,176 @@ bool WriteXyz(const std::string& path, const std::vector<Eigen::Vector3d>& point
 }  // namespace
 
 
+namespace {
+using namespace objscan;
+
+// objscan_evaluate trajectory EST TRUTH [options] (argv[2], argv[3]; options from argv[4]): ATE after Sim(3) (or SE(3)).
+int EvaluateTrajectoryCommand(int argc, char** argv) {
+  std::string error;
+  bool with_scale = true;
+  double max_dt = 0.005;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--no-scale")
+      with_scale = false;
+    else if (a == "--max-dt" && i + 1 < argc) {
+      if (!ParseFiniteNumber(argv[++i], &max_dt) || max_dt < 0) return Fail("--max-dt wants seconds >= 0, got " + std::string(argv[i]));
+    }
+    else
+      return Fail("unknown option " + a);
+  }
+  std::vector<StampedPose> est, truth;
+  if (!ReadTumTrajectory(argv[2], &est, &error) || !ReadTumTrajectory(argv[3], &truth, &error)) return Fail(error);
+  TrajectoryEvaluation e;
+  if (!EvaluateTumTrajectories(est, truth, with_scale, max_dt, &e, &error)) return Fail(error);
+  std::printf(
+      "matched %d\nestimated %d\ntruth %d\nregistered_fraction %.4f\nate_rmse %.4f\nate_max %.4f\n"
+      "rotation_mean_deg %.4f\nrotation_max_deg %.4f\nscale %.6f\n",
+      e.num_matched, e.num_estimated, e.num_truth, e.registered_fraction, e.error.ate_rmse, e.error.ate_max,
+      e.error.rotation_mean_rad * 180 / M_PI, e.error.rotation_max_rad * 180 / M_PI, e.error.scale);
+  return 0;
+
+}
+
+// objscan_evaluate surface MODEL.ply TRUTH.ply [options]: accuracy and completeness against the truth's samples (or
+// its mesh), optionally aligned by the trajectories and restricted to what the views saw.
+int EvaluateSurfaceCommand(int argc, char** argv) {
+  std::string error;
+  double threshold = 2.0, min_z = -1e300;
+  std::string align_est, align_truth, visible_from, write_aligned, write_visible, write_errors, truth_mesh;
+  ViewIntrinsics intrinsics;
+  int min_views = 2;
+  bool occlusion = true;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--threshold" && i + 1 < argc) {
+      if (!ParseFiniteNumber(argv[++i], &threshold) || !(threshold > 0))
+        return Fail("--threshold wants a distance in mm > 0, got " + std::string(argv[i]));
+    } else if (a == "--min-z" && i + 1 < argc) {
+      if (!ParseFiniteNumber(argv[++i], &min_z)) return Fail("--min-z wants a height in mm, got " + std::string(argv[i]));
+    }
+    else if (a == "--visible-from" && i + 1 < argc)
+      visible_from = argv[++i];
+    else if (a == "--min-views" && i + 1 < argc) {
+      double v = 0;
+      if (!ParseFiniteNumber(argv[++i], &v) || v < 1 || v != std::floor(v) || v > 1e6)
+        return Fail("--min-views wants a whole number >= 1, got " + std::string(argv[i]));
+      min_views = static_cast<int>(v);
+    }
+    else if (a == "--no-occlusion")
+      occlusion = false;
+    else if (a == "--intrinsics" && i + 1 < argc) {
+      if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
+                      &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
+        return Fail("--intrinsics wants fx,fy,cx,cy,width,height");
+    } else if (a == "--write-aligned" && i + 1 < argc) {
+      write_aligned = argv[++i];
+    } else if (a == "--truth-mesh" && i + 1 < argc) {
+      truth_mesh = argv[++i];
+    } else if (a == "--write-errors" && i + 1 < argc) {
+      write_errors = argv[++i];
+    } else if (a == "--write-visible" && i + 1 < argc) {
+      write_visible = argv[++i];
+    } else if (a == "--align" && i + 2 < argc) {
+      align_est = argv[++i];
+      align_truth = argv[++i];
+    } else
+      return Fail("unknown option " + a);
+  }
+  std::vector<Eigen::Vector3d> model, truth, truth_normals, visible;
+  if (!ReadPlyPoints(argv[2], &model, &error) ||
+      !ReadPlyPoints(argv[3], &truth, &error, visible_from.empty() ? nullptr : &truth_normals))
+    return Fail(error);
+  std::vector<int> candidates;
+  if (visible_from.empty()) {
+    for (size_t i = 0; i < truth.size(); ++i) candidates.push_back(static_cast<int>(i));
+  } else {
+    std::vector<StampedPose> views;
+    if (!ReadTumTrajectory(visible_from, &views, &error)) return Fail(error);
+    candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, /*min_cos=*/0.1, occlusion);
+  }
+  for (int i : candidates)
+    if (truth[i].z() >= min_z) visible.push_back(truth[i]);
+  if (!align_est.empty()) {
+    Sim3 truth_from_estimate;
+    if (!TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error)) return Fail(error);
+    for (auto& p : model) p = truth_from_estimate * p;
+  }
+  if (!write_aligned.empty() && !WriteXyz(write_aligned, model, &error)) return Fail(error);
+  if (!write_visible.empty() && !WriteXyz(write_visible, visible, &error)) return Fail(error);
+  std::vector<double> distances;
+  const SurfaceEvaluation samples = EvaluateSurface(model, truth, visible, threshold, &distances);
+  const SurfaceEvaluation v = EvaluateSurface(model, visible, threshold);
+  SurfaceEvaluation s = samples;
+  if (!truth_mesh.empty()) {
+    std::vector<Eigen::Vector3d> mesh_vertices;
+    std::vector<Eigen::Vector3i> mesh_triangles;
+    if (!ReadPlyMesh(truth_mesh, &mesh_vertices, &mesh_triangles, &error)) return Fail(error);
+    const MeshDistance distance(mesh_vertices, mesh_triangles);
+    if (distance.empty()) return Fail(truth_mesh + ": no usable triangle");
+    s = EvaluateSurfaceToMesh(model, distance, visible, threshold, &distances);
+  }
+  if (!write_errors.empty()) {
+    if (distances.empty())
+      std::fprintf(stderr, "warning: %s: no distances (no model points, or no truth points to score against)\n",
+                   write_errors.c_str());
+    const std::vector<Eigen::Vector3d> none;  // no distances: an empty file
+    if (!WriteXyz(write_errors, distances.empty() ? none : model, &error, &distances)) return Fail(error);
+  }
+  std::printf(
+      "model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
+      "completeness %.4f\nvisible_accuracy_p50 %.4f\nvisible_accuracy_p90 %.4f\nvisible_accuracy_max %.4f\n",
+      s.num_model, s.num_truth, s.accuracy_p50, s.accuracy_p90, s.accuracy_max, s.completeness, v.accuracy_p50,
+      v.accuracy_p90, v.accuracy_max);
+  if (!truth_mesh.empty())
+    std::printf("sample_accuracy_p50 %.4f\nsample_accuracy_p90 %.4f\nsample_accuracy_max %.4f\n",
+                samples.accuracy_p50, samples.accuracy_p90, samples.accuracy_max);
+  return 0;
+
+}
+
+// objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH]: the target box's centre and size errors.
+int EvaluateTargetCommand(int argc, char** argv) {
+  std::string error;
+  std::string align_est, align_truth;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--align" && i + 2 < argc) {
+      align_est = argv[++i];
+      align_truth = argv[++i];
+    } else {
+      return Fail("unknown option " + a);
+    }
+  }
+  std::string texts[2];
+  for (int k = 0; k < 2; ++k) {
+    std::ifstream in(argv[2 + k]);
+    if (!in) return Fail(std::string("cannot read ") + argv[2 + k]);
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    texts[k] = buffer.str();
+  }
+  // The object finder writes centre_mm (as the issue names it), the simulator center_mm: either is read.
+  auto read_box = [](const std::string& text, std::vector<double>* centre, std::vector<double>* size) {
+    return (JsonNumbers(text, "centre_mm", 3, centre) || JsonNumbers(text, "center_mm", 3, centre)) &&
+           JsonNumbers(text, "size_mm", 3, size);
+  };
+  std::vector<double> c, sz, tc, tsz;
+  if (!read_box(texts[0], &c, &sz)) return Fail(std::string(argv[2]) + ": no centre_mm / size_mm (3 numbers each)");
+  if (!read_box(texts[1], &tc, &tsz)) return Fail(std::string(argv[3]) + ": no centre_mm / size_mm (3 numbers each)");
+  Sim3 truth_from_estimate;
+  if (!align_est.empty() && !TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error))
+    return Fail(error);
+  const TargetEvaluation t = EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, {tc[0], tc[1], tc[2]},
+                                            {tsz[0], tsz[1], tsz[2]}, truth_from_estimate);
+  std::printf("center_error_mm %.3f\ncenter_error_xy_mm %.3f\ncenter_x %.3f\ncenter_y %.3f\ncenter_z %.3f\n"
+              "size_error_major_mm %.3f\nsize_error_minor_mm %.3f\nsize_error_height_mm %.3f\n",
+              t.center_error_mm, t.center_error_xy_mm, t.center_aligned_mm.x(), t.center_aligned_mm.y(),
+              t.center_aligned_mm.z(), t.size_error_mm.x(), t.size_error_mm.y(), t.size_error_mm.z());
+  return 0;
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace objscan;
   const bool help = argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h");
@@ -83,160 +253,8 @@ int main(int argc, char** argv) {
     return help ? 0 : 2;
   }
   const std::string command = argv[1];
-  std::string error;
-  if (command == "trajectory") {
-    bool with_scale = true;
-    double max_dt = 0.005;
-    for (int i = 4; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--no-scale")
-        with_scale = false;
-      else if (a == "--max-dt" && i + 1 < argc) {
-        if (!ParseFiniteNumber(argv[++i], &max_dt) || max_dt < 0) return Fail("--max-dt wants seconds >= 0, got " + std::string(argv[i]));
-      }
-      else
-        return Fail("unknown option " + a);
-    }
-    std::vector<StampedPose> est, truth;
-    if (!ReadTumTrajectory(argv[2], &est, &error) || !ReadTumTrajectory(argv[3], &truth, &error)) return Fail(error);
-    TrajectoryEvaluation e;
-    if (!EvaluateTumTrajectories(est, truth, with_scale, max_dt, &e, &error)) return Fail(error);
-    std::printf(
-        "matched %d\nestimated %d\ntruth %d\nregistered_fraction %.4f\nate_rmse %.4f\nate_max %.4f\n"
-        "rotation_mean_deg %.4f\nrotation_max_deg %.4f\nscale %.6f\n",
-        e.num_matched, e.num_estimated, e.num_truth, e.registered_fraction, e.error.ate_rmse, e.error.ate_max,
-        e.error.rotation_mean_rad * 180 / M_PI, e.error.rotation_max_rad * 180 / M_PI, e.error.scale);
-    return 0;
-  }
-  if (command == "surface") {
-    double threshold = 2.0, min_z = -1e300;
-    std::string align_est, align_truth, visible_from, write_aligned, write_visible, write_errors, truth_mesh;
-    ViewIntrinsics intrinsics;
-    int min_views = 2;
-    bool occlusion = true;
-    for (int i = 4; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--threshold" && i + 1 < argc) {
-        if (!ParseFiniteNumber(argv[++i], &threshold) || !(threshold > 0))
-          return Fail("--threshold wants a distance in mm > 0, got " + std::string(argv[i]));
-      } else if (a == "--min-z" && i + 1 < argc) {
-        if (!ParseFiniteNumber(argv[++i], &min_z)) return Fail("--min-z wants a height in mm, got " + std::string(argv[i]));
-      }
-      else if (a == "--visible-from" && i + 1 < argc)
-        visible_from = argv[++i];
-      else if (a == "--min-views" && i + 1 < argc) {
-        double v = 0;
-        if (!ParseFiniteNumber(argv[++i], &v) || v < 1 || v != std::floor(v) || v > 1e6)
-          return Fail("--min-views wants a whole number >= 1, got " + std::string(argv[i]));
-        min_views = static_cast<int>(v);
-      }
-      else if (a == "--no-occlusion")
-        occlusion = false;
-      else if (a == "--intrinsics" && i + 1 < argc) {
-        if (std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%d,%d", &intrinsics.fx, &intrinsics.fy, &intrinsics.cx,
-                        &intrinsics.cy, &intrinsics.width, &intrinsics.height) != 6)
-          return Fail("--intrinsics wants fx,fy,cx,cy,width,height");
-      } else if (a == "--write-aligned" && i + 1 < argc) {
-        write_aligned = argv[++i];
-      } else if (a == "--truth-mesh" && i + 1 < argc) {
-        truth_mesh = argv[++i];
-      } else if (a == "--write-errors" && i + 1 < argc) {
-        write_errors = argv[++i];
-      } else if (a == "--write-visible" && i + 1 < argc) {
-        write_visible = argv[++i];
-      } else if (a == "--align" && i + 2 < argc) {
-        align_est = argv[++i];
-        align_truth = argv[++i];
-      } else
-        return Fail("unknown option " + a);
-    }
-    std::vector<Eigen::Vector3d> model, truth, truth_normals, visible;
-    if (!ReadPlyPoints(argv[2], &model, &error) ||
-        !ReadPlyPoints(argv[3], &truth, &error, visible_from.empty() ? nullptr : &truth_normals))
-      return Fail(error);
-    std::vector<int> candidates;
-    if (visible_from.empty()) {
-      for (size_t i = 0; i < truth.size(); ++i) candidates.push_back(static_cast<int>(i));
-    } else {
-      std::vector<StampedPose> views;
-      if (!ReadTumTrajectory(visible_from, &views, &error)) return Fail(error);
-      candidates = VisibleSurfacePoints(truth, truth_normals, views, intrinsics, min_views, /*min_cos=*/0.1, occlusion);
-    }
-    for (int i : candidates)
-      if (truth[i].z() >= min_z) visible.push_back(truth[i]);
-    if (!align_est.empty()) {
-      Sim3 truth_from_estimate;
-      if (!TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error)) return Fail(error);
-      for (auto& p : model) p = truth_from_estimate * p;
-    }
-    if (!write_aligned.empty() && !WriteXyz(write_aligned, model, &error)) return Fail(error);
-    if (!write_visible.empty() && !WriteXyz(write_visible, visible, &error)) return Fail(error);
-    std::vector<double> distances;
-    const SurfaceEvaluation samples = EvaluateSurface(model, truth, visible, threshold, &distances);
-    const SurfaceEvaluation v = EvaluateSurface(model, visible, threshold);
-    SurfaceEvaluation s = samples;
-    if (!truth_mesh.empty()) {
-      std::vector<Eigen::Vector3d> mesh_vertices;
-      std::vector<Eigen::Vector3i> mesh_triangles;
-      if (!ReadPlyMesh(truth_mesh, &mesh_vertices, &mesh_triangles, &error)) return Fail(error);
-      const MeshDistance distance(mesh_vertices, mesh_triangles);
-      if (distance.empty()) return Fail(truth_mesh + ": no usable triangle");
-      s = EvaluateSurfaceToMesh(model, distance, visible, threshold, &distances);
-    }
-    if (!write_errors.empty()) {
-      if (distances.empty())
-        std::fprintf(stderr, "warning: %s: no distances (no model points, or no truth points to score against)\n",
-                     write_errors.c_str());
-      const std::vector<Eigen::Vector3d> none;  // no distances: an empty file
-      if (!WriteXyz(write_errors, distances.empty() ? none : model, &error, &distances)) return Fail(error);
-    }
-    std::printf(
-        "model_points %d\ntruth_points %d\naccuracy_p50 %.4f\naccuracy_p90 %.4f\naccuracy_max %.4f\n"
-        "completeness %.4f\nvisible_accuracy_p50 %.4f\nvisible_accuracy_p90 %.4f\nvisible_accuracy_max %.4f\n",
-        s.num_model, s.num_truth, s.accuracy_p50, s.accuracy_p90, s.accuracy_max, s.completeness, v.accuracy_p50,
-        v.accuracy_p90, v.accuracy_max);
-    if (!truth_mesh.empty())
-      std::printf("sample_accuracy_p50 %.4f\nsample_accuracy_p90 %.4f\nsample_accuracy_max %.4f\n",
-                  samples.accuracy_p50, samples.accuracy_p90, samples.accuracy_max);
-    return 0;
-  }
-  if (command == "target") {
-    std::string align_est, align_truth;
-    for (int i = 4; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--align" && i + 2 < argc) {
-        align_est = argv[++i];
-        align_truth = argv[++i];
-      } else {
-        return Fail("unknown option " + a);
-      }
-    }
-    std::string texts[2];
-    for (int k = 0; k < 2; ++k) {
-      std::ifstream in(argv[2 + k]);
-      if (!in) return Fail(std::string("cannot read ") + argv[2 + k]);
-      std::stringstream buffer;
-      buffer << in.rdbuf();
-      texts[k] = buffer.str();
-    }
-    // The object finder writes centre_mm (as the issue names it), the simulator center_mm: either is read.
-    auto read_box = [](const std::string& text, std::vector<double>* centre, std::vector<double>* size) {
-      return (JsonNumbers(text, "centre_mm", 3, centre) || JsonNumbers(text, "center_mm", 3, centre)) &&
-             JsonNumbers(text, "size_mm", 3, size);
-    };
-    std::vector<double> c, sz, tc, tsz;
-    if (!read_box(texts[0], &c, &sz)) return Fail(std::string(argv[2]) + ": no centre_mm / size_mm (3 numbers each)");
-    if (!read_box(texts[1], &tc, &tsz)) return Fail(std::string(argv[3]) + ": no centre_mm / size_mm (3 numbers each)");
-    Sim3 truth_from_estimate;
-    if (!align_est.empty() && !TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error))
-      return Fail(error);
-    const TargetEvaluation t = EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, {tc[0], tc[1], tc[2]},
-                                              {tsz[0], tsz[1], tsz[2]}, truth_from_estimate);
-    std::printf("center_error_mm %.3f\ncenter_error_xy_mm %.3f\ncenter_x %.3f\ncenter_y %.3f\ncenter_z %.3f\n"
-                "size_error_major_mm %.3f\nsize_error_minor_mm %.3f\nsize_error_height_mm %.3f\n",
-                t.center_error_mm, t.center_error_xy_mm, t.center_aligned_mm.x(), t.center_aligned_mm.y(),
-                t.center_aligned_mm.z(), t.size_error_mm.x(), t.size_error_mm.y(), t.size_error_mm.z());
-    return 0;
-  }
+  if (command == "trajectory") return EvaluateTrajectoryCommand(argc, argv);
+  if (command == "surface") return EvaluateSurfaceCommand(argc, argv);
+  if (command == "target") return EvaluateTargetCommand(argc, argv);
   return Fail("unknown command " + command);
 }
