@@ -88,10 +88,13 @@ struct PlannerOptions {
                                                    // gentle forward arc that starts the pose solver's map) goes
                                                    // there; place the robot accordingly
   double coverage_target = 0.95;                   // coverage fraction that ends NEXT_VIEWS
-  double min_coverage = 0.7;                       // a plan that ends (FINISH) with less coverage is "partial", a
+  double min_coverage = 0.6;                       // a plan that ends (FINISH) with less coverage is "partial", a
                                                    // failure: the model misses part of the target (room_04, 7 Dec:
                                                    // orbit and next views unreachable, coverage 52 %, the model 48.5 %
-                                                   // of the target and its centre 26 mm off, with status ok), [0, 1]
+                                                   // of the target and its centre 26 mm off, with status ok). The
+                                                   // coverage estimate is within about 15 points of the model's true
+                                                   // completeness (rooms 01-07: 84/97, 87/77, 96/85, 52/49, 67/83,
+                                                   // 78/84 %), hence well under the coverage target, [0, 1]
   int max_next_views = 12;                         // views NEXT_VIEWS adds at most
   double next_views_budget_s = 240;                // s of NEXT_VIEWS at most
   double lost_search_s = 15;                       // s an ORBIT waits for a LOST target before going on
