@@ -762,18 +762,15 @@ std::vector<DensePoint> ComputeDensePair(const DenseView& a, const DenseView& b,
   return out;
 }
 
-void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
-                      const AffineDenseOptions& o, std::vector<DensePoint>* out, DensePairStats* stats_out) {
-  DensePairStats stats;
-  out->clear();
-  auto finish = [&]() {
-    if (stats_out) *stats_out = stats;
-  };
-  if (!DensePairViewsUsable(a, b) || !ValidateAffineDenseOptions(o, nullptr)) return finish();
-  const Eigen::Vector3d center_a = a.world_from_camera.translation();
-  const Eigen::Vector3d center_b = b.world_from_camera.translation();
+namespace {
 
-  // Features: inside both images, finite, deduplicated (order kept, deterministic).
+// ComputeDensePair's steps. Frames: world, A and B = the cameras of views a and b (x right, y down, z forward);
+// lengths in the poses' unit (mm); pixels (px) of A or B with (0, 0) at the first pixel's centre.
+
+// The pair's features: the matches (a in A, b in B, px) finite and inside both images, without those closer than
+// min_feature_separation_px in A or in B to an earlier kept one (order kept, deterministic).
+std::vector<PointMatch> PairFeatures(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
+                                     const AffineDenseOptions& o) {
   std::vector<PointMatch> feats;
   feats.reserve(matches.size());
   const double sep2 = o.min_feature_separation_px * o.min_feature_separation_px;
@@ -793,43 +790,457 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
     }
     feats.push_back(m);
   }
+  return feats;
+}
+
+// The pair's relative geometry, computed once per pair.
+struct PairGeometry {
+  Eigen::Vector3d center_a, center_b;  // the cameras' centres in world (mm)
+  Eigen::Matrix3d rwa, rwb;            // rotations world_from_A, world_from_B
+  Eigen::Isometry3d b_from_a, a_from_world, b_from_world;
+  Eigen::Matrix3d essential;    // normalized point of A (x, y, 1) -> its epipolar line in B's normalized coordinates
+  Eigen::Matrix3d fundamental;  // pixel of A (u, v, 1) -> its epipolar line in B's pixels
+  double min_angle;             // rad, the vertices' least triangulation angle
+
+  PairGeometry(const DenseView& a, const DenseView& b, const AffineDenseOptions& o)
+      : center_a(a.world_from_camera.translation()),
+        center_b(b.world_from_camera.translation()),
+        rwa(a.world_from_camera.linear()),
+        rwb(b.world_from_camera.linear()),
+        b_from_a(b.world_from_camera.inverse() * a.world_from_camera),
+        a_from_world(a.world_from_camera.inverse()),
+        b_from_world(b.world_from_camera.inverse()),
+        essential(EssentialMatrix(a.world_from_camera, b.world_from_camera)),
+        fundamental(b.camera.K().inverse().transpose() * essential * a.camera.K().inverse()),
+        min_angle(o.min_triangulation_angle_deg * kDegToRad) {}
+};
+
+// The features' vertices, for the depth-edge test and the plane mapping: (*vertex_in_a)[i] = feature i's ray
+// midpoint in A (mm) with (*vertex_ok)[i] = 1 when it triangulates with at least g.min_angle in front of A; both
+// sized feats.size() by the caller (entries not ok are left as they are).
+void TriangulateVertices(const std::vector<PointMatch>& feats, const DenseView& a, const DenseView& b,
+                         const PairGeometry& g, std::vector<Eigen::Vector3d>* vertex_in_a,
+                         std::vector<char>* vertex_ok) {
+  for (size_t i = 0; i < feats.size(); ++i) {
+    const Eigen::Vector3d da = (g.rwa * a.camera.Unproject(feats[i].a).homogeneous()).normalized();
+    const Eigen::Vector3d db = (g.rwb * b.camera.Unproject(feats[i].b).homogeneous()).normalized();
+    Eigen::Vector3d x;
+    double angle = 0;
+    if (TriangulateMidpoint(g.center_a, da, g.center_b, db, &x, &angle) && angle >= g.min_angle) {
+      (*vertex_in_a)[i] = g.a_from_world * x;
+      (*vertex_ok)[i] = (*vertex_in_a)[i].z() > 0;
+    }
+  }
+}
+
+// Delaunay triangulation of the features' pixels in A (as float px) over image_a's rectangle: *tri_list in
+// Subdiv2D's order (including triangles on its virtual outer vertices), *index_of = exact float position -> the
+// first feature there (the features at a position already taken are not inserted).
+void DelaunayInA(const std::vector<PointMatch>& feats, const cv::Mat& image_a,
+                 std::unordered_map<uint64_t, int>* index_of, std::vector<cv::Vec6f>* tri_list) {
+  cv::Subdiv2D subdiv(cv::Rect(-2, -2, image_a.cols + 4, image_a.rows + 4));
+  index_of->reserve(2 * feats.size());
+  for (size_t i = 0; i < feats.size(); ++i) {
+    const cv::Point2f pt(static_cast<float>(feats[i].a.x()), static_cast<float>(feats[i].a.y()));
+    if (!index_of->emplace(FloatPairKey(pt.x, pt.y), static_cast<int>(i)).second) continue;
+    subdiv.insert(pt);
+  }
+  subdiv.getTriangleList(*tri_list);
+}
+
+// One Delaunay triangle of the features.
+struct PairTriangle {
+  int idx[3];                  // the corners' feature indices
+  Eigen::Vector2d a0, a1, a2;  // the corners in A (px)
+  Eigen::Vector2d b0, b1, b2;  // their matches in B (px)
+};
+
+// The features at t's corners into *tri; false for a triangle touching Subdiv2D's virtual outer vertices.
+bool ResolveTriangle(const cv::Vec6f& t, const std::unordered_map<uint64_t, int>& index_of,
+                     const std::vector<PointMatch>& feats, PairTriangle* tri) {
+  for (int k = 0; k < 3; ++k) {
+    auto it = index_of.find(FloatPairKey(t[2 * k], t[2 * k + 1]));
+    if (it == index_of.end()) return false;
+    tri->idx[k] = it->second;
+  }
+  tri->a0 = feats[tri->idx[0]].a, tri->a1 = feats[tri->idx[1]].a, tri->a2 = feats[tri->idx[2]].a;
+  tri->b0 = feats[tri->idx[0]].b, tri->b1 = feats[tri->idx[1]].b, tri->b2 = feats[tri->idx[2]].b;
+  return true;
+}
+
+// What the triangles' and pixels' steps read, fixed for the pair.
+struct PairInputs {
+  const DenseView& a;
+  const DenseView& b;
+  const AffineDenseOptions& o;
+  const PairGeometry& g;
+  const std::vector<Eigen::Vector3d>& vertex_in_a;  // see TriangulateVertices
+  const std::vector<char>& vertex_ok;
+  const cv::Rect& roi;    // the pixels of A visited (DensePairRoi)
+  const cv::Mat& gray_a;  // CV_32F gray of A and B (0-255)
+  const cv::Mat& gray_b;
+  const PairTriangulator& triangulator;
+  const std::vector<int>& near_steps;  // the search's steps (see SetSearchSteps)
+  const std::vector<int>& far_steps;
+  int n_steps;      // steps each side of the prediction (refine_step_px each)
+  int first_steps;  // steps each side searched first
+  int h;            // ncc_half_window (px)
+  int channels;     // of a.image
+};
+
+// What they update.
+struct PairState {
+  cv::Mat1b& visited;           // pixels of A already handled by an earlier triangle
+  WindowA& window_a;            // A's NCC window of the current pixel
+  std::vector<double>& scores;  // the search's scores, index step + n_steps
+  SearchScratch& search;
+  std::vector<DensePoint>& points;  // the accepted points
+  DensePairStats& stats;
+  double refine_shift_sum;  // px, |q_refined - q| summed over refine_count pixels
+  int64_t refine_count;
+};
+
+// The epipolar search's steps, the same for every pixel (in refine_step_px, relative to the prediction's foot on the
+// line): *n_steps each side (0 without refinement), those within *first_steps into scratch->near_steps (-first to
+// +first), the others into scratch->far_steps (-s, s by increasing s); scratch->scores sized 2·n_steps + 1.
+void SetSearchSteps(const AffineDenseOptions& o, PairScratch* scratch, int* n_steps_out, int* first_steps_out) {
+  const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
+  const int first_steps =
+      o.refine_first_steps > 0 ? std::min(n_steps, o.refine_first_steps) : n_steps;  // 0: every step at once
+  std::vector<int>& near_steps = scratch->near_steps;
+  std::vector<int>& far_steps = scratch->far_steps;
+  near_steps.clear(), far_steps.clear();
+  for (int s = -first_steps; s <= first_steps; ++s) near_steps.push_back(s);
+  for (int s = first_steps + 1; s <= n_steps; ++s) far_steps.push_back(-s), far_steps.push_back(s);
+  scratch->scores.assign(2 * n_steps + 1, -2.0);
+  *n_steps_out = n_steps;
+  *first_steps_out = first_steps;
+}
+
+// The triangle's checks before any pixel work, each rejection counted in *stats (but for missing the ROI): shape in
+// A and B (area px², orientation, edges px, angles deg), the vertices' depths in A (triangulated, ratio, slant) and
+// the region (outside, on the floor). When accepted sets *strict (an edge over strict_triangle_edge_px) and
+// *junction (joins the floor to the object): stricter photometric checks for its pixels.
+bool TriangleAccepted(const PairInputs& in, const PairTriangle& tri, DensePairStats* stats, bool* strict,
+                      bool* junction) {
+  const AffineDenseOptions& o = in.o;
+  const cv::Rect& roi = in.roi;
+  const std::vector<Eigen::Vector3d>& vertex_in_a = in.vertex_in_a;
+  const int* idx = tri.idx;
+  const Eigen::Vector2d &a0 = tri.a0, &a1 = tri.a1, &a2 = tri.a2;
+  const Eigen::Vector2d &b0 = tri.b0, &b1 = tri.b1, &b2 = tri.b2;
+  const double area_a = 0.5 * Cross2(a1 - a0, a2 - a0);
+  const double area_b = 0.5 * Cross2(b1 - b0, b2 - b0);
+  const double max_edge = std::max(
+      {(a1 - a0).norm(), (a2 - a1).norm(), (a0 - a2).norm(), (b1 - b0).norm(), (b2 - b1).norm(), (b0 - b2).norm()});
+  if (std::abs(area_a) < o.min_triangle_area_px2 || area_a * area_b <= 0 || max_edge > o.max_triangle_edge_px ||
+      SmallestAngleBelow(a0, a1, a2, o.min_triangle_angle_deg)) {
+    ++stats->triangles_skipped_shape;
+    return false;
+  }
+  if (!in.vertex_ok[idx[0]] || !in.vertex_ok[idx[1]] || !in.vertex_ok[idx[2]]) {
+    ++stats->triangles_skipped_depth;
+    return false;
+  }
+  const double z0 = vertex_in_a[idx[0]].z(), z1 = vertex_in_a[idx[1]].z(), z2 = vertex_in_a[idx[2]].z();
+  if (std::max({z0, z1, z2}) > o.max_vertex_depth_ratio * std::min({z0, z1, z2})) {
+    ++stats->triangles_skipped_depth;
+    return false;
+  }
+  *strict = max_edge > o.strict_triangle_edge_px;
+  *junction = false;
+  if (o.region.valid) {
+    const Eigen::Vector3d w0 = in.a.world_from_camera * vertex_in_a[idx[0]],
+                          w1 = in.a.world_from_camera * vertex_in_a[idx[1]],
+                          w2 = in.a.world_from_camera * vertex_in_a[idx[2]];
+    if (o.region.TriangleOutside(w0, w1, w2, o.region_slack_mm) ||
+        (o.skip_floor_triangles && o.region.TriangleOnFloor(w0, w1, w2))) {
+      ++stats->triangles_skipped_region;
+      return false;
+    }
+    *junction = o.region.TriangleSpansFloorJunction(w0, w1, w2);
+  }
+  // Cheap reject before any pixel work: the triangle's bounding box misses the ROI rectangle.
+  if (std::max({a0.x(), a1.x(), a2.x()}) < roi.x || std::min({a0.x(), a1.x(), a2.x()}) > roi.x + roi.width - 1 ||
+      std::max({a0.y(), a1.y(), a2.y()}) < roi.y || std::min({a0.y(), a1.y(), a2.y()}) > roi.y + roi.height - 1)
+    return false;
+  {
+    const Eigen::Vector3d& v0 = vertex_in_a[idx[0]];
+    const Eigen::Vector3d normal = (vertex_in_a[idx[1]] - v0).cross(vertex_in_a[idx[2]] - v0);
+    const Eigen::Vector3d centroid = (v0 + vertex_in_a[idx[1]] + vertex_in_a[idx[2]]) / 3.0;
+    const double nn = normal.norm() * centroid.norm();
+    if (!(nn > 0) || std::abs(normal.dot(centroid)) < std::cos(o.max_triangle_slant_deg * kDegToRad) * nn) {
+      ++stats->triangles_skipped_depth;
+      return false;
+    }
+  }
+  return true;
+}
+
+// A triangle's prediction of B from A.
+struct TrianglePrediction {
+  Eigen::Matrix3d tinv;           // pixel of A (u, v, 1) -> barycentric coordinates (α, β, γ)
+  Eigen::Matrix<double, 2, 3> m;  // the affine map: pixel of A (u, v, 1) -> predicted pixel of B
+  Eigen::Vector3d plane_n;        // the vertices' plane in A: plane_n · X = plane_d (X in A, mm; plane_n unnormalized)
+  double plane_d;
+  int u_lo, u_hi, v_lo, v_hi;  // the triangle's bounding box of pixels of A within the ROI (inclusive)
+  bool strict, junction;       // see TriangleAccepted
+};
+
+// The affine map of the triangle's corners A -> B, the plane of its vertices in A and its pixel box in the ROI.
+TrianglePrediction PredictTriangle(const PairInputs& in, const PairTriangle& tri, bool strict, bool junction) {
+  const cv::Rect& roi = in.roi;
+  const std::vector<Eigen::Vector3d>& vertex_in_a = in.vertex_in_a;
+  const int* idx = tri.idx;
+  const Eigen::Vector2d &a0 = tri.a0, &a1 = tri.a1, &a2 = tri.a2;
+  const Eigen::Vector2d &b0 = tri.b0, &b1 = tri.b1, &b2 = tri.b2;
+  // Barycentric coordinates: (α, β, γ) = tinv * (u, v, 1); affine map Q = m * (u, v, 1).
+  Eigen::Matrix3d tmat;
+  tmat << a0.x(), a1.x(), a2.x(), a0.y(), a1.y(), a2.y(), 1, 1, 1;
+  const Eigen::Matrix3d tinv = tmat.inverse();
+  Eigen::Matrix<double, 2, 3> bmat;
+  bmat << b0.x(), b1.x(), b2.x(), b0.y(), b1.y(), b2.y();
+  const Eigen::Matrix<double, 2, 3> m = bmat * tinv;
+  const Eigen::Vector3d x0 = vertex_in_a[idx[0]];
+  const Eigen::Vector3d plane_n = (vertex_in_a[idx[1]] - x0).cross(vertex_in_a[idx[2]] - x0);
+  const double plane_d = plane_n.dot(x0);
+
+  const int u_lo = std::max(roi.x, static_cast<int>(std::ceil(std::min({a0.x(), a1.x(), a2.x()}))));
+  const int u_hi = std::min(roi.x + roi.width - 1, static_cast<int>(std::floor(std::max({a0.x(), a1.x(), a2.x()}))));
+  const int v_lo = std::max(roi.y, static_cast<int>(std::ceil(std::min({a0.y(), a1.y(), a2.y()}))));
+  const int v_hi = std::min(roi.y + roi.height - 1, static_cast<int>(std::floor(std::max({a0.y(), a1.y(), a2.y()}))));
+  return {tinv, m, plane_n, plane_d, u_lo, u_hi, v_lo, v_hi, strict, junction};
+}
+
+// The first best score of scores[lo, hi].
+int BestIn(const std::vector<double>& scores, int lo, int hi) {
+  int best = lo;
+  for (int k = lo + 1; k <= hi; ++k)
+    if (scores[k] > scores[best]) best = k;
+  return best;
+}
+
+// Pixel (u, v) of A (na: its normalized point) predicted in B into *q (px): through the vertices' plane (plane
+// mapping) or the affine map. False when the plane misses the ray, B cannot project the point or q's NCC window
+// (h + 1) leaves B.
+bool PredictInB(const PairInputs& in, const TrianglePrediction& tri, int u, int v, const Eigen::Vector2d& na,
+                Eigen::Vector2d* q) {
+  if (in.o.mapping == static_cast<int>(DenseMapping::kPlane)) {
+    const Eigen::Vector3d ray = na.homogeneous();
+    const double denom = tri.plane_n.dot(ray);
+    if (std::abs(denom) < 1e-12 * tri.plane_n.norm()) return false;
+    if (!in.b.camera.Project(in.g.b_from_a * (ray * (tri.plane_d / denom)), q)) return false;
+  } else {
+    *q = tri.m * Eigen::Vector3d(u, v, 1);
+  }
+  return Inside(in.b.image, *q, in.h + 1);
+}
+
+// Refines *q (px in B, p = (u, v) in A) along p's epipolar line in B: the NCC of A's window around p (set into
+// s->window_a) warped by the triangle's affine map at refine_step_px steps about q's foot on the line (the near
+// steps first, the far ones only when needed), the best step refined by a parabola to within ±0.5 step. False
+// when rejected (counted: the best at the search's border, or the refined q's window leaving B); else *q is the
+// refined pixel and |shift| (px) is added to s's sums.
+bool RefineAlongEpipolar(const PairInputs& in, const WindowWarp& warp, int u, int v, const Eigen::Vector2d& p,
+                         Eigen::Vector2d* q_io, PairState* s) {
+  const AffineDenseOptions& o = in.o;
+  DensePairStats& stats = s->stats;
+  std::vector<double>& scores = s->scores;
+  const int n_steps = in.n_steps, first_steps = in.first_steps;
+  const std::vector<int>& near_steps = in.near_steps;
+  const std::vector<int>& far_steps = in.far_steps;
+  const Eigen::Vector2d q = *q_io;
+  s->window_a.Set(in.gray_a, p, in.h);
+  const Eigen::Vector3d l = in.g.fundamental * Eigen::Vector3d(u, v, 1);
+  const double ln = std::hypot(l.x(), l.y());
+  const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
+  const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
+  // The steps within first_steps of the prediction first; the rest only when their best is at their edge
+  // (the peak may lie farther out) or under refine_first_min_ncc (a weak peak: a better one may lie farther
+  // out). Steps not scored stay at -2 (never the best, never a neighbour).
+  ++stats.refine_searches;
+  if (far_steps.empty()) ++stats.refine_full_searches;  // every step at once
+  std::fill(scores.begin(), scores.end(), -2.0);
+  SearchScores(s->window_a, warp, in.gray_b, q0, dir, o.refine_step_px, n_steps, near_steps.data(),
+               static_cast<int>(near_steps.size()), o.refine_kernel, &s->search, scores.data());
+  int best = BestIn(scores, n_steps - first_steps, n_steps + first_steps);
+  if (!far_steps.empty() &&
+      (best == n_steps - first_steps || best == n_steps + first_steps || scores[best] < o.refine_first_min_ncc)) {
+    ++stats.refine_full_searches;
+    SearchScores(s->window_a, warp, in.gray_b, q0, dir, o.refine_step_px, n_steps, far_steps.data(),
+                 static_cast<int>(far_steps.size()), o.refine_kernel, &s->search, scores.data());
+    best = BestIn(scores, 0, 2 * n_steps);
+  }
+  if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
+    ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here
+    return false;
+  }
+  double offset = 0;
+  if (best > 0 && best < 2 * n_steps) {
+    const double l0 = scores[best - 1], c0 = scores[best], r0 = scores[best + 1];
+    const double den = l0 - 2 * c0 + r0;
+    if (den < 0 && l0 > -2 && r0 > -2) offset = std::clamp(0.5 * (l0 - r0) / den, -0.5, 0.5);
+  }
+  const Eigen::Vector2d qr = q0 + ((best - n_steps + offset) * o.refine_step_px) * dir;
+  if (!Inside(in.b.image, qr, in.h + 1)) {
+    ++stats.rejected_outside;
+    return false;
+  }
+  s->refine_shift_sum += (qr - q).norm();
+  ++s->refine_count;
+  *q_io = qr;
+  return true;
+}
+
+// Whether A's colour at (u, v) and B's bilinear colour at q (px) agree: mean absolute difference over B, G, R
+// (0-255; a gray image's value stands for all three) not over max_color_difference.
+bool ColorAgrees(const PairInputs& in, int u, int v, const Eigen::Vector2d& q) {
+  double cb[3];
+  SampleBgr(in.b.image, q.x(), q.y(), cb);
+  const uint8_t* pa = in.a.image.ptr<uint8_t>(v) + u * in.channels;
+  double diff = 0;
+  for (int k = 0; k < 3; ++k) diff += std::abs(pa[in.channels == 3 ? k : 0] - cb[k]);
+  return !(diff / 3.0 > in.o.max_color_difference);
+}
+
+// The NCC checks of p (px in A; na its normalized point) against q (px in B) with the triangle's affine window
+// (h > 0): min_ncc where both windows are textured, the junction limits on strict or junction triangles, and the
+// floor hypothesis on junction triangles. Sets s->window_a unless window_a_set; a rejection is counted.
+bool NccAccepted(const PairInputs& in, const TrianglePrediction& tri, const WindowWarp& warp, const Eigen::Vector2d& p,
+                 const Eigen::Vector2d& na, const Eigen::Vector2d& q, bool window_a_set, PairState* s) {
+  const AffineDenseOptions& o = in.o;
+  DensePairStats& stats = s->stats;
+  const bool junction = tri.junction, strict = tri.strict;
+  double sd_a = 0, sd_b = 0;
+  if (!window_a_set) s->window_a.Set(in.gray_a, p, in.h);
+  const double ncc = WindowNcc(s->window_a, warp, in.gray_b, q, &sd_a, &sd_b, o.refine_kernel);
+  if (ncc < -1.5 || (sd_a >= o.min_window_stddev && sd_b >= o.min_window_stddev && ncc < o.min_ncc)) {
+    ++stats.rejected_ncc;
+    return false;
+  }
+  if ((junction || strict) && o.junction_min_window_stddev >= 0 &&
+      (sd_a < o.junction_min_window_stddev || sd_b < o.junction_min_window_stddev || ncc < o.junction_min_ncc)) {
+    ++stats.rejected_ncc;
+    return false;
+  }
+  // The floor hypothesis: the ray of P meets the floor plane at X_f, seen in B at q_f. In the crevice between
+  // the floor and the object, the triangle's plane puts P in the air in front of the shadowed floor that P
+  // really sees; when the floor explains the match about as well (q_f near q, or an NCC at q_f nearly as
+  // high), P is ambiguous and dropped.
+  if (junction && o.junction_floor_ncc_margin >= 0) {
+    const Eigen::Vector3d ray = (in.g.rwa * na.homogeneous()).normalized();
+    const double along = o.region.floor_normal.dot(ray);
+    if (along < -1e-9) {
+      const Eigen::Vector3d& center_a = in.g.center_a;
+      const Eigen::Vector3d x_floor = center_a - (o.region.HeightAboveFloor(center_a) / along) * ray;
+      Eigen::Vector2d q_floor;
+      if (in.b.camera.Project(in.g.b_from_world * x_floor, &q_floor) &&
+          ((q_floor - q).norm() < o.junction_floor_min_separation_px ||
+           (Inside(in.b.image, q_floor, in.h + 1) &&
+            WindowNcc(s->window_a, warp, in.gray_b, q_floor, nullptr, nullptr, o.refine_kernel) >=
+                ncc - o.junction_floor_ncc_margin))) {
+        ++stats.rejected_floor_ambiguous;
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// Pixel (u, v) of A: its prediction q in B, the epipolar check, the refinement along the epipolar line, the colour
+// and NCC checks, then its triangulation; an accepted point (with A's colour) is appended to s->points, a rejection
+// counted in s->stats.
+void MatchPixel(const PairInputs& in, const TrianglePrediction& tri, const WindowWarp& warp, int u, int v,
+                PairState* s) {
+  const AffineDenseOptions& o = in.o;
+  DensePairStats& stats = s->stats;
+  const Eigen::Vector2d p(u, v);
+  bool window_a_set = false;
+  const Eigen::Vector2d na = in.a.camera.Unproject(p);
+  Eigen::Vector2d q;
+  if (!PredictInB(in, tri, u, v, na, &q)) {
+    ++stats.rejected_outside;
+    return;
+  }
+  const Eigen::Vector3d nb_line = in.g.essential * na.homogeneous();
+  const Eigen::Vector2d nb = in.b.camera.Unproject(q);  // of the unrefined q
+  bool q_refined = false;
+  if (EpipolarFar(nb_line, std::abs(nb_line.dot(nb.homogeneous())), in.b.camera.fx, o.epipolar_threshold_px)) {
+    ++stats.rejected_epipolar;
+    return;
+  }
+  if (o.refine_along_epipolar) {
+    if (!RefineAlongEpipolar(in, warp, u, v, p, &q, s)) return;
+    window_a_set = true;
+    q_refined = true;
+  }
+  if (o.max_color_difference >= 0 && !ColorAgrees(in, u, v, q)) {
+    ++stats.rejected_color;
+    return;
+  }
+  if (in.h > 0 && !NccAccepted(in, tri, warp, p, na, q, window_a_set, s)) return;
+  DensePoint dp;
+  const PairTriangulator::Result result =
+      in.triangulator.Triangulate(p, na, q, q_refined ? in.b.camera.Unproject(q) : nb, &dp);
+  if (result == PairTriangulator::kRejectedTriangulation) {
+    ++stats.rejected_triangulation;
+    return;
+  }
+  if (result == PairTriangulator::kRejectedBox) {
+    ++stats.rejected_box;
+    return;
+  }
+  const uint8_t* pa = in.a.image.ptr<uint8_t>(v) + u * in.channels;
+  for (int k = 0; k < 3; ++k) dp.bgr[k] = pa[in.channels == 3 ? k : 0];
+  s->points.push_back(dp);
+  ++stats.accepted;
+}
+
+// The triangle's pixels of A (every pixel_step-th of its box, raster order) not handled by an earlier triangle,
+// each counted in stats.pixels and matched (MatchPixel) with the triangle's affine NCC window.
+void MatchTrianglePixels(const PairInputs& in, const TrianglePrediction& tri, PairState* s) {
+  const Eigen::Matrix2d jac = tri.m.leftCols<2>();
+  const WindowWarp warp(jac, in.h);
+  const int step = in.o.pixel_step;
+  for (int v = tri.v_lo + (step - tri.v_lo % step) % step; v <= tri.v_hi; v += step) {
+    for (int u = tri.u_lo + (step - tri.u_lo % step) % step; u <= tri.u_hi; u += step) {
+      const Eigen::Vector3d bary = tri.tinv * Eigen::Vector3d(u, v, 1);
+      if (bary.minCoeff() < -1e-9) continue;
+      uint8_t& seen = s->visited(v, u);
+      if (seen) continue;
+      seen = 1;
+      ++s->stats.pixels;
+      MatchPixel(in, tri, warp, u, v, s);
+    }
+  }
+}
+
+}  // namespace
+
+void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<PointMatch>& matches,
+                      const AffineDenseOptions& o, std::vector<DensePoint>* out, DensePairStats* stats_out) {
+  DensePairStats stats;
+  out->clear();
+  auto finish = [&]() {
+    if (stats_out) *stats_out = stats;
+  };
+  if (!DensePairViewsUsable(a, b) || !ValidateAffineDenseOptions(o, nullptr)) return finish();
+
+  // Features: inside both images, finite, deduplicated (order kept, deterministic).
+  const std::vector<PointMatch> feats = PairFeatures(a, b, matches, o);
   stats.features = static_cast<int>(feats.size());
   if (feats.size() < 3) return finish();
-
-  const Eigen::Matrix3d rwa = a.world_from_camera.linear();
-  const Eigen::Matrix3d rwb = b.world_from_camera.linear();
-  const Eigen::Isometry3d b_from_a = b.world_from_camera.inverse() * a.world_from_camera;
-  const Eigen::Isometry3d a_from_world = a.world_from_camera.inverse();
-  const Eigen::Isometry3d b_from_world = b.world_from_camera.inverse();
-  const Eigen::Matrix3d essential = EssentialMatrix(a.world_from_camera, b.world_from_camera);
-  const Eigen::Matrix3d fundamental = b.camera.K().inverse().transpose() * essential * a.camera.K().inverse();
-  const double min_angle = o.min_triangulation_angle_deg * kDegToRad;
+  const PairGeometry geometry(a, b, o);
 
   // Triangulate the vertices (depth in A for the depth-edge test, points for the plane mapping).
   std::vector<Eigen::Vector3d> vertex_in_a(feats.size());
   std::vector<char> vertex_ok(feats.size(), 0);
-  for (size_t i = 0; i < feats.size(); ++i) {
-    const Eigen::Vector3d da = (rwa * a.camera.Unproject(feats[i].a).homogeneous()).normalized();
-    const Eigen::Vector3d db = (rwb * b.camera.Unproject(feats[i].b).homogeneous()).normalized();
-    Eigen::Vector3d x;
-    double angle = 0;
-    if (TriangulateMidpoint(center_a, da, center_b, db, &x, &angle) && angle >= min_angle) {
-      vertex_in_a[i] = a_from_world * x;
-      vertex_ok[i] = vertex_in_a[i].z() > 0;
-    }
-  }
+  TriangulateVertices(feats, a, b, geometry, &vertex_in_a, &vertex_ok);
 
   // Delaunay triangulation of the features in A.
-  cv::Subdiv2D subdiv(cv::Rect(-2, -2, a.image.cols + 4, a.image.rows + 4));
   std::unordered_map<uint64_t, int> index_of;  // exact float position -> first feature there
-  index_of.reserve(2 * feats.size());
-  for (size_t i = 0; i < feats.size(); ++i) {
-    const cv::Point2f pt(static_cast<float>(feats[i].a.x()), static_cast<float>(feats[i].a.y()));
-    if (!index_of.emplace(FloatPairKey(pt.x, pt.y), static_cast<int>(i)).second) continue;
-    subdiv.insert(pt);
-  }
   std::vector<cv::Vec6f> tri_list;
-  subdiv.getTriangleList(tri_list);
+  DelaunayInA(feats, a.image, &index_of, &tri_list);
 
   thread_local PairScratch scratch;
   const cv::Mat& gray_a = GrayFloatOf(a, &scratch.gray8, &scratch.gray_a);
@@ -837,259 +1248,40 @@ void ComputeDensePair(const DenseView& a, const DenseView& b, const std::vector<
   cv::Mat1b& visited = scratch.visited;
   visited.create(a.image.rows, a.image.cols);
   visited.setTo(0);
-  std::vector<DensePoint>& points = *out;
-  const PinholeCamera& cam_a = a.camera;
-  const PinholeCamera& cam_b = b.camera;
-  const PairTriangulator triangulator(cam_a, a.world_from_camera, cam_b, b.world_from_camera, o);
-  const int n_steps = o.refine_along_epipolar ? static_cast<int>(std::floor(o.refine_search_px / o.refine_step_px)) : 0;
-  const int first_steps =
-      o.refine_first_steps > 0 ? std::min(n_steps, o.refine_first_steps) : n_steps;  // 0: every step at once
-  // The search's steps (the same for every pixel): those within first_steps of the prediction, then the others.
-  std::vector<int>& near_steps = scratch.near_steps;
-  std::vector<int>& far_steps = scratch.far_steps;
-  near_steps.clear(), far_steps.clear();
-  for (int s = -first_steps; s <= first_steps; ++s) near_steps.push_back(s);
-  for (int s = first_steps + 1; s <= n_steps; ++s) far_steps.push_back(-s), far_steps.push_back(s);
+  const PairTriangulator triangulator(a.camera, a.world_from_camera, b.camera, b.world_from_camera, o);
+  int n_steps = 0, first_steps = 0;
+  SetSearchSteps(o, &scratch, &n_steps, &first_steps);
   WindowA window_a;
-  std::vector<double>& scores = scratch.scores;
-  scores.assign(2 * n_steps + 1, -2.0);
-  // The first best score of scores[lo, hi].
-  const auto best_in = [&scores](int lo, int hi) {
-    int best = lo;
-    for (int k = lo + 1; k <= hi; ++k)
-      if (scores[k] > scores[best]) best = k;
-    return best;
-  };
   const cv::Rect roi = DensePairRoi(a.camera, a.world_from_camera, o);
   if (roi.area() <= 0) return finish();
-  const int h = o.ncc_half_window;
-  const int channels = a.image.channels();
-  double refine_shift_sum = 0;
-  int64_t refine_count = 0;
+  const PairInputs in{a,
+                      b,
+                      o,
+                      geometry,
+                      vertex_in_a,
+                      vertex_ok,
+                      roi,
+                      gray_a,
+                      gray_b,
+                      triangulator,
+                      scratch.near_steps,
+                      scratch.far_steps,
+                      n_steps,
+                      first_steps,
+                      o.ncc_half_window,
+                      a.image.channels()};
+  PairState state{visited, window_a, scratch.scores, scratch.search, *out, stats, 0, 0};
 
+  // Each triangle: its checks, its affine prediction, then its pixels' search, checks and triangulation.
   for (const cv::Vec6f& t : tri_list) {
-    int idx[3];
-    bool real = true;
-    for (int k = 0; k < 3; ++k) {
-      auto it = index_of.find(FloatPairKey(t[2 * k], t[2 * k + 1]));
-      if (it == index_of.end()) {
-        real = false;
-        break;
-      }
-      idx[k] = it->second;
-    }
-    if (!real) continue;  // a triangle touching Subdiv2D's virtual outer vertices
+    PairTriangle tri;
+    if (!ResolveTriangle(t, index_of, feats, &tri)) continue;  // a triangle touching Subdiv2D's virtual vertices
     ++stats.triangles;
-    const Eigen::Vector2d a0 = feats[idx[0]].a, a1 = feats[idx[1]].a, a2 = feats[idx[2]].a;
-    const Eigen::Vector2d b0 = feats[idx[0]].b, b1 = feats[idx[1]].b, b2 = feats[idx[2]].b;
-    const double area_a = 0.5 * Cross2(a1 - a0, a2 - a0);
-    const double area_b = 0.5 * Cross2(b1 - b0, b2 - b0);
-    const double max_edge = std::max(
-        {(a1 - a0).norm(), (a2 - a1).norm(), (a0 - a2).norm(), (b1 - b0).norm(), (b2 - b1).norm(), (b0 - b2).norm()});
-    if (std::abs(area_a) < o.min_triangle_area_px2 || area_a * area_b <= 0 || max_edge > o.max_triangle_edge_px ||
-        SmallestAngleBelow(a0, a1, a2, o.min_triangle_angle_deg)) {
-      ++stats.triangles_skipped_shape;
-      continue;
-    }
-    if (!vertex_ok[idx[0]] || !vertex_ok[idx[1]] || !vertex_ok[idx[2]]) {
-      ++stats.triangles_skipped_depth;
-      continue;
-    }
-    const double z0 = vertex_in_a[idx[0]].z(), z1 = vertex_in_a[idx[1]].z(), z2 = vertex_in_a[idx[2]].z();
-    if (std::max({z0, z1, z2}) > o.max_vertex_depth_ratio * std::min({z0, z1, z2})) {
-      ++stats.triangles_skipped_depth;
-      continue;
-    }
-    const bool strict = max_edge > o.strict_triangle_edge_px;  // stricter photometric checks below
-    bool junction = false;  // joins the floor to the object: stricter photometric checks below
-    if (o.region.valid) {
-      const Eigen::Vector3d w0 = a.world_from_camera * vertex_in_a[idx[0]],
-                            w1 = a.world_from_camera * vertex_in_a[idx[1]],
-                            w2 = a.world_from_camera * vertex_in_a[idx[2]];
-      if (o.region.TriangleOutside(w0, w1, w2, o.region_slack_mm) ||
-          (o.skip_floor_triangles && o.region.TriangleOnFloor(w0, w1, w2))) {
-        ++stats.triangles_skipped_region;
-        continue;
-      }
-      junction = o.region.TriangleSpansFloorJunction(w0, w1, w2);
-    }
-    // Cheap reject before any pixel work: the triangle's bounding box misses the ROI rectangle.
-    if (std::max({a0.x(), a1.x(), a2.x()}) < roi.x || std::min({a0.x(), a1.x(), a2.x()}) > roi.x + roi.width - 1 ||
-        std::max({a0.y(), a1.y(), a2.y()}) < roi.y || std::min({a0.y(), a1.y(), a2.y()}) > roi.y + roi.height - 1)
-      continue;
-    {
-      const Eigen::Vector3d& v0 = vertex_in_a[idx[0]];
-      const Eigen::Vector3d normal = (vertex_in_a[idx[1]] - v0).cross(vertex_in_a[idx[2]] - v0);
-      const Eigen::Vector3d centroid = (v0 + vertex_in_a[idx[1]] + vertex_in_a[idx[2]]) / 3.0;
-      const double nn = normal.norm() * centroid.norm();
-      if (!(nn > 0) || std::abs(normal.dot(centroid)) < std::cos(o.max_triangle_slant_deg * kDegToRad) * nn) {
-        ++stats.triangles_skipped_depth;
-        continue;
-      }
-    }
-    // Barycentric coordinates: (α, β, γ) = tinv * (u, v, 1); affine map Q = m * (u, v, 1).
-    Eigen::Matrix3d tmat;
-    tmat << a0.x(), a1.x(), a2.x(), a0.y(), a1.y(), a2.y(), 1, 1, 1;
-    const Eigen::Matrix3d tinv = tmat.inverse();
-    Eigen::Matrix<double, 2, 3> bmat;
-    bmat << b0.x(), b1.x(), b2.x(), b0.y(), b1.y(), b2.y();
-    const Eigen::Matrix<double, 2, 3> m = bmat * tinv;
-    const Eigen::Matrix2d jac = m.leftCols<2>();
-    const WindowWarp warp(jac, h);
-    const Eigen::Vector3d x0 = vertex_in_a[idx[0]];
-    const Eigen::Vector3d plane_n = (vertex_in_a[idx[1]] - x0).cross(vertex_in_a[idx[2]] - x0);
-    const double plane_d = plane_n.dot(x0);
-
-    const int u_lo = std::max(roi.x, static_cast<int>(std::ceil(std::min({a0.x(), a1.x(), a2.x()}))));
-    const int u_hi = std::min(roi.x + roi.width - 1, static_cast<int>(std::floor(std::max({a0.x(), a1.x(), a2.x()}))));
-    const int v_lo = std::max(roi.y, static_cast<int>(std::ceil(std::min({a0.y(), a1.y(), a2.y()}))));
-    const int v_hi = std::min(roi.y + roi.height - 1, static_cast<int>(std::floor(std::max({a0.y(), a1.y(), a2.y()}))));
-    const int step = o.pixel_step;
-    for (int v = v_lo + (step - v_lo % step) % step; v <= v_hi; v += step) {
-      for (int u = u_lo + (step - u_lo % step) % step; u <= u_hi; u += step) {
-        const Eigen::Vector3d bary = tinv * Eigen::Vector3d(u, v, 1);
-        if (bary.minCoeff() < -1e-9) continue;
-        uint8_t& seen = visited(v, u);
-        if (seen) continue;
-        seen = 1;
-        ++stats.pixels;
-        const Eigen::Vector2d p(u, v);
-        bool window_a_set = false;
-        const Eigen::Vector2d na = cam_a.Unproject(p);
-        Eigen::Vector2d q;
-        if (o.mapping == static_cast<int>(DenseMapping::kPlane)) {
-          const Eigen::Vector3d ray = na.homogeneous();
-          const double denom = plane_n.dot(ray);
-          if (std::abs(denom) < 1e-12 * plane_n.norm()) {
-            ++stats.rejected_outside;
-            continue;
-          }
-          if (!cam_b.Project(b_from_a * (ray * (plane_d / denom)), &q)) {
-            ++stats.rejected_outside;
-            continue;
-          }
-        } else {
-          q = m * Eigen::Vector3d(u, v, 1);
-        }
-        if (!Inside(b.image, q, h + 1)) {
-          ++stats.rejected_outside;
-          continue;
-        }
-        const Eigen::Vector3d nb_line = essential * na.homogeneous();
-        const Eigen::Vector2d nb = cam_b.Unproject(q);  // of the unrefined q
-        bool q_refined = false;
-        if (EpipolarFar(nb_line, std::abs(nb_line.dot(nb.homogeneous())), b.camera.fx, o.epipolar_threshold_px)) {
-          ++stats.rejected_epipolar;
-          continue;
-        }
-        if (o.refine_along_epipolar) {
-          window_a.Set(gray_a, p, h);
-          window_a_set = true;
-          const Eigen::Vector3d l = fundamental * Eigen::Vector3d(u, v, 1);
-          const double ln = std::hypot(l.x(), l.y());
-          const Eigen::Vector2d dir(-l.y() / ln, l.x() / ln);
-          const Eigen::Vector2d q0 = q - (l.dot(q.homogeneous()) / ln) * Eigen::Vector2d(l.x() / ln, l.y() / ln);
-          // The steps within first_steps of the prediction first; the rest only when their best is at their edge
-          // (the peak may lie farther out) or under refine_first_min_ncc (a weak peak: a better one may lie farther
-          // out). Steps not scored stay at -2 (never the best, never a neighbour).
-          ++stats.refine_searches;
-          if (far_steps.empty()) ++stats.refine_full_searches;  // every step at once
-          std::fill(scores.begin(), scores.end(), -2.0);
-          SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, near_steps.data(),
-                       static_cast<int>(near_steps.size()), o.refine_kernel, &scratch.search, scores.data());
-          int best = best_in(n_steps - first_steps, n_steps + first_steps);
-          if (!far_steps.empty() && (best == n_steps - first_steps || best == n_steps + first_steps ||
-                                     scores[best] < o.refine_first_min_ncc)) {
-            ++stats.refine_full_searches;
-            SearchScores(window_a, warp, gray_b, q0, dir, o.refine_step_px, n_steps, far_steps.data(),
-                         static_cast<int>(far_steps.size()), o.refine_kernel, &scratch.search, scores.data());
-            best = best_in(0, 2 * n_steps);
-          }
-          if (o.reject_refine_at_border && (best == 0 || best == 2 * n_steps)) {
-            ++stats.rejected_refine_border;  // the best match lies beyond the search: the affine map is off here
-            continue;
-          }
-          double offset = 0;
-          if (best > 0 && best < 2 * n_steps) {
-            const double l0 = scores[best - 1], c0 = scores[best], r0 = scores[best + 1];
-            const double den = l0 - 2 * c0 + r0;
-            if (den < 0 && l0 > -2 && r0 > -2) offset = std::clamp(0.5 * (l0 - r0) / den, -0.5, 0.5);
-          }
-          const Eigen::Vector2d qr = q0 + ((best - n_steps + offset) * o.refine_step_px) * dir;
-          if (!Inside(b.image, qr, h + 1)) {
-            ++stats.rejected_outside;
-            continue;
-          }
-          refine_shift_sum += (qr - q).norm();
-          ++refine_count;
-          q = qr;
-          q_refined = true;
-        }
-        if (o.max_color_difference >= 0) {
-          double cb[3];
-          SampleBgr(b.image, q.x(), q.y(), cb);
-          const uint8_t* pa = a.image.ptr<uint8_t>(v) + u * channels;
-          double diff = 0;
-          for (int k = 0; k < 3; ++k) diff += std::abs(pa[channels == 3 ? k : 0] - cb[k]);
-          if (diff / 3.0 > o.max_color_difference) {
-            ++stats.rejected_color;
-            continue;
-          }
-        }
-        if (h > 0) {
-          double sd_a = 0, sd_b = 0;
-          if (!window_a_set) window_a.Set(gray_a, p, h);
-          const double ncc = WindowNcc(window_a, warp, gray_b, q, &sd_a, &sd_b, o.refine_kernel);
-          if (ncc < -1.5 || (sd_a >= o.min_window_stddev && sd_b >= o.min_window_stddev && ncc < o.min_ncc)) {
-            ++stats.rejected_ncc;
-            continue;
-          }
-          if ((junction || strict) && o.junction_min_window_stddev >= 0 &&
-              (sd_a < o.junction_min_window_stddev || sd_b < o.junction_min_window_stddev ||
-               ncc < o.junction_min_ncc)) {
-            ++stats.rejected_ncc;
-            continue;
-          }
-          // The floor hypothesis: the ray of P meets the floor plane at X_f, seen in B at q_f. In the crevice between
-          // the floor and the object, the triangle's plane puts P in the air in front of the shadowed floor that P
-          // really sees; when the floor explains the match about as well (q_f near q, or an NCC at q_f nearly as
-          // high), P is ambiguous and dropped.
-          if (junction && o.junction_floor_ncc_margin >= 0) {
-            const Eigen::Vector3d ray = (rwa * na.homogeneous()).normalized();
-            const double along = o.region.floor_normal.dot(ray);
-            if (along < -1e-9) {
-              const Eigen::Vector3d x_floor = center_a - (o.region.HeightAboveFloor(center_a) / along) * ray;
-              Eigen::Vector2d q_floor;
-              if (cam_b.Project(b_from_world * x_floor, &q_floor) &&
-                  ((q_floor - q).norm() < o.junction_floor_min_separation_px ||
-                   (Inside(b.image, q_floor, h + 1) &&
-                    WindowNcc(window_a, warp, gray_b, q_floor, nullptr, nullptr, o.refine_kernel) >=
-                        ncc - o.junction_floor_ncc_margin))) {
-                ++stats.rejected_floor_ambiguous;
-                continue;
-              }
-            }
-          }
-        }
-        DensePoint dp;
-        const PairTriangulator::Result result =
-            triangulator.Triangulate(p, na, q, q_refined ? cam_b.Unproject(q) : nb, &dp);
-        if (result == PairTriangulator::kRejectedTriangulation) {
-          ++stats.rejected_triangulation;
-          continue;
-        }
-        if (result == PairTriangulator::kRejectedBox) {
-          ++stats.rejected_box;
-          continue;
-        }
-        const uint8_t* pa = a.image.ptr<uint8_t>(v) + u * channels;
-        for (int k = 0; k < 3; ++k) dp.bgr[k] = pa[channels == 3 ? k : 0];
-        points.push_back(dp);
-        ++stats.accepted;
-      }
-    }
+    bool strict = false, junction = false;
+    if (!TriangleAccepted(in, tri, &stats, &strict, &junction)) continue;
+    MatchTrianglePixels(in, PredictTriangle(in, tri, strict, junction), &state);
   }
-  if (refine_count > 0) stats.mean_refine_shift_px = refine_shift_sum / refine_count;
+  if (state.refine_count > 0) stats.mean_refine_shift_px = state.refine_shift_sum / state.refine_count;
   // Triangles come from Subdiv2D in its own order; sort output into raster order of the source pixel is not
   // needed for determinism (Subdiv2D is deterministic for the same input), so keep the order as produced.
   return finish();
