@@ -93,8 +93,9 @@ struct PlannerOptions {
                                                    // orbit and next views unreachable, coverage 52 %, the model 48.5 %
                                                    // of the target and its centre 26 mm off, with status ok). The
                                                    // coverage estimate is within about 15 points of the model's true
-                                                   // completeness (rooms 01-07: 84/97, 87/77, 96/85, 52/49, 67/83,
-                                                   // 78/84 %), hence well under the coverage target, [0, 1]
+                                                   // completeness where the poses held (rooms 01-07: 84/97, 87/77,
+                                                   // 96/85, 52/49, 67/83, 78/84 %; not room_05's distorted map: 90/42),
+                                                   // hence well under the coverage target, [0, 1]
   int max_next_views = 12;                         // views NEXT_VIEWS adds at most
   double next_views_budget_s = 240;                // s of NEXT_VIEWS at most
   double lost_search_s = 15;                       // s an ORBIT waits for a LOST target before going on
