@@ -24,7 +24,7 @@
 // "robot_sim" or "*" on OBJSCAN_CONTROL ends the stream early (END_OF_STREAM follows).
 // Determinism: messages depend only on the scene, options and seed (and in command mode on the commands received
 // before each frame), never on timing, except PROCESS_STATUS.
-// Collisions (robot_sim.h, footprint.h): the base is a circle of --footprint-radius-mm; in command mode it stops
+// Collisions (robot_sim.h, footprint.h): the base is a circle of robot.cfg's footprint_radius_mm; in command mode it stops
 // instead of driving into an object or a wall; each new collision is logged (frame, object) and counted.
 // --ground-truth-dir DIR writes target_surface.ply, target_mesh.ply, scene.txt at start-up, poses_gt.txt,
 // robot_gt.txt per frame and sim_outcome.json at the end of the stream (frames, collisions, blocked_frames,
