@@ -697,6 +697,15 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
   // A region moved by less than a voxel stays (the final adjustment's sub-millimetre changes); a move that is not a
   // Sim(3) (the views' centres off it by more than 20 mm RMS) is not followed either.
   if (moved <= grid_.voxel_size()) return region_;
+  // The automatic region is derived from the landmarks in use: from the final map's, it is in the final frame already.
+  if (region_source_ == 3 && landmarks_final_) {
+    std::snprintf(text, sizeof(text),
+                  "final votes: the automatic region, derived from the final map's landmarks, stays (the final poses "
+                  "moved its centre %.0f mm from the live frame)",
+                  moved);
+    *note = text;
+    return region_;
+  }
   if (rms > 20.0) {
     std::snprintf(text, sizeof(text),
                   "final votes: the region stays in the live frame: the final camera centres are no Sim(3) of the live "
@@ -716,29 +725,32 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
   // would be off by the move's height (room_03, 7 Dec: the region moved 38 mm, Sim(3) 18 mm RMS; the floor band then
   // kept the floor ring 5-11 mm high up to 100 mm around the cylinder: mesh p90 29.3 mm, max 124 mm, target box +79 /
   // +45 mm). It is fitted again among them around the moved box (the floor near the live box may be another part of
-  // the room); when none is found there, region_'s (final) floor stays.
-  if (region_.has_floor && landmarks_final_) {
+  // the room, or none); when none is found there, region_'s (final) floor, if any, stays.
+  if (landmarks_final_ && options_.roi.detect_floor) {
     RegionOfInterest refit = moved_region;
     refit.has_floor = false;
     const Eigen::Vector3d moved_centre = 0.5 * (moved_region.box_min + moved_region.box_max);
     const int inliers = AddFloorNear(landmark_points_, moved_centre, options_.roi, &refit);
     if (inliers == 0) {
-      refit.has_floor = true;
+      refit.has_floor = region_.has_floor;
       refit.floor_normal = region_.floor_normal;
       refit.floor_offset_mm = region_.floor_offset_mm;
     }
     refit.floor_clearance_mm = region_.floor_clearance_mm;
+    const bool both = refit.has_floor && moved_region.has_floor;
     const double shift_mm =
-        std::abs(refit.HeightAboveFloor(moved_centre) - moved_region.HeightAboveFloor(moved_centre));
+        both ? std::abs(refit.HeightAboveFloor(moved_centre) - moved_region.HeightAboveFloor(moved_centre)) : 0.0;
     char more[220];
     if (inliers > 0)
       std::snprintf(more, sizeof(more),
                     "; floor fitted again among the final landmarks around it (%d points), %.1f mm from the moved one "
                     "at its centre", inliers, shift_mm);
-    else
+    else if (refit.has_floor)
       std::snprintf(more, sizeof(more),
                     "; no floor among the final landmarks around it: the final floor near the live box kept, %.1f mm "
                     "from the moved one at its centre", shift_mm);
+    else
+      std::snprintf(more, sizeof(more), "; no floor among the final landmarks around it or the live box");
     *note += more;
     moved_region = refit;
   }

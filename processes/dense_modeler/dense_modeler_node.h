@@ -234,8 +234,9 @@ class DenseModelerNode : public Node {
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
   // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). The floor
   // moves with it only when the landmarks in use are live ones; fitted among the final map's landmarks (they arrive
-  // after the final poses) it is in the final frame already and is fitted again around the moved box instead. *note:
-  // what was done, for the log ("" when nothing to say).
+  // after the final poses) it is in the final frame already and is fitted again around the moved box instead. An
+  // automatic region (source 3) derived from the final map's landmarks stays. *note: what was done, for the log
+  // ("" when nothing to say).
   RegionOfInterest RegionInFinalFrame(const std::vector<StoredPair>& pairs, std::string* note) const;
   // revote_final_poses is set and final poses can arrive (final_pose_channel): the pairs' matches are kept.
   bool RevoteEnabled() const { return options_.revote_final_poses && !options_.final_pose_channel.empty(); }

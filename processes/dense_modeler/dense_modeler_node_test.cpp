@@ -339,6 +339,64 @@ TEST_F(NodeFixture, TheRegionFollowsTheFinalPosesIntoTheirFrame) {
   EXPECT_LT(error_mm, 0.8);
 }
 
+// Without a target box the region is the automatic one, derived from the landmarks in use (the tracks seen in the
+// image centre). In the final phase those are the final map's, so the region is in the final frame already: it stays
+// where it is, while the final poses lie 300 mm / 11 deg / scale 1.1 from the live ones (moved again by that Sim(3) it
+// would miss the sphere).
+TEST_F(NodeFixture, TheAutomaticRegionFromTheFinalMapStays) {
+  const int n = 16;
+  const auto features = scene_.SurfacePoints(2000);
+  live_from_truth_.scale = 1.1;
+  live_from_truth_.rotation = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  live_from_truth_.translation = Eigen::Vector3d(300, -200, 0);
+  options_.target_channel = "";
+  options_.auto_roi = true;
+  DenseModelerNode node(*bus_, options_);
+  PublishInfo();
+  // The landmarks: the features (track id = index), in the live frame while tracking, in the true one at the end.
+  auto landmarks_in = [&](const Sim3& frame, int64_t seq) {
+    landmarks_t m;
+    m.utime = std::llround(seq * 1e6 / 30);
+    m.seq = seq;
+    m.frame = "world";
+    m.num_landmarks = static_cast<int32_t>(features.size());
+    for (size_t k = 0; k < features.size(); ++k) {
+      const Eigen::Vector3d p = frame * features[k];
+      m.id.push_back(static_cast<int64_t>(k));
+      m.position_mm.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+      m.num_observations.push_back(5);
+      m.reprojection_error_px.push_back(0.5f);
+      m.rgb.push_back({128, 128, 128});
+    }
+    return m;
+  };
+  for (int i = 0; i <= n; ++i) {
+    PublishFrame(i, n, features, PoseStatus::kTracking);
+    if (i == 1) {
+      bus_->PublishMessage("LANDMARKS", landmarks_in(live_from_truth_, i));
+      Drain();
+    }
+  }
+  ASSERT_GT(node.pairs_done(), n / 2);
+  for (int i = 0; i <= n; ++i) PublishFinalPose(i, n);
+  bus_->PublishMessage("LANDMARKS", landmarks_in(Sim3(), n));  // the pose solver's final map
+  Drain();
+  EXPECT_EQ(node.status().rejected_total(), 0);
+  ::testing::internal::CaptureStderr();
+  PublishControl(+control_t::COMMAND_FINISHED, "pose_solver");
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(node.final_phase_done());
+  EXPECT_EQ(node.region_source(), 3);
+  EXPECT_NE(log.find("the automatic region, derived from the final map's landmarks, stays"), std::string::npos)
+      << log;
+  ASSERT_EQ(out_.models.size(), 1u);
+  EXPECT_GT(out_.models[0].num_voxels, 3000);
+  const double error_mm = FinalVoxelMedianErrorMm();
+  std::printf("automatic region from the final map: %d final voxels, median error %.2f mm\n",
+              out_.models[0].num_voxels, error_mm);
+  EXPECT_LT(error_mm, 0.8);
+}
+
 // The live poses lie 40 mm below the final (true) ones, in one case alternate live views also 8 mm off sideways (no
 // Sim(3): room_03, 7 Dec, 18 mm RMS after a restart rescaled in the orbit). The region (TARGET box in the live frame)
 // moves with the Sim(3) of the camera centres. Its floor, fitted in the final phase among the final landmarks (the
