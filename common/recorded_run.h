@@ -58,7 +58,8 @@ struct RobotDescription {
   RobotGeometry geometry;
   double pan_sign = 1, tilt_sign = 1;          // +1 or -1
   double pan_zero_rad = 0, tilt_zero_rad = 0;  // rad, encoder readings of the straight-ahead, level camera
-  // The base's and the head's limits: the planner plans within them, the simulator enforces them.
+  // The base's and the head's limits: the planner plans within them; the simulator enforces the footprint, speed and
+  // yaw rate (not the head's limits).
   double footprint_radius_mm = 200;  // mm, radius of the base's round footprint (> 0)
   double max_speed_mm_s = 400;       // mm/s, base speed (> 0)
   double max_omega_deg_s = 90;       // deg/s, base yaw rate (> 0)

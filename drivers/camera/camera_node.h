@@ -72,10 +72,10 @@ struct CameraNodeOptions {
 // Registers the options a user sets on the command line (names as in the comments: --source, --rate, ...); the rest
 // (gt_position_scale, publish_ground_truth, camera_name) keep their defaults, code and tests set the fields directly.
 void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* options);
-// Checks the option values (not the source itself). Returns false with *why on the first problem.
 // Parses a device size "WxH" (positive px, e.g. "640x480") into *width, *height; "" gives 0 x 0 (the calibration's
 // size). False for anything else.
 bool ParseDeviceSize(const std::string& text, int* width, int* height);
+// Checks the option values (not the source itself). Returns false with *why on the first problem.
 bool ValidateCameraNodeOptions(const CameraNodeOptions& options, std::string* why);
 
 class CameraNode : public Node {

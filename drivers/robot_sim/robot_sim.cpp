@@ -54,7 +54,7 @@ bool ValidateRobotSimOptions(const RobotSimOptions& o, std::string* why) {
     return fail("goal tolerance and gain must be > 0");
   if (o.command_timeout_us < 0) return fail("command_timeout_us must be >= 0");
   if (!Finite(o.footprint_radius_mm) || o.footprint_radius_mm <= 0 || o.footprint_radius_mm > 5000)
-    return fail("footprint_radius_mm must be in (0, 5000] mm (robot.cfg)");
+    return fail("the footprint radius (robot.cfg's footprint_radius_mm) must be in (0, 5000] mm");
   return true;
 }
 

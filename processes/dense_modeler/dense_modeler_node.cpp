@@ -848,16 +848,16 @@ void DenseModelerNode::ReportLiveFinalOffset(bool use_final_poses) {
 
 void DenseModelerNode::LogFinalModel(const FinalModel& model, size_t views, int final_used) const {
   LogInfo("vote ridge: " + std::to_string(model.ridge.ridge) + " ridge voxels of " + std::to_string(model.seeds) +
-            " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
-            std::to_string(model.crevice_band_dropped) + " facing down near the floor dropped, " +
-            std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
-            std::to_string(model.ridge.crease_points_moved) +
-            " surface points moved onto creases; mesh: " + std::to_string(model.visibility.vertices_removed) +
-            " vertices hidden in " + std::to_string(model.visibility.views) + " views removed, " +
-            std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +
-            std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
-            std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
-            std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
+          " seeds, " + std::to_string(model.floor_band_dropped) + " facing up and " +
+          std::to_string(model.crevice_band_dropped) + " facing down near the floor dropped, " +
+          std::to_string(model.ridge.fragments_dropped) + " in small fragments dropped, " +
+          std::to_string(model.ridge.crease_points_moved) +
+          " surface points moved onto creases; mesh: " + std::to_string(model.visibility.vertices_removed) +
+          " vertices hidden in " + std::to_string(model.visibility.views) + " views removed, " +
+          std::to_string(model.ridge.curled_triangles_dropped) + " triangles of curled rims and " +
+          std::to_string(model.ridge.border_triangles_dropped) + " of border rings peeled, " +
+          std::to_string(model.ridge.mesh_triangles_dropped) + " in small pieces dropped, " +
+          std::to_string(model.voxels_without_mesh) + " voxels off the final mesh dropped");
   if (options_.model.weak_refit.relative_votes > 0) {
     const WeakRefitStats& w = model.weak_refit;
     char line[512];

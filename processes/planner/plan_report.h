@@ -1,5 +1,6 @@
 // plan.json: the planner's record of a run (LCM-free).
-//   outcome          "modeled" (FINISH reached) | "no_target" (NO_TARGET) | "stopped" (the stream ended first)
+//   outcome          "modeled" (FINISH reached) | "partial" (FINISH with coverage under min_coverage) | "no_target"
+//                    (NO_TARGET) | "stopped" (the stream ended first)
 //   phases           [{name, start_utime, end_utime, seconds}] in order (a running phase ends at end_utime)
 //   path_length_mm   estimated path of the base; views = frames with a usable camera pose; frames = poses handled
 //   orbit_percent    share of the circle's 1-degree bins driven in ORBIT
@@ -18,7 +19,7 @@
 
 namespace objscan {
 
-// Outcome word for a summary: "modeled", "no_target" or "stopped".
+// Outcome word for a summary: "modeled", "partial", "no_target" or "stopped".
 std::string PlanOutcome(const PlanSummary& summary);
 std::string PlanJson(const PlanSummary& summary, int64_t end_utime);
 // Writes PlanJson to path; false with *error when the file cannot be written.

@@ -91,6 +91,7 @@ bool ValidatePlannerOptions(const PlannerOptions& o, std::string* why) {
     e << "orbit radius must be > footprint radius + safety margin; ";
   if (!(o.coverage_target > 0 && o.coverage_target <= 1)) e << "coverage target must be in (0, 1]; ";
   if (!(o.min_coverage >= 0 && o.min_coverage <= 1)) e << "min coverage must be in [0, 1]; ";
+  if (o.min_coverage > o.coverage_target) e << "min coverage must be <= the coverage target; ";
   if (o.max_next_views < 0) e << "max next views must be >= 0; ";
   positive(o.coverage.sample_mm, "coverage sample spacing");
   positive(o.coverage.max_range_mm, "coverage range");

@@ -27,7 +27,7 @@
 //   3 NEXT_VIEWS  next-best-view (next_best_view.h) from the coverage model: go to the view, turn along its ring,
 //                 aim the head, drive capture_arc_deg along the ring (frames for motion stereo), choose again; until
 //                 coverage_target, max_next_views, next_views_budget_s, or no view adds coverage (-> FINISH).
-//   4 FINISH      stop. Outcome "modeled".
+//   4 FINISH      stop. Outcome "modeled" ("partial" under min_coverage: an error of the run).
 //   5 NO_TARGET   stop. Outcome "no_target".
 // Every command: v in [0, max speed], |omega| <= tracking_turn_rad_s (<= the base limit), pan/tilt within the joint
 // limits, the camera's yaw rate (base + pan) and the tilt rate <= tracking_turn_rad_s (the tracker must keep up);

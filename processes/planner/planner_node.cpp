@@ -134,7 +134,7 @@ bool ValidatePlannerNodeOptions(const PlannerNodeOptions& o, std::string* why) {
   if (!ToPlannerOptions(o, &p, &sub))
     e << sub << "; ";
   else if (!ValidatePlannerOptions(p, &sub))
-    e << sub << "; ";
+    e << sub << (o.robot_file.empty() ? "" : " (with the limits of " + o.robot_file + ")") << "; ";
   const std::string message = e.str();
   if (message.empty()) return true;
   if (why) *why = message.substr(0, message.size() - 2);
@@ -213,7 +213,7 @@ void PlannerNode::OnPose(const pose_t& msg) {
     request.target = options_.driver_name;
     request.command = control_t::COMMAND_SHUTDOWN;
     request.last_seq = msg.seq;
-    request.argument = planner_.phase() == Phase::kFinish ? "modeled" : "no_target";
+    request.argument = PlanOutcome(planner_.Summary());
     if (bus_.PublishMessage(options_.control_channel, request))
       status_.CountOut();
     else
@@ -382,11 +382,12 @@ void PlannerNode::OnControl(const control_t& msg) {
                          " (room explored or explore budget spent); try a longer --explore-budget and --frames, "
                          "check the object finder's target rule (size, texture), or start the robot nearer the object");
   } else if (outcome == "partial") {
-    char text[640];
+    char text[720];
     std::snprintf(text, sizeof(text),
-                  "the plan ended with %.0f %% of the target's surface seen (--min-coverage %.0f %%) %s: %s. The "
-                  "model misses part of the target; try a smaller --orbit-radius or room around the target (%lld "
-                  "safety stops), a longer --next-views-budget or more --max-next-views",
+                  "the plan ended with %.1f %% of the target's surface seen (--min-coverage %.1f %%) %s: %s. The "
+                  "model misses part of the target; try a smaller orbit radius (objscan run --radius, planner "
+                  "--orbit-radius) or room around the target (%lld safety stops), more next views (objscan run "
+                  "--next-views, planner --max-next-views, --next-views-budget)",
                   100 * summary.coverage, 100 * summary.min_coverage, travelled, summary.finish_reason.c_str(),
                   static_cast<long long>(summary.safety_stops));
     status_.SetState(+process_status_t::STATE_ERROR, text);

@@ -582,6 +582,10 @@ TEST(PlanReport, AFinishBelowTheMinimumCoverageIsPartial) {
   std::string why;
   EXPECT_FALSE(ValidatePlannerOptions(bad, &why));
   EXPECT_NE(why.find("min coverage"), std::string::npos) << why;
+  bad.min_coverage = 0.8;
+  bad.coverage_target = 0.7;
+  EXPECT_FALSE(ValidatePlannerOptions(bad, &why));
+  EXPECT_NE(why.find("<= the coverage target"), std::string::npos) << why;
 }
 
 }  // namespace
