@@ -883,17 +883,22 @@ Planner::Motion Planner::Approach() {
   activity_ = "approach";
   const Eigen::Vector3d centre = TargetCentre();
   const double d = (base_.position() - centre.head<2>()).norm();
+  // On the circle, or at the circle point PlanToOrbit chose (radius up to 400 mm more) - not at a frontier the
+  // approach explores while the circle is out of reach (room_04, 7 Dec: "on the orbit circle (3601 mm from the
+  // target)" at a frontier goal, then no orbit, no model).
   if ((std::abs(d - options_.orbit_radius_mm) <= kGoalToleranceMm && map_.TraversableAt(base_.position())) ||
-      (!follower_.empty() && follower_.Reached(base_, kGoalToleranceMm))) {
+      (approach_to_circle_ && !follower_.empty() && follower_.Reached(base_, kGoalToleranceMm))) {
     EnterPhase(Phase::kOrbit, "on the orbit circle (" + std::to_string(static_cast<int>(d)) + " mm from the target)");
     return Orbit();
   }
   const bool replan = follower_.empty() || now_ >= next_replan_ || now_ > goal_deadline_ ||
-                      !follower_.StillFree(map_, 1000) || Stuck();
+                      !follower_.StillFree(map_, 1000) || Stuck() ||
+                      (!approach_to_circle_ && follower_.Reached(base_, kGoalToleranceMm));
   if (replan) {
     next_replan_ = now_ + kReplanUs;
     blocked_since_ = -1;
-    if (!PlanToOrbit()) {
+    approach_to_circle_ = PlanToOrbit();
+    if (!approach_to_circle_) {
       if (!ChooseFrontier()) {
         EnterPhase(Phase::kNextViews, "the orbit circle is not reachable and nothing is left to explore");
         return NextViews();

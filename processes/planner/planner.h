@@ -274,6 +274,7 @@ class Planner {
   Phase phase_ = Phase::kExplore;
   std::string activity_ = "waiting";
   std::string last_phase_reason_;  // EnterPhase's why, for the summary
+  bool approach_to_circle_ = false;  // APPROACH: the follower's goal is a point of the orbit circle (not a frontier)
   std::vector<PhaseRecord> phases_;
   std::vector<std::string> events_;
   int64_t now_ = 0;             // µs, utime of the current pose

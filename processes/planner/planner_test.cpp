@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
@@ -90,6 +91,13 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     for (const std::string& e : planner.TakeEvents()) {
       if (Verbose()) std::printf("[%7.2f s] %s\n", world.utime() * 1e-6, e.c_str());
       log.events.push_back("[" + std::to_string(world.seq()) + "] " + e);
+      // The orbit starts on its circle (PlanToOrbit's radius is up to 400 mm more), never at a frontier the approach
+      // explored (room_04, 7 Dec: "on the orbit circle (3601 mm from the target)", then no orbit and no model).
+      const size_t at = e.find("on the orbit circle (");
+      if (at != std::string::npos) {
+        const double d = std::atof(e.c_str() + at + std::strlen("on the orbit circle ("));
+        EXPECT_LE(d, options.orbit_radius_mm + 400 + 2 * 150) << e;
+      }
     }
     if (!c.stop && planner.phase() == Phase::kExplore &&
         (planner.activity() == "frontier" || planner.activity() == "look around")) {
