@@ -727,30 +727,27 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
   // +45 mm). It is fitted again among them around the moved box (the floor near the live box may be another part of
   // the room, or none); when none is found there, region_'s (final) floor, if any, stays.
   if (landmarks_final_ && options_.roi.detect_floor) {
-    RegionOfInterest refit = moved_region;
-    refit.has_floor = false;
+    RegionOfInterest refit = moved_region;  // region_'s (final) floor, unless one is found around the moved box
+    refit.has_floor = region_.has_floor;
+    refit.floor_normal = region_.floor_normal;
+    refit.floor_offset_mm = region_.floor_offset_mm;
     const Eigen::Vector3d moved_centre = 0.5 * (moved_region.box_min + moved_region.box_max);
     const int inliers = AddFloorNear(landmark_points_, moved_centre, options_.roi, &refit);
-    if (inliers == 0) {
-      refit.has_floor = region_.has_floor;
-      refit.floor_normal = region_.floor_normal;
-      refit.floor_offset_mm = region_.floor_offset_mm;
-    }
     refit.floor_clearance_mm = region_.floor_clearance_mm;
-    const bool both = refit.has_floor && moved_region.has_floor;
-    const double shift_mm =
-        both ? std::abs(refit.HeightAboveFloor(moved_centre) - moved_region.HeightAboveFloor(moved_centre)) : 0.0;
-    char more[220];
-    if (inliers > 0)
-      std::snprintf(more, sizeof(more),
-                    "; floor fitted again among the final landmarks around it (%d points), %.1f mm from the moved one "
-                    "at its centre", inliers, shift_mm);
-    else if (refit.has_floor)
-      std::snprintf(more, sizeof(more),
-                    "; no floor among the final landmarks around it: the final floor near the live box kept, %.1f mm "
-                    "from the moved one at its centre", shift_mm);
-    else
-      std::snprintf(more, sizeof(more), "; no floor among the final landmarks around it or the live box");
+    char more[220] = "; no floor among the final landmarks around it or the live box";
+    if (refit.has_floor) {
+      const double shift_mm = moved_region.has_floor ? std::abs(refit.HeightAboveFloor(moved_centre) -
+                                                                moved_region.HeightAboveFloor(moved_centre))
+                                                     : 0.0;
+      if (inliers > 0)
+        std::snprintf(more, sizeof(more),
+                      "; floor fitted again among the final landmarks around it (%d points), %.1f mm from the moved "
+                      "one at its centre", inliers, shift_mm);
+      else
+        std::snprintf(more, sizeof(more),
+                      "; no floor among the final landmarks around it: the final floor near the live box kept, %.1f "
+                      "mm from the moved one at its centre", shift_mm);
+    }
     *note += more;
     moved_region = refit;
   }

@@ -126,6 +126,24 @@ class NodeFixture : public ::testing::Test {
     target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 200;
     bus_->PublishMessage("TARGET", target);
   }
+  // A LANDMARKS message (world frame) of frame seq: points[k] (mapped by `frame`) with id first_id + k.
+  static landmarks_t LandmarksMessage(const std::vector<Eigen::Vector3d>& points, int64_t seq, int64_t first_id = 0,
+                                      const Sim3& frame = Sim3()) {
+    landmarks_t m;
+    m.utime = std::llround(seq * 1e6 / 30);
+    m.seq = seq;
+    m.frame = "world";
+    m.num_landmarks = static_cast<int32_t>(points.size());
+    for (size_t k = 0; k < points.size(); ++k) {
+      const Eigen::Vector3d p = frame * points[k];
+      m.id.push_back(first_id + static_cast<int64_t>(k));
+      m.position_mm.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
+      m.num_observations.push_back(5);
+      m.reprojection_error_px.push_back(0.5f);
+      m.rgb.push_back({128, 128, 128});
+    }
+    return m;
+  }
   // Median distance (mm) of the final VOXEL_MAP's voxel centres to the true sphere; NaN without a final map.
   double FinalVoxelMedianErrorMm() const {
     if (out_.maps.empty() || !out_.maps.back().is_final || out_.maps.back().num_voxels == 0) return std::nan("");
@@ -354,32 +372,16 @@ TEST_F(NodeFixture, TheAutomaticRegionFromTheFinalMapStays) {
   DenseModelerNode node(*bus_, options_);
   PublishInfo();
   // The landmarks: the features (track id = index), in the live frame while tracking, in the true one at the end.
-  auto landmarks_in = [&](const Sim3& frame, int64_t seq) {
-    landmarks_t m;
-    m.utime = std::llround(seq * 1e6 / 30);
-    m.seq = seq;
-    m.frame = "world";
-    m.num_landmarks = static_cast<int32_t>(features.size());
-    for (size_t k = 0; k < features.size(); ++k) {
-      const Eigen::Vector3d p = frame * features[k];
-      m.id.push_back(static_cast<int64_t>(k));
-      m.position_mm.push_back({static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())});
-      m.num_observations.push_back(5);
-      m.reprojection_error_px.push_back(0.5f);
-      m.rgb.push_back({128, 128, 128});
-    }
-    return m;
-  };
   for (int i = 0; i <= n; ++i) {
     PublishFrame(i, n, features, PoseStatus::kTracking);
     if (i == 1) {
-      bus_->PublishMessage("LANDMARKS", landmarks_in(live_from_truth_, i));
+      bus_->PublishMessage("LANDMARKS", LandmarksMessage(features, i, 0, live_from_truth_));
       Drain();
     }
   }
   ASSERT_GT(node.pairs_done(), n / 2);
   for (int i = 0; i <= n; ++i) PublishFinalPose(i, n);
-  bus_->PublishMessage("LANDMARKS", landmarks_in(Sim3(), n));  // the pose solver's final map
+  bus_->PublishMessage("LANDMARKS", LandmarksMessage(features, n));  // the pose solver's final map
   Drain();
   EXPECT_EQ(node.status().rejected_total(), 0);
   ::testing::internal::CaptureStderr();
@@ -408,30 +410,17 @@ TEST_F(NodeFixture, RegionFloorInTheFinalFrameWhateverFrameItWasFittedIn) {
   const int n = 16;
   const auto features = scene_.SurfacePoints(2000);
   const Eigen::Vector3d live_shift(0, 0, -40);
-  // The final landmarks (true frame): 200 on the floor z = 0 around the sphere, 300 on the sphere.
-  landmarks_t landmarks;
-  landmarks.utime = std::llround(n * 1e6 / 30);
-  landmarks.seq = n;
-  landmarks.frame = "world";
+  // The final landmarks (true frame): 200 on the floor z = 0 around the sphere, 300 on the sphere (ids no track has).
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < 200; ++i) {
     const double a = 2 * M_PI * i / 200, r = 150 + 250 * ((i * 37) % 100) / 100.0;
     points.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
   }
   for (const Eigen::Vector3d& p : scene_.SurfacePoints(300)) points.push_back(p);
-  landmarks.num_landmarks = static_cast<int32_t>(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    landmarks.id.push_back(1000000 + static_cast<int64_t>(i));  // no track's id
-    landmarks.position_mm.push_back(
-        {static_cast<float>(points[i].x()), static_cast<float>(points[i].y()), static_cast<float>(points[i].z())});
-    landmarks.num_observations.push_back(5);
-    landmarks.reprojection_error_px.push_back(0.5f);
-    landmarks.rgb.push_back({128, 128, 128});
-  }
-  landmarks_t live_landmarks = landmarks;  // the same map in the live frame
-  for (auto& p : live_landmarks.position_mm)
-    for (int k = 0; k < 3; ++k) p[k] += static_cast<float>(live_shift[k]);
-  live_landmarks.seq = n - 1;
+  const landmarks_t landmarks = LandmarksMessage(points, n, 1000000);
+  Sim3 live_from_final;  // the same map in the live frame
+  live_from_final.translation = live_shift;
+  const landmarks_t live_landmarks = LandmarksMessage(points, n - 1, 1000000, live_from_final);
   struct Case {
     double sideways_mm;
     bool final_landmarks;
