@@ -48,6 +48,82 @@ inline void ToScreenPlane(const Eigen::Vector3d& v, const PinholeCamera& cam, do
   plane[2] = v.z() - v.x() * cam.cx / cam.fx - v.y() * cam.cy / cam.fy;
 }
 
+// Z-buffers one screen triangle (a, b, c in pixels, any winding) into qbuffer / setup_index (width x height, row
+// major), where its q = 1/z (1/mm, screen plane qp) beats the stored value. Returns whether any pixel was won.
+bool ZBufferTriangle(Eigen::Vector2d a, Eigen::Vector2d b, Eigen::Vector2d c, const double qp[3], int width, int height,
+                     int setup_id, float* qbuffer, int32_t* setup_index) {
+  double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+  if (std::abs(area) < 1e-12) return false;
+  if (area < 0) std::swap(b, c);
+  const Eigen::Vector2d pts[3] = {a, b, c};
+  double ea[3], eb[3], ec[3];
+  for (int k2 = 0; k2 < 3; ++k2) {
+    const Eigen::Vector2d& p = pts[k2];
+    const Eigen::Vector2d& q = pts[(k2 + 1) % 3];
+    ea[k2] = -(q.y() - p.y());
+    eb[k2] = q.x() - p.x();
+    ec[k2] = -ea[k2] * p.x() - eb[k2] * p.y();
+  }
+  bool any = false;
+  const double ymin = std::min({a.y(), b.y(), c.y()}), ymax = std::max({a.y(), b.y(), c.y()});
+  const int y_start = std::max(0, static_cast<int>(std::ceil(ymin)));
+  const int y_end = std::min(height - 1, static_cast<int>(std::floor(ymax)));
+  for (int y = y_start; y <= y_end; ++y) {
+    double lo = 0, hi = width - 1;
+    for (int k2 = 0; k2 < 3; ++k2) {
+      const double kk = eb[k2] * y + ec[k2];
+      if (ea[k2] > 0)
+        lo = std::max(lo, -kk / ea[k2]);
+      else if (ea[k2] < 0)
+        hi = std::min(hi, -kk / ea[k2]);
+      else if (kk < 0)
+        hi = -1;
+    }
+    if (hi < lo) continue;
+    const int x_start = static_cast<int>(std::ceil(lo)), x_end = static_cast<int>(std::floor(hi));
+    float* qrow = &qbuffer[static_cast<size_t>(y) * width];
+    int32_t* irow = &setup_index[static_cast<size_t>(y) * width];
+    const double qrow_c = qp[1] * y + qp[2];
+    for (int x = x_start; x <= x_end; ++x) {
+      const float q = static_cast<float>(qp[0] * x + qrow_c);
+      if (q > qrow[x]) {
+        qrow[x] = q;
+        irow[x] = setup_id;
+        any = true;
+      }
+    }
+  }
+  return any;
+}
+
+// Colour (R, G, B, 0..255) of a mip chain at (u, v) in level-0 texels for the squared footprint rho2 (level-0
+// texels^2 per pixel): nearest level with bilinear filtering, or trilinear between the two nearest levels.
+inline void SampleTexture(const Texture::Level* levels, int max_level, bool trilinear, float u, float v, float rho2,
+                          float colour[3]) {
+  if (!trilinear) {
+    // nearest level: round(0.5 * log2(rho2)) = floor(log2(2 * rho2) / 2)
+    int level = 0;
+    if (rho2 > 0.5f) {
+      uint32_t bits;
+      const float twice = 2.0f * rho2;
+      std::memcpy(&bits, &twice, 4);
+      const int exponent = static_cast<int>((bits >> 23) & 0xff) - 127;  // floor(log2(2 rho2))
+      level = std::min(max_level, exponent >> 1);
+    }
+    const float scale = 1.0f / static_cast<float>(1 << level);
+    SampleBilinear(levels[level], u * scale, v * scale, colour);
+  } else {
+    const float lod = rho2 > 1.0f ? std::min(0.5f * std::log2(rho2), static_cast<float>(max_level)) : 0.0f;
+    const int l0 = static_cast<int>(lod);
+    const int l1 = std::min(l0 + 1, max_level);
+    const float t = lod - l0;
+    float c0[3], c1[3];
+    SampleBilinear(levels[l0], u / static_cast<float>(1 << l0), v / static_cast<float>(1 << l0), c0);
+    SampleBilinear(levels[l1], u / static_cast<float>(1 << l1), v / static_cast<float>(1 << l1), c1);
+    for (int k = 0; k < 3; ++k) colour[k] = c0[k] + t * (c1[k] - c0[k]);
+  }
+}
+
 }  // namespace
 
 Renderer::Renderer(const Scene& scene, const RenderOptions& options) : scene_(scene), options_(options) {
@@ -88,126 +164,95 @@ void Renderer::Render(const PinholeCamera& camera, const Eigen::Isometry3d& worl
   setups_.clear();
   qbuffer_.assign(num_pixels, 0.0f);
   setup_index_.assign(num_pixels, -1);
-  const double near = options_.near_mm;
   // Frustum side planes through the optical centre (inside: dot >= 0), pixel area [-0.5, size - 0.5].
   const Eigen::Vector3d side_planes[4] = {
       Eigen::Vector3d(camera.fx, 0, camera.cx + 0.5), Eigen::Vector3d(-camera.fx, 0, width - 0.5 - camera.cx),
       Eigen::Vector3d(0, camera.fy, camera.cy + 0.5), Eigen::Vector3d(0, -camera.fy, height - 0.5 - camera.cy)};
   int drawn = 0;
-
   for (const Triangle& tri : triangles_) {
-    const Eigen::Vector3d& p0 = camera_points_[tri.v[0]];
-    const Eigen::Vector3d& p1 = camera_points_[tri.v[1]];
-    const Eigen::Vector3d& p2 = camera_points_[tri.v[2]];
-    if (p0.z() < near && p1.z() < near && p2.z() < near) continue;
-    bool outside = false;
-    for (const auto& plane : side_planes) {
-      if (plane.dot(p0) < 0 && plane.dot(p1) < 0 && plane.dot(p2) < 0) {
-        outside = true;
-        break;
-      }
-    }
-    if (outside) continue;
-    const Eigen::Vector3d e1 = p1 - p0, e2 = p2 - p0;
-    const Eigen::Vector3d n = e1.cross(e2);
-    const double d = n.dot(p0);
-    if (tri.cull && d >= 0) continue;             // back face (the camera sits at the origin)
-    if (std::abs(d) < 1e-9 * n.norm()) continue;  // plane through the optical centre: seen edge-on
-    // Perspective-correct planes: for the viewing ray r, q = 1/z = r.n/d, b1*q = -r.(p0 x e2)/d, b2*q = r.(p0 x e1)/d.
-    const Eigen::Vector3d q_vec = n / d;
-    const Eigen::Vector3d b1_vec = -p0.cross(e2) / d;
-    const Eigen::Vector3d b2_vec = p0.cross(e1) / d;
-    const Vertex& v0 = vertices_[tri.v[0]];
-    const Vertex& v1 = vertices_[tri.v[1]];
-    const Vertex& v2 = vertices_[tri.v[2]];
-    double qp[3], up[3], vp[3], sp[3];
-    ToScreenPlane(q_vec, camera, qp);
-    ToScreenPlane(v0.u * q_vec + (v1.u - v0.u) * b1_vec + (v2.u - v0.u) * b2_vec, camera, up);
-    ToScreenPlane(v0.v * q_vec + (v1.v - v0.v) * b1_vec + (v2.v - v0.v) * b2_vec, camera, vp);
-    ToScreenPlane(v0.shade * q_vec + (v1.shade - v0.shade) * b1_vec + (v2.shade - v0.shade) * b2_vec, camera, sp);
     Setup setup;
-    for (int k = 0; k < 3; ++k) {
-      setup.q[k] = static_cast<float>(qp[k]);
-      setup.u[k] = static_cast<float>(up[k]);
-      setup.v[k] = static_cast<float>(vp[k]);
-      setup.s[k] = static_cast<float>(sp[k]);
-    }
-    setup.object = tri.object;
-    setup.levels = textures_[tri.object]->levels.data();
-    setup.max_level = static_cast<int>(textures_[tri.object]->levels.size()) - 1;
-
-    // Clip the polygon at the near plane (Sutherland-Hodgman), project, rasterize as a fan.
-    Eigen::Vector3d poly[4];
-    int count = 0;
-    const Eigen::Vector3d in[3] = {p0, p1, p2};
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d& a = in[k];
-      const Eigen::Vector3d& b = in[(k + 1) % 3];
-      const bool a_in = a.z() >= near, b_in = b.z() >= near;
-      if (a_in) poly[count++] = a;
-      if (a_in != b_in) poly[count++] = a + (b - a) * ((near - a.z()) / (b.z() - a.z()));
-    }
-    if (count < 3) continue;
-    Eigen::Vector2d screen[4];
-    for (int k = 0; k < count; ++k)
-      screen[k] = Eigen::Vector2d(camera.fx * poly[k].x() / poly[k].z() + camera.cx,
-                                  camera.fy * poly[k].y() / poly[k].z() + camera.cy);
-    const int setup_id = static_cast<int>(setups_.size());
-    bool any = false;
-    for (int k = 1; k + 1 < count; ++k) {
-      Eigen::Vector2d a = screen[0], b = screen[k], c = screen[k + 1];
-      double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
-      if (std::abs(area) < 1e-12) continue;
-      if (area < 0) std::swap(b, c);
-      const Eigen::Vector2d pts[3] = {a, b, c};
-      double ea[3], eb[3], ec[3];
-      for (int k2 = 0; k2 < 3; ++k2) {
-        const Eigen::Vector2d& p = pts[k2];
-        const Eigen::Vector2d& q = pts[(k2 + 1) % 3];
-        ea[k2] = -(q.y() - p.y());
-        eb[k2] = q.x() - p.x();
-        ec[k2] = -ea[k2] * p.x() - eb[k2] * p.y();
-      }
-      const double ymin = std::min({a.y(), b.y(), c.y()}), ymax = std::max({a.y(), b.y(), c.y()});
-      const int y_start = std::max(0, static_cast<int>(std::ceil(ymin)));
-      const int y_end = std::min(height - 1, static_cast<int>(std::floor(ymax)));
-      for (int y = y_start; y <= y_end; ++y) {
-        double lo = 0, hi = width - 1;
-        for (int k2 = 0; k2 < 3; ++k2) {
-          const double kk = eb[k2] * y + ec[k2];
-          if (ea[k2] > 0)
-            lo = std::max(lo, -kk / ea[k2]);
-          else if (ea[k2] < 0)
-            hi = std::min(hi, -kk / ea[k2]);
-          else if (kk < 0)
-            hi = -1;
-        }
-        if (hi < lo) continue;
-        const int x_start = static_cast<int>(std::ceil(lo)), x_end = static_cast<int>(std::floor(hi));
-        float* qrow = &qbuffer_[static_cast<size_t>(y) * width];
-        int32_t* irow = &setup_index_[static_cast<size_t>(y) * width];
-        const double qrow_c = qp[1] * y + qp[2];
-        for (int x = x_start; x <= x_end; ++x) {
-          const float q = static_cast<float>(qp[0] * x + qrow_c);
-          if (q > qrow[x]) {
-            qrow[x] = q;
-            irow[x] = setup_id;
-            any = true;
-          }
-        }
-      }
-    }
-    if (any) {
+    double qp[3];
+    if (!SetUpTriangle(tri, camera, side_planes, &setup, qp)) continue;
+    if (RasterizeTriangle(tri, camera, qp, static_cast<int>(setups_.size()))) {
       setups_.push_back(setup);
       ++drawn;
     }
   }
+  out->triangles_drawn = drawn;
+  ShadePixels(width, height, frame_key, out);
+}
 
-  // Shading: once per pixel.
+bool Renderer::SetUpTriangle(const Triangle& tri, const PinholeCamera& camera, const Eigen::Vector3d side_planes[4],
+                             Setup* setup, double qp[3]) const {
+  const double near = options_.near_mm;
+  const Eigen::Vector3d& p0 = camera_points_[tri.v[0]];
+  const Eigen::Vector3d& p1 = camera_points_[tri.v[1]];
+  const Eigen::Vector3d& p2 = camera_points_[tri.v[2]];
+  if (p0.z() < near && p1.z() < near && p2.z() < near) return false;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d& plane = side_planes[k];
+    if (plane.dot(p0) < 0 && plane.dot(p1) < 0 && plane.dot(p2) < 0) return false;
+  }
+  const Eigen::Vector3d e1 = p1 - p0, e2 = p2 - p0;
+  const Eigen::Vector3d n = e1.cross(e2);
+  const double d = n.dot(p0);
+  if (tri.cull && d >= 0) return false;             // back face (the camera sits at the origin)
+  if (std::abs(d) < 1e-9 * n.norm()) return false;  // plane through the optical centre: seen edge-on
+  // Perspective-correct planes: for the viewing ray r, q = 1/z = r.n/d, b1*q = -r.(p0 x e2)/d, b2*q = r.(p0 x e1)/d.
+  const Eigen::Vector3d q_vec = n / d;
+  const Eigen::Vector3d b1_vec = -p0.cross(e2) / d;
+  const Eigen::Vector3d b2_vec = p0.cross(e1) / d;
+  const Vertex& v0 = vertices_[tri.v[0]];
+  const Vertex& v1 = vertices_[tri.v[1]];
+  const Vertex& v2 = vertices_[tri.v[2]];
+  double up[3], vp[3], sp[3];
+  ToScreenPlane(q_vec, camera, qp);
+  ToScreenPlane(v0.u * q_vec + (v1.u - v0.u) * b1_vec + (v2.u - v0.u) * b2_vec, camera, up);
+  ToScreenPlane(v0.v * q_vec + (v1.v - v0.v) * b1_vec + (v2.v - v0.v) * b2_vec, camera, vp);
+  ToScreenPlane(v0.shade * q_vec + (v1.shade - v0.shade) * b1_vec + (v2.shade - v0.shade) * b2_vec, camera, sp);
+  for (int k = 0; k < 3; ++k) {
+    setup->q[k] = static_cast<float>(qp[k]);
+    setup->u[k] = static_cast<float>(up[k]);
+    setup->v[k] = static_cast<float>(vp[k]);
+    setup->s[k] = static_cast<float>(sp[k]);
+  }
+  setup->object = tri.object;
+  setup->levels = textures_[tri.object]->levels.data();
+  setup->max_level = static_cast<int>(textures_[tri.object]->levels.size()) - 1;
+  return true;
+}
+
+bool Renderer::RasterizeTriangle(const Triangle& tri, const PinholeCamera& camera, const double qp[3], int setup_id) {
+  // Clip the polygon at the near plane (Sutherland-Hodgman), project, rasterize as a fan.
+  const double near = options_.near_mm;
+  Eigen::Vector3d poly[4];
+  int count = 0;
+  const Eigen::Vector3d in[3] = {camera_points_[tri.v[0]], camera_points_[tri.v[1]], camera_points_[tri.v[2]]};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& a = in[k];
+    const Eigen::Vector3d& b = in[(k + 1) % 3];
+    const bool a_in = a.z() >= near, b_in = b.z() >= near;
+    if (a_in) poly[count++] = a;
+    if (a_in != b_in) poly[count++] = a + (b - a) * ((near - a.z()) / (b.z() - a.z()));
+  }
+  if (count < 3) return false;
+  Eigen::Vector2d screen[4];
+  for (int k = 0; k < count; ++k)
+    screen[k] = Eigen::Vector2d(camera.fx * poly[k].x() / poly[k].z() + camera.cx,
+                                camera.fy * poly[k].y() / poly[k].z() + camera.cy);
+  bool any = false;
+  for (int k = 1; k + 1 < count; ++k) {
+    if (ZBufferTriangle(screen[0], screen[k], screen[k + 1], qp, camera.width, camera.height, setup_id,
+                        qbuffer_.data(), setup_index_.data()))
+      any = true;
+  }
+  return any;
+}
+
+void Renderer::ShadePixels(int width, int height, uint64_t frame_key, RenderOutput* out) const {
   out->rgb.create(height, width, CV_8UC3);
   out->depth_mm.create(height, width, CV_32F);
   out->object_id.create(height, width, CV_32S);
-  out->triangles_drawn = drawn;
   const float* noise = noise_table_.data();
   uint32_t noise_index = static_cast<uint32_t>(MixSeed(options_.noise_seed, frame_key)) & kNoiseMask;
   const float bg[3] = {static_cast<float>(scene_.background_bgr.x()), static_cast<float>(scene_.background_bgr.y()),
@@ -257,28 +302,7 @@ void Renderer::Render(const PinholeCamera& camera, const Eigen::Isometry3d& worl
       const float dudy = (ub - u * qb) * z, dvdy = (vb - v * qb) * z;
       const float rho2 = std::max(dudx * dudx + dvdx * dvdx, dudy * dudy + dvdy * dvdy);
       float colour[3];
-      if (!trilinear) {
-        // nearest level: round(0.5 * log2(rho2)) = floor(log2(2 * rho2) / 2)
-        int level = 0;
-        if (rho2 > 0.5f) {
-          uint32_t bits;
-          const float twice = 2.0f * rho2;
-          std::memcpy(&bits, &twice, 4);
-          const int exponent = static_cast<int>((bits >> 23) & 0xff) - 127;  // floor(log2(2 rho2))
-          level = std::min(max_level, exponent >> 1);
-        }
-        const float scale = 1.0f / static_cast<float>(1 << level);
-        SampleBilinear(levels[level], u * scale, v * scale, colour);
-      } else {
-        const float lod = rho2 > 1.0f ? std::min(0.5f * std::log2(rho2), static_cast<float>(max_level)) : 0.0f;
-        const int l0 = static_cast<int>(lod);
-        const int l1 = std::min(l0 + 1, max_level);
-        const float t = lod - l0;
-        float c0[3], c1[3];
-        SampleBilinear(levels[l0], u / static_cast<float>(1 << l0), v / static_cast<float>(1 << l0), c0);
-        SampleBilinear(levels[l1], u / static_cast<float>(1 << l1), v / static_cast<float>(1 << l1), c1);
-        for (int k = 0; k < 3; ++k) colour[k] = c0[k] + t * (c1[k] - c0[k]);
-      }
+      SampleTexture(levels, max_level, trilinear, u, v, rho2, colour);
       // texture stores R, G, B; the output is BGR
       rgb_row[3 * x + 0] = ToByte(colour[2] * shade + n0);
       rgb_row[3 * x + 1] = ToByte(colour[1] * shade + n1);

@@ -67,6 +67,18 @@ class Renderer {
     const Texture::Level* levels;  // the object's mip chain
   };
 
+  // Culls a triangle (camera-frame vertices in camera_points_, mm) behind the near plane, outside a frustum side plane
+  // (side_planes: inside = dot >= 0), back-facing or edge-on; otherwise fills its screen-space setup and the plane of
+  // q = 1/z (1/mm) in double precision (qp) and returns true.
+  bool SetUpTriangle(const Triangle& tri, const PinholeCamera& camera, const Eigen::Vector3d side_planes[4],
+                     Setup* setup, double qp[3]) const;
+  // Clips a triangle at the near plane, projects it to pixels and z-buffers its fan into qbuffer_ / setup_index_
+  // (tagged setup_id) using the q plane qp; returns whether any pixel was won.
+  bool RasterizeTriangle(const Triangle& tri, const PinholeCamera& camera, const double qp[3], int setup_id);
+  // Shades every pixel of a width x height image once from setup_index_ / setups_ (texture, Lambert shade, sensor
+  // noise of frame_key) into out's rgb, depth_mm (mm along camera z) and object_id.
+  void ShadePixels(int width, int height, uint64_t frame_key, RenderOutput* out) const;
+
   const Scene& scene_;
   RenderOptions options_;
   std::vector<Vertex> vertices_;
