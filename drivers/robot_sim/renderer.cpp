@@ -242,8 +242,8 @@ bool Renderer::RasterizeTriangle(const Triangle& tri, const PinholeCamera& camer
                                 camera.fy * poly[k].y() / poly[k].z() + camera.cy);
   bool any = false;
   for (int k = 1; k + 1 < count; ++k) {
-    if (ZBufferTriangle(screen[0], screen[k], screen[k + 1], qp, camera.width, camera.height, setup_id,
-                        qbuffer_.data(), setup_index_.data()))
+    if (ZBufferTriangle(screen[0], screen[k], screen[k + 1], qp, camera.width, camera.height, setup_id, qbuffer_.data(),
+                        setup_index_.data()))
       any = true;
   }
   return any;
