@@ -325,6 +325,120 @@ std::vector<LodCell> MergeCells(const std::vector<LodCell>& cells) {
   return merged;
 }
 
+// Per shown voxel of the map (indices `shown`, coloured by votes relative to max_votes or by their own colour): its
+// level-0 level-of-detail cell into *cells and, unless enclosed on all six sides by shown voxels (only checked with
+// cull_hidden_voxels), its instance (centre mm, RGB 0..1, neighbour bits as a float) into *instances; bounds_min /
+// bounds_max: box (mm, world) around the instances' cubes.
+void BuildVoxelInstances(const voxel_map_t& map, const std::vector<size_t>& shown, int max_votes,
+                         const SceneOptions& options, std::vector<float>* instances, std::vector<LodCell>* cells,
+                         float bounds_min[3], float bounds_max[3]) {
+  const CellSet occupied(options.cull_hidden_voxels ? shown : std::vector<size_t>(), [&map](size_t i) {
+    return std::array<int64_t, 3>{map.ijk[i][0], map.ijk[i][1], map.ijk[i][2]};
+  });
+  std::vector<float>& buffer = *instances;
+  buffer.reserve(shown.size() * 7);
+  cells->reserve(shown.size());
+  const double size = map.voxel_size_mm;
+  for (int a = 0; a < 3; ++a) {
+    bounds_min[a] = std::numeric_limits<float>::max();
+    bounds_max[a] = std::numeric_limits<float>::lowest();
+  }
+  for (size_t i : shown) {
+    const std::vector<int32_t>& ijk = map.ijk[i];
+    Color c;
+    if (options.voxel_coloring == VoxelColoring::kVotes) {
+      c = Ramp(static_cast<double>(map.votes[i]) / max_votes);
+    } else {
+      c = {map.rgb[i][0] / 255.0f, map.rgb[i][1] / 255.0f, map.rgb[i][2] / 255.0f};
+    }
+    int bits = 0;
+    if (options.cull_hidden_voxels) {
+      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      for (int f = 0; f < 6; ++f)
+        if (occupied.Has(int64_t{ijk[0]} + d[f][0], int64_t{ijk[1]} + d[f][1], int64_t{ijk[2]} + d[f][2]))
+          bits |= 1 << f;
+    }
+    const bool enclosed = bits == 63;  // enclosed on all sides: never visible
+    cells->push_back({MortonKey(ijk[0], ijk[1], ijk[2]),
+                      ijk[0],
+                      ijk[1],
+                      ijk[2],
+                      {enclosed ? 0 : c.r, enclosed ? 0 : c.g, enclosed ? 0 : c.b},
+                      enclosed ? 0 : 1,
+                      {c.r, c.g, c.b},
+                      1});
+    if (enclosed) continue;
+    for (int a = 0; a < 3; ++a) {
+      const float centre = static_cast<float>(map.origin_mm[a] + (ijk[a] + 0.5) * size);
+      bounds_min[a] = std::min(bounds_min[a], centre - static_cast<float>(size / 2));
+      bounds_max[a] = std::max(bounds_max[a], centre + static_cast<float>(size / 2));
+    }
+    float bits_as_float;
+    static_assert(sizeof(bits_as_float) == sizeof(bits), "int/float size");
+    std::memcpy(&bits_as_float, &bits, sizeof(bits));
+    buffer.insert(buffer.end(),
+                  {static_cast<float>(map.origin_mm[0] + (ijk[0] + 0.5) * size),
+                   static_cast<float>(map.origin_mm[1] + (ijk[1] + 0.5) * size),
+                   static_cast<float>(map.origin_mm[2] + (ijk[2] + 0.5) * size), c.r, c.g, c.b, bits_as_float});
+  }
+}
+
+// Faces of the voxel instances (7 floats each, see BuildVoxelInstances) without a shown neighbour.
+int64_t CountExposedFaces(const std::vector<float>& instances) {
+  int64_t exposed_faces = 0;
+  for (size_t v = 0; v < instances.size() / 7; ++v) {
+    int bits;
+    std::memcpy(&bits, &instances[v * 7 + 6], sizeof(bits));
+    for (int f = 0; f < 6; ++f) exposed_faces += (bits >> f & 1) == 0;
+  }
+  return exposed_faces;
+}
+
+// Triangle mesh (6 floats per vertex: xyz mm, shaded RGB 0..1; counter-clockwise from outside) of the exposed faces
+// of the voxel instances (cubes of side size_mm); exposed_faces (CountExposedFaces) only sizes the buffer.
+std::vector<float> ExposedFaceMesh(const std::vector<float>& instances, double size_mm, int64_t exposed_faces) {
+  // Face f: normal n, in-plane axes u, v with u x v = n (counter-clockwise seen from outside), shade.
+  static const float kFace[6][3][3] = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{-1, 0, 0}, {0, 0, 1}, {0, 1, 0}},
+                                       {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}}, {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}},
+                                       {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {0, 1, 0}, {1, 0, 0}}};
+  static const float kShade[6] = {0.80f, 0.80f, 0.64f, 0.64f, 1.0f, 0.45f};
+  static const float kCorner[6][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, -1}, {1, 1}, {-1, 1}};
+  const float h = static_cast<float>(size_mm / 2);
+  std::vector<float> mesh;
+  mesh.reserve(static_cast<size_t>(exposed_faces) * 36);
+  for (size_t v = 0; v < instances.size() / 7; ++v) {
+    const float* in = &instances[v * 7];
+    int bits;
+    std::memcpy(&bits, &in[6], sizeof(bits));
+    for (int f = 0; f < 6; ++f) {
+      if (bits >> f & 1) continue;
+      for (const auto& corner : kCorner) {
+        for (int axis = 0; axis < 3; ++axis)
+          mesh.push_back(in[axis] +
+                         h * (kFace[f][0][axis] + corner[0] * kFace[f][1][axis] + corner[1] * kFace[f][2][axis]));
+        for (int k = 0; k < 3; ++k) mesh.push_back(in[3 + k] * kShade[f]);
+      }
+    }
+  }
+  return mesh;
+}
+
+// Creates the vertex array, vertex buffer (PointVertex layout) and index buffer of one point level.
+void CreatePointLevelArrays(unsigned* vao, unsigned* vbo, unsigned* ebo) {
+  glGenVertexArrays(1, vao);
+  glGenBuffers(1, vbo);
+  glBindVertexArray(*vao);
+  glBindBuffer(GL_ARRAY_BUFFER, *vbo);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(PointVertex), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(PointVertex),
+                        reinterpret_cast<void*>(offsetof(PointVertex, rgba)));
+  glGenBuffers(1, ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, *ebo);  // part of the vertex array's state
+  glBindVertexArray(0);
+}
+
 }  // namespace
 
 SceneRenderer::~SceneRenderer() {
@@ -428,91 +542,18 @@ void SceneRenderer::UpdateVoxelInstances(const ViewerState& state, const SceneOp
     shown.push_back(i);
     max_votes = std::max(max_votes, map.votes[i]);
   }
-  const CellSet occupied(options.cull_hidden_voxels ? shown : std::vector<size_t>(), [&map](size_t i) {
-    return std::array<int64_t, 3>{map.ijk[i][0], map.ijk[i][1], map.ijk[i][2]};
-  });
   std::vector<float> buffer;
-  buffer.reserve(shown.size() * 7);
   std::vector<LodCell> cells;  // level 0 of the level-of-detail pyramid: every shown voxel
-  cells.reserve(shown.size());
+  BuildVoxelInstances(map, shown, max_votes, options, &buffer, &cells, voxel_bounds_min_, voxel_bounds_max_);
   const double size = map.voxel_size_mm;
-  for (int a = 0; a < 3; ++a) {
-    voxel_bounds_min_[a] = std::numeric_limits<float>::max();
-    voxel_bounds_max_[a] = std::numeric_limits<float>::lowest();
-  }
-  for (size_t i : shown) {
-    const std::vector<int32_t>& ijk = map.ijk[i];
-    Color c;
-    if (options.voxel_coloring == VoxelColoring::kVotes) {
-      c = Ramp(static_cast<double>(map.votes[i]) / max_votes);
-    } else {
-      c = {map.rgb[i][0] / 255.0f, map.rgb[i][1] / 255.0f, map.rgb[i][2] / 255.0f};
-    }
-    int bits = 0;
-    if (options.cull_hidden_voxels) {
-      const int d[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-      for (int f = 0; f < 6; ++f)
-        if (occupied.Has(int64_t{ijk[0]} + d[f][0], int64_t{ijk[1]} + d[f][1], int64_t{ijk[2]} + d[f][2]))
-          bits |= 1 << f;
-    }
-    const bool enclosed = bits == 63;  // enclosed on all sides: never visible
-    cells.push_back({MortonKey(ijk[0], ijk[1], ijk[2]),
-                     ijk[0],
-                     ijk[1],
-                     ijk[2],
-                     {enclosed ? 0 : c.r, enclosed ? 0 : c.g, enclosed ? 0 : c.b},
-                     enclosed ? 0 : 1,
-                     {c.r, c.g, c.b},
-                     1});
-    if (enclosed) continue;
-    for (int a = 0; a < 3; ++a) {
-      const float centre = static_cast<float>(map.origin_mm[a] + (ijk[a] + 0.5) * size);
-      voxel_bounds_min_[a] = std::min(voxel_bounds_min_[a], centre - static_cast<float>(size / 2));
-      voxel_bounds_max_[a] = std::max(voxel_bounds_max_[a], centre + static_cast<float>(size / 2));
-    }
-    float bits_as_float;
-    static_assert(sizeof(bits_as_float) == sizeof(bits), "int/float size");
-    std::memcpy(&bits_as_float, &bits, sizeof(bits));
-    buffer.insert(buffer.end(),
-                  {static_cast<float>(map.origin_mm[0] + (ijk[0] + 0.5) * size),
-                   static_cast<float>(map.origin_mm[1] + (ijk[1] + 0.5) * size),
-                   static_cast<float>(map.origin_mm[2] + (ijk[2] + 0.5) * size), c.r, c.g, c.b, bits_as_float});
-  }
   voxels_shown_ = static_cast<int64_t>(shown.size());
   voxel_instances_ = static_cast<int64_t>(buffer.size() / 7);
   // Static mesh of the exposed faces (plain triangles, back faces culled by GL): the fastest path in software GL
   // while it stays small; larger models use the instanced cubes or points.
   voxel_mesh_vertices_ = 0;
-  int64_t exposed_faces = 0;
-  for (size_t v = 0; v < static_cast<size_t>(voxel_instances_); ++v) {
-    int bits;
-    std::memcpy(&bits, &buffer[v * 7 + 6], sizeof(bits));
-    for (int f = 0; f < 6; ++f) exposed_faces += (bits >> f & 1) == 0;
-  }
+  const int64_t exposed_faces = CountExposedFaces(buffer);
   if (exposed_faces <= options.max_mesh_faces) {
-    // Face f: normal n, in-plane axes u, v with u x v = n (counter-clockwise seen from outside), shade.
-    static const float kFace[6][3][3] = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{-1, 0, 0}, {0, 0, 1}, {0, 1, 0}},
-                                         {{0, 1, 0}, {0, 0, 1}, {1, 0, 0}}, {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}},
-                                         {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}}, {{0, 0, -1}, {0, 1, 0}, {1, 0, 0}}};
-    static const float kShade[6] = {0.80f, 0.80f, 0.64f, 0.64f, 1.0f, 0.45f};
-    static const float kCorner[6][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, -1}, {1, 1}, {-1, 1}};
-    const float h = static_cast<float>(size / 2);
-    std::vector<float> mesh;
-    mesh.reserve(static_cast<size_t>(exposed_faces) * 36);
-    for (size_t v = 0; v < static_cast<size_t>(voxel_instances_); ++v) {
-      const float* in = &buffer[v * 7];
-      int bits;
-      std::memcpy(&bits, &in[6], sizeof(bits));
-      for (int f = 0; f < 6; ++f) {
-        if (bits >> f & 1) continue;
-        for (const auto& corner : kCorner) {
-          for (int axis = 0; axis < 3; ++axis)
-            mesh.push_back(in[axis] +
-                           h * (kFace[f][0][axis] + corner[0] * kFace[f][1][axis] + corner[1] * kFace[f][2][axis]));
-          for (int k = 0; k < 3; ++k) mesh.push_back(in[3 + k] * kShade[f]);
-        }
-      }
-    }
+    const std::vector<float> mesh = ExposedFaceMesh(buffer, size, exposed_faces);
     voxel_mesh_vertices_ = static_cast<int64_t>(mesh.size() / 6);
     glBindBuffer(GL_ARRAY_BUFFER, voxel_mesh_vbo_);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.size() * sizeof(float)), mesh.data(), GL_STATIC_DRAW);
@@ -535,18 +576,7 @@ void SceneRenderer::UpdateVoxelInstances(const ViewerState& state, const SceneOp
     const std::vector<PointVertex> points = LevelPoints(cells, map.origin_mm, cell_mm, options.cull_hidden_voxels);
     if (static_cast<int>(point_levels_.size()) <= level) {
       PointLevel created;
-      glGenVertexArrays(1, &created.vao);
-      glGenBuffers(1, &created.vbo);
-      glBindVertexArray(created.vao);
-      glBindBuffer(GL_ARRAY_BUFFER, created.vbo);
-      glEnableVertexAttribArray(0);
-      glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(PointVertex), nullptr);
-      glEnableVertexAttribArray(1);
-      glVertexAttribPointer(1, 3, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(PointVertex),
-                            reinterpret_cast<void*>(offsetof(PointVertex, rgba)));
-      glGenBuffers(1, &created.ebo);
-      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, created.ebo);  // part of the vertex array's state
-      glBindVertexArray(0);
+      CreatePointLevelArrays(&created.vao, &created.vbo, &created.ebo);
       point_levels_.push_back(created);
     }
     PointLevel& target = point_levels_[level];
