@@ -439,6 +439,121 @@ void CreatePointLevelArrays(unsigned* vao, unsigned* vbo, unsigned* ebo) {
   glBindVertexArray(0);
 }
 
+// Floor grid (z = 0) and world axes (mm), as enabled in the options.
+void AddGridAndAxes(VertexList* lines, const SceneOptions& options) {
+  if (options.layers.grid && options.grid_spacing_mm > 0) {
+    const Color c = ToColor(kGridColor);
+    const double e = options.grid_extent_mm;
+    const int n = static_cast<int>(std::floor(e / options.grid_spacing_mm));
+    for (int i = -n; i <= n; ++i) {
+      const double t = i * options.grid_spacing_mm;
+      lines->Segment({t, -e, 0}, {t, e, 0}, c);
+      lines->Segment({-e, t, 0}, {e, t, 0}, c);
+    }
+  }
+  if (options.layers.axes) {
+    const double l = options.axes_length_mm;
+    lines->Segment({0, 0, 0}, {l, 0, 0}, {0.95f, 0.2f, 0.2f});
+    lines->Segment({0, 0, 0}, {0, l, 0}, {0.2f, 0.9f, 0.2f});
+    lines->Segment({0, 0, 0}, {0, 0, l}, {0.3f, 0.4f, 1.0f});
+  }
+}
+
+// Camera frustums along the estimated trajectory (every frustum_every-th pose, the newest twice as deep).
+void AddTrajectoryFrustums(VertexList* lines, const ViewerState& state, const PinholeCamera* camera,
+                           const SceneOptions& options) {
+  const auto& trajectory = state.estimated_trajectory();
+  const int every = std::max(options.frustum_every, 1);
+  int index = 0;
+  for (const auto& [seq, point] : trajectory) {
+    if (index++ % every == 0)
+      AddFrustum(lines, point.world_from_camera, camera, options.frustum_depth_mm, {0.75f, 0.6f, 0.35f});
+  }
+  AddFrustum(lines, trajectory.rbegin()->second.world_from_camera, camera, options.frustum_depth_mm * 2,
+             ToColor(kEstimatedTrajectoryColor));
+}
+
+// The target box (world, mm), coloured by its state.
+void AddTargetBox(VertexList* lines, const target_t& t) {
+  Color c{0.6f, 0.6f, 0.6f};
+  if (t.state == target_t::STATE_CANDIDATE) c = {1.0f, 0.9f, 0.2f};
+  if (t.state == target_t::STATE_CONFIRMED) c = {0.2f, 1.0f, 0.3f};
+  if (t.state == target_t::STATE_LOST) c = {1.0f, 0.25f, 0.25f};
+  Eigen::Isometry3d world_from_box = Eigen::Isometry3d::Identity();
+  world_from_box.translate(Eigen::Vector3d(t.center_mm[0], t.center_mm[1], t.center_mm[2]));
+  world_from_box.rotate(Eigen::AngleAxisd(t.yaw_rad, Eigen::Vector3d::UnitZ()));
+  AddBox(lines, world_from_box, 0.5 * Eigen::Vector3d(t.size_mm[0], t.size_mm[1], t.size_mm[2]), c);
+}
+
+// The robot at the odometry pose (world, mm): base box, heading, mast and the camera's frustum.
+void AddRobot(VertexList* lines, const OdometryReading& o, const PinholeCamera* camera, const SceneOptions& options) {
+  const Color c{0.85f, 0.85f, 0.9f};
+  const Eigen::Isometry3d world_from_base = WorldFromBase(o.x_mm, o.y_mm, o.theta_rad);
+  const double half_track = options.robot.wheel_base_mm / 2;
+  AddBox(lines, world_from_base * Eigen::Translation3d(0, 0, 60), Eigen::Vector3d(half_track, half_track, 60), c);
+  lines->Segment(world_from_base * Eigen::Vector3d(0, 0, 120),
+                 world_from_base * Eigen::Vector3d(half_track * 1.5, 0, 120), {1.0f, 0.3f, 0.3f});
+  const Eigen::Vector3d mast_foot(options.robot.mast_offset_x_mm, options.robot.mast_offset_y_mm, 120);
+  const Eigen::Vector3d mast_top(options.robot.mast_offset_x_mm, options.robot.mast_offset_y_mm,
+                                 options.robot.mast_height_mm);
+  lines->Segment(world_from_base * mast_foot, world_from_base * mast_top, c);
+  AddFrustum(lines, WorldFromCamera(options.robot, o.x_mm, o.y_mm, o.theta_rad, o.pan_rad, o.tilt_rad), camera,
+             options.frustum_depth_mm * 1.5, c);
+}
+
+// A trajectory's camera positions joined by segments, mapped by transform into the drawn frame (mm).
+void AddPath(VertexList* lines, const std::map<int64_t, TrajectoryPoint>& path, Color c, const Sim3& transform) {
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  bool first = true;
+  for (const auto& entry : path) {
+    const Eigen::Vector3d p = transform * entry.second.world_from_camera.translation();
+    if (!first) lines->Segment(previous, p, c);
+    previous = p;
+    first = false;
+  }
+}
+
+// Ground-truth and estimated trajectories and the newest error segment, in the estimate's frame (mm).
+void AddTrajectories(VertexList* lines, const ViewerState& state, const SceneOptions& options) {
+  // The truth is drawn in the estimate's frame (ViewerState::estimate_from_truth).
+  if (options.layers.ground_truth)
+    AddPath(lines, state.ground_truth_trajectory(), ToColor(kGroundTruthTrajectoryColor), state.estimate_from_truth());
+  if (options.layers.estimated)
+    AddPath(lines, state.estimated_trajectory(), ToColor(kEstimatedTrajectoryColor), Sim3());
+  if (options.layers.error && state.latest_error_seq() >= 0) {
+    const auto est = state.estimated_trajectory().find(state.latest_error_seq());
+    const auto gt = state.ground_truth_trajectory().find(state.latest_error_seq());
+    if (est != state.estimated_trajectory().end() && gt != state.ground_truth_trajectory().end())
+      lines->Segment(est->second.world_from_camera.translation(),
+                     state.estimate_from_truth() * gt->second.world_from_camera.translation(),
+                     ToColor(kErrorSegmentColor));
+  }
+}
+
+// One point per landmark (world, mm), coloured by reprojection error, age or its own colour.
+void AddLandmarks(VertexList* points, const ViewerState& state, const landmarks_t& lm, const SceneOptions& options) {
+  const size_t n = std::min({static_cast<size_t>(std::max(lm.num_landmarks, 0)), lm.position_mm.size(),
+                             lm.reprojection_error_px.size(), lm.rgb.size(), lm.id.size()});
+  for (size_t i = 0; i < n; ++i) {
+    Color c;
+    switch (options.landmark_coloring) {
+      case LandmarkColoring::kReprojectionError:
+        c = Ramp(lm.reprojection_error_px[i] / std::max(options.max_reprojection_error_px, 1e-6));
+        break;
+      case LandmarkColoring::kAge: {
+        const int64_t first = state.LandmarkFirstSeq(lm.id[i]);
+        const double age = first < 0 ? 0.0 : static_cast<double>(lm.seq - first);
+        c = Ramp(1.0 - age / std::max(options.max_landmark_age_frames, 1.0));  // new = red, old = green
+        break;
+      }
+      case LandmarkColoring::kRgb:
+        c = {lm.rgb[i][0] / 255.0f, lm.rgb[i][1] / 255.0f, lm.rgb[i][2] / 255.0f};
+        break;
+    }
+    points->Add(Eigen::Vector3d(lm.position_mm[i][0], lm.position_mm[i][1], lm.position_mm[i][2]), c);
+  }
+}
+
 }  // namespace
 
 SceneRenderer::~SceneRenderer() {
@@ -722,6 +837,65 @@ void SceneRenderer::DrawColored(const std::vector<float>& vertices, unsigned mod
   glDrawArrays(mode, 0, static_cast<GLsizei>(vertices.size() / 6));
 }
 
+void SceneRenderer::DrawVoxels(const ViewerState& state, const OrbitView& view, const Viewport& viewport,
+                               const SceneOptions& options, const Eigen::Matrix4f& mvp) {
+  UpdateVoxelInstances(state, options);
+  voxel_level_ = ChooseVoxelLevel(view, viewport, options);
+  voxels_occlusion_culled_ = false;
+  const bool small = nearest_voxel_px_ > 0 && nearest_voxel_px_ <= options.auto_points_px;
+  voxels_as_points_ = voxel_level_ > 0 || options.voxel_style == VoxelStyle::kPoints ||
+                      (options.voxel_style == VoxelStyle::kAuto &&
+                       (small || (voxel_mesh_vertices_ == 0 && voxel_instances_ > options.max_cube_instances)));
+  voxels_as_mesh_ = !voxels_as_points_ && voxel_mesh_vertices_ > 0;
+  voxels_drawn_ =
+      voxels_as_points_ && voxel_level_ < voxel_levels_ ? point_levels_[voxel_level_].count : voxel_instances_;
+  if (voxels_as_mesh_) {
+    glUseProgram(line_program_);
+    glUniformMatrix4fv(line_mvp_location_, 1, GL_FALSE, mvp.data());
+    glBindVertexArray(voxel_mesh_vao_);
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace(GL_CCW);
+    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(voxel_mesh_vertices_));
+    glDisable(GL_CULL_FACE);
+  } else if (voxels_as_points_) {
+    if (voxel_level_ < voxel_levels_ && point_levels_[voxel_level_].count > 0)
+      DrawVoxelPoints(point_levels_[voxel_level_], view, viewport, options, mvp);
+  } else if (voxel_instances_ > 0) {
+    const Eigen::Vector3f eye = EyePosition(view).cast<float>();
+    glUseProgram(voxel_program_);
+    glUniformMatrix4fv(voxel_mvp_location_, 1, GL_FALSE, mvp.data());
+    glUniform3f(voxel_eye_location_, eye.x(), eye.y(), eye.z());
+    glUniform1f(voxel_half_size_location_, voxel_half_size_);
+    glBindVertexArray(voxel_vao_);
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(voxel_instances_));
+  }
+}
+
+void SceneRenderer::DrawVoxelPoints(const PointLevel& level, const OrbitView& view, const Viewport& viewport,
+                                    const SceneOptions& options, const Eigen::Matrix4f& mvp) {
+  const Eigen::Matrix4f projection = ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height);
+  glUseProgram(voxel_point_program_);
+  glUniformMatrix4fv(point_mvp_location_, 1, GL_FALSE, mvp.data());
+  glUniform1f(point_half_size_location_, level.half_size);
+  glUniform1f(point_pixels_location_, projection(1, 1) * viewport.height / 2.0f);
+  glBindVertexArray(level.vao);
+  const float pixels_per_unit = projection(1, 1) * viewport.height / 2.0f;
+  voxels_occlusion_culled_ =
+      options.occlusion_min_points > 0 && level.count >= options.occlusion_min_points &&
+      nearest_voxel_depth_mm_ > view.near_mm &&
+      2.0 * level.half_size * pixels_per_unit / nearest_voxel_depth_mm_ <= options.max_occlusion_point_px &&
+      VisiblePoints(level, mvp, viewport, pixels_per_unit, options.max_occlusion_point_px, &visible_points_);
+  if (voxels_occlusion_culled_) {
+    voxels_drawn_ = static_cast<int64_t>(visible_points_.size());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(visible_points_.size() * sizeof(uint32_t)),
+                 visible_points_.data(), GL_STREAM_DRAW);
+    glDrawElements(GL_POINTS, static_cast<GLsizei>(visible_points_.size()), GL_UNSIGNED_INT, nullptr);
+  } else {
+    glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(level.count));
+  }
+}
+
 void SceneRenderer::Render(const ViewerState& state, const OrbitView& view, const Viewport& viewport,
                            int framebuffer_height, const SceneOptions& options) {
   if (!initialized_ || viewport.width <= 0 || viewport.height <= 0) return;
@@ -743,172 +917,28 @@ void SceneRenderer::Render(const ViewerState& state, const OrbitView& view, cons
       ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height) * ViewMatrix(view);
 
   // Voxels first (opaque, largest depth complexity).
-  if (options.layers.voxels) {
-    UpdateVoxelInstances(state, options);
-    voxel_level_ = ChooseVoxelLevel(view, viewport, options);
-    voxels_occlusion_culled_ = false;
-    const bool small = nearest_voxel_px_ > 0 && nearest_voxel_px_ <= options.auto_points_px;
-    voxels_as_points_ = voxel_level_ > 0 || options.voxel_style == VoxelStyle::kPoints ||
-                        (options.voxel_style == VoxelStyle::kAuto &&
-                         (small || (voxel_mesh_vertices_ == 0 && voxel_instances_ > options.max_cube_instances)));
-    voxels_as_mesh_ = !voxels_as_points_ && voxel_mesh_vertices_ > 0;
-    voxels_drawn_ =
-        voxels_as_points_ && voxel_level_ < voxel_levels_ ? point_levels_[voxel_level_].count : voxel_instances_;
-    if (voxels_as_mesh_) {
-      glUseProgram(line_program_);
-      glUniformMatrix4fv(line_mvp_location_, 1, GL_FALSE, mvp.data());
-      glBindVertexArray(voxel_mesh_vao_);
-      glEnable(GL_CULL_FACE);
-      glCullFace(GL_BACK);
-      glFrontFace(GL_CCW);
-      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(voxel_mesh_vertices_));
-      glDisable(GL_CULL_FACE);
-    } else if (voxels_as_points_) {
-      if (voxel_level_ < voxel_levels_ && point_levels_[voxel_level_].count > 0) {
-        const PointLevel& level = point_levels_[voxel_level_];
-        const Eigen::Matrix4f projection =
-            ProjectionMatrix(view, static_cast<double>(viewport.width) / viewport.height);
-        glUseProgram(voxel_point_program_);
-        glUniformMatrix4fv(point_mvp_location_, 1, GL_FALSE, mvp.data());
-        glUniform1f(point_half_size_location_, level.half_size);
-        glUniform1f(point_pixels_location_, projection(1, 1) * viewport.height / 2.0f);
-        glBindVertexArray(level.vao);
-        const float pixels_per_unit = projection(1, 1) * viewport.height / 2.0f;
-        voxels_occlusion_culled_ =
-            options.occlusion_min_points > 0 && level.count >= options.occlusion_min_points &&
-            nearest_voxel_depth_mm_ > view.near_mm &&
-            2.0 * level.half_size * pixels_per_unit / nearest_voxel_depth_mm_ <= options.max_occlusion_point_px &&
-            VisiblePoints(level, mvp, viewport, pixels_per_unit, options.max_occlusion_point_px, &visible_points_);
-        if (voxels_occlusion_culled_) {
-          voxels_drawn_ = static_cast<int64_t>(visible_points_.size());
-          glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(visible_points_.size() * sizeof(uint32_t)),
-                       visible_points_.data(), GL_STREAM_DRAW);
-          glDrawElements(GL_POINTS, static_cast<GLsizei>(visible_points_.size()), GL_UNSIGNED_INT, nullptr);
-        } else {
-          glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(level.count));
-        }
-      }
-    } else if (voxel_instances_ > 0) {
-      const Eigen::Vector3f eye = EyePosition(view).cast<float>();
-      glUseProgram(voxel_program_);
-      glUniformMatrix4fv(voxel_mvp_location_, 1, GL_FALSE, mvp.data());
-      glUniform3f(voxel_eye_location_, eye.x(), eye.y(), eye.z());
-      glUniform1f(voxel_half_size_location_, voxel_half_size_);
-      glBindVertexArray(voxel_vao_);
-      glDrawArraysInstanced(GL_TRIANGLES, 0, 18, static_cast<GLsizei>(voxel_instances_));
-    }
-  }
+  if (options.layers.voxels) DrawVoxels(state, view, viewport, options, mvp);
 
   glUseProgram(line_program_);
   glUniformMatrix4fv(line_mvp_location_, 1, GL_FALSE, mvp.data());
   glBindVertexArray(line_vao_);
   VertexList lines;
-
-  if (options.layers.grid && options.grid_spacing_mm > 0) {
-    const Color c = ToColor(kGridColor);
-    const double e = options.grid_extent_mm;
-    const int n = static_cast<int>(std::floor(e / options.grid_spacing_mm));
-    for (int i = -n; i <= n; ++i) {
-      const double t = i * options.grid_spacing_mm;
-      lines.Segment({t, -e, 0}, {t, e, 0}, c);
-      lines.Segment({-e, t, 0}, {e, t, 0}, c);
-    }
-  }
-  if (options.layers.axes) {
-    const double l = options.axes_length_mm;
-    lines.Segment({0, 0, 0}, {l, 0, 0}, {0.95f, 0.2f, 0.2f});
-    lines.Segment({0, 0, 0}, {0, l, 0}, {0.2f, 0.9f, 0.2f});
-    lines.Segment({0, 0, 0}, {0, 0, l}, {0.3f, 0.4f, 1.0f});
-  }
+  AddGridAndAxes(&lines, options);
   const PinholeCamera* camera = state.camera() ? &*state.camera() : nullptr;
-  if (options.layers.frustums && !state.estimated_trajectory().empty()) {
-    const auto& trajectory = state.estimated_trajectory();
-    const int every = std::max(options.frustum_every, 1);
-    int index = 0;
-    for (const auto& [seq, point] : trajectory) {
-      if (index++ % every == 0)
-        AddFrustum(&lines, point.world_from_camera, camera, options.frustum_depth_mm, {0.75f, 0.6f, 0.35f});
-    }
-    AddFrustum(&lines, trajectory.rbegin()->second.world_from_camera, camera, options.frustum_depth_mm * 2,
-               ToColor(kEstimatedTrajectoryColor));
-  }
-  if (options.layers.target && state.target()) {
-    const target_t& t = *state.target();
-    Color c{0.6f, 0.6f, 0.6f};
-    if (t.state == target_t::STATE_CANDIDATE) c = {1.0f, 0.9f, 0.2f};
-    if (t.state == target_t::STATE_CONFIRMED) c = {0.2f, 1.0f, 0.3f};
-    if (t.state == target_t::STATE_LOST) c = {1.0f, 0.25f, 0.25f};
-    Eigen::Isometry3d world_from_box = Eigen::Isometry3d::Identity();
-    world_from_box.translate(Eigen::Vector3d(t.center_mm[0], t.center_mm[1], t.center_mm[2]));
-    world_from_box.rotate(Eigen::AngleAxisd(t.yaw_rad, Eigen::Vector3d::UnitZ()));
-    AddBox(&lines, world_from_box, 0.5 * Eigen::Vector3d(t.size_mm[0], t.size_mm[1], t.size_mm[2]), c);
-  }
-  if (options.layers.robot && state.odometry()) {
-    const OdometryReading& o = *state.odometry();
-    const Color c{0.85f, 0.85f, 0.9f};
-    const Eigen::Isometry3d world_from_base = WorldFromBase(o.x_mm, o.y_mm, o.theta_rad);
-    const double half_track = options.robot.wheel_base_mm / 2;
-    AddBox(&lines, world_from_base * Eigen::Translation3d(0, 0, 60), Eigen::Vector3d(half_track, half_track, 60), c);
-    lines.Segment(world_from_base * Eigen::Vector3d(0, 0, 120),
-                  world_from_base * Eigen::Vector3d(half_track * 1.5, 0, 120), {1.0f, 0.3f, 0.3f});
-    const Eigen::Vector3d mast_foot(options.robot.mast_offset_x_mm, options.robot.mast_offset_y_mm, 120);
-    const Eigen::Vector3d mast_top(options.robot.mast_offset_x_mm, options.robot.mast_offset_y_mm,
-                                   options.robot.mast_height_mm);
-    lines.Segment(world_from_base * mast_foot, world_from_base * mast_top, c);
-    AddFrustum(&lines, WorldFromCamera(options.robot, o.x_mm, o.y_mm, o.theta_rad, o.pan_rad, o.tilt_rad), camera,
-               options.frustum_depth_mm * 1.5, c);
-  }
+  if (options.layers.frustums && !state.estimated_trajectory().empty())
+    AddTrajectoryFrustums(&lines, state, camera, options);
+  if (options.layers.target && state.target()) AddTargetBox(&lines, *state.target());
+  if (options.layers.robot && state.odometry()) AddRobot(&lines, *state.odometry(), camera, options);
   DrawColored(lines.data(), GL_LINES, 1.0f);
 
   // Trajectories and the error segment, thicker.
   lines.Clear();
-  // The truth is drawn in the estimate's frame (ViewerState::estimate_from_truth).
-  auto add_path = [&lines](const std::map<int64_t, TrajectoryPoint>& path, Color c, const Sim3& transform) {
-    Eigen::Vector3d previous = Eigen::Vector3d::Zero();
-    bool first = true;
-    for (const auto& entry : path) {
-      const Eigen::Vector3d p = transform * entry.second.world_from_camera.translation();
-      if (!first) lines.Segment(previous, p, c);
-      previous = p;
-      first = false;
-    }
-  };
-  if (options.layers.ground_truth)
-    add_path(state.ground_truth_trajectory(), ToColor(kGroundTruthTrajectoryColor), state.estimate_from_truth());
-  if (options.layers.estimated) add_path(state.estimated_trajectory(), ToColor(kEstimatedTrajectoryColor), Sim3());
-  if (options.layers.error && state.latest_error_seq() >= 0) {
-    const auto est = state.estimated_trajectory().find(state.latest_error_seq());
-    const auto gt = state.ground_truth_trajectory().find(state.latest_error_seq());
-    if (est != state.estimated_trajectory().end() && gt != state.ground_truth_trajectory().end())
-      lines.Segment(est->second.world_from_camera.translation(),
-                    state.estimate_from_truth() * gt->second.world_from_camera.translation(),
-                    ToColor(kErrorSegmentColor));
-  }
+  AddTrajectories(&lines, state, options);
   DrawColored(lines.data(), GL_LINES, options.trajectory_line_width_px);
 
   if (options.layers.landmarks && state.landmarks()) {
-    const landmarks_t& lm = *state.landmarks();
     lines.Clear();
-    const size_t n = std::min({static_cast<size_t>(std::max(lm.num_landmarks, 0)), lm.position_mm.size(),
-                               lm.reprojection_error_px.size(), lm.rgb.size(), lm.id.size()});
-    for (size_t i = 0; i < n; ++i) {
-      Color c;
-      switch (options.landmark_coloring) {
-        case LandmarkColoring::kReprojectionError:
-          c = Ramp(lm.reprojection_error_px[i] / std::max(options.max_reprojection_error_px, 1e-6));
-          break;
-        case LandmarkColoring::kAge: {
-          const int64_t first = state.LandmarkFirstSeq(lm.id[i]);
-          const double age = first < 0 ? 0.0 : static_cast<double>(lm.seq - first);
-          c = Ramp(1.0 - age / std::max(options.max_landmark_age_frames, 1.0));  // new = red, old = green
-          break;
-        }
-        case LandmarkColoring::kRgb:
-          c = {lm.rgb[i][0] / 255.0f, lm.rgb[i][1] / 255.0f, lm.rgb[i][2] / 255.0f};
-          break;
-      }
-      lines.Add(Eigen::Vector3d(lm.position_mm[i][0], lm.position_mm[i][1], lm.position_mm[i][2]), c);
-    }
+    AddLandmarks(&lines, state, *state.landmarks(), options);
     DrawColored(lines.data(), GL_POINTS, options.landmark_point_size_px);
   }
   glBindVertexArray(0);

@@ -113,6 +113,13 @@ class SceneRenderer {
   };
 
   void UpdateVoxelInstances(const ViewerState& state, const SceneOptions& options);
+  // Draws the voxel model (rebuilding its buffers when needed) as a face mesh, points or instanced cubes, per the
+  // options and the level of detail; sets the last-frame voxel statistics. mvp: clip from world (mm).
+  void DrawVoxels(const ViewerState& state, const OrbitView& view, const Viewport& viewport,
+                  const SceneOptions& options, const Eigen::Matrix4f& mvp);
+  // Draws one point level, through the CPU depth pass (VisiblePoints) when it is large and its points small enough.
+  void DrawVoxelPoints(const PointLevel& level, const OrbitView& view, const Viewport& viewport,
+                       const SceneOptions& options, const Eigen::Matrix4f& mvp);
   // Level of detail to draw this frame: the coarsest whose cells project at most lod_pixels at the model's nearest
   // depth; 0 when the voxels themselves are bigger or the eye is at or inside the model's bounds.
   // Also sets nearest_voxel_depth_mm_ and nearest_voxel_px_.
