@@ -80,6 +80,7 @@ bool ValidatePlannerOptions(const PlannerOptions& o, std::string* why) {
   positive(o.capture_speed_mm_s, "capture speed");
   positive(o.tracking_turn_rad_s, "tracking turn rate");
   positive(o.explore_budget_s, "explore budget");
+  positive(o.approach_budget_s, "approach budget");
   if (!(o.start_free_mm >= 0) || !std::isfinite(o.start_free_mm)) e << "start free must be >= 0 mm; ";
   positive(o.next_views_budget_s, "next views budget");
   if (!(o.lost_search_s >= 0)) e << "lost search time must be >= 0; ";
@@ -890,6 +891,15 @@ Planner::Motion Planner::Approach() {
       (approach_to_circle_ && !follower_.empty() && follower_.Reached(base_, kGoalToleranceMm))) {
     EnterPhase(Phase::kOrbit, "on the orbit circle (" + std::to_string(static_cast<int>(d)) + " mm from the target)");
     return Orbit();
+  }
+  if (PhaseSeconds() >= options_.approach_budget_s) {
+    char why[200];
+    std::snprintf(why, sizeof(why),
+                  "the orbit circle was not reached in %.0f s (its floor is not free in the map: not seen, "
+                  "untextured or blocked; try another --radius)",
+                  options_.approach_budget_s);
+    EnterPhase(Phase::kNextViews, why);
+    return NextViews();
   }
   const bool replan = follower_.empty() || now_ >= next_replan_ || now_ > goal_deadline_ ||
                       !follower_.StillFree(map_, 1000) || Stuck() ||

@@ -16,7 +16,9 @@
 //                 CONFIRMED (-> APPROACH), or after explore_budget_s or with nothing left to explore (-> NO_TARGET).
 //                 Nothing reachable at all (no usable camera pose yet): the look-around starts again.
 //   1 APPROACH    to the nearest reachable free point of the orbit circle (orbit_radius_mm around the target centre),
-//                 head on the target centre.
+//                 head on the target centre; while none is reachable, exploring frontiers (the orbit starts only at
+//                 the circle, never at a frontier). After approach_budget_s without reaching it (-> NEXT_VIEWS, which
+//                 ends "partial" when the views it can reach leave the coverage under min_coverage).
 //   2 ORBIT       counter-clockwise around the target at orbit_radius_mm and orbit_speed_mm_s, head on the target.
 //                 An obstacle on the next 0.9 m of circle: the radius rises locally (up to +600 mm) where that is
 //                 free; else (unknown floor ahead: the camera looks at the target, not ahead) the head looks at the
@@ -83,6 +85,9 @@ struct PlannerOptions {
   double capture_speed_mm_s = 100;                 // mm/s, along the ring at a next view
   double tracking_turn_rad_s = 30 * M_PI / 180;    // rad/s, fastest base and camera rotation
   double explore_budget_s = 300;                   // s of EXPLORE before NO_TARGET
+  double approach_budget_s = 120;                  // s of APPROACH before NEXT_VIEWS without an orbit (a circle
+                                                   // whose floor the map never shows free: a frontier search
+                                                   // around it would go on until the frame budget)
   double start_free_mm = 400;                      // mm of floor ahead of the start taken as free: one camera sees
                                                    // depth only once it moves, so the robot's first motion (a
                                                    // gentle forward arc that starts the pose solver's map) goes

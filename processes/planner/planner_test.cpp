@@ -413,6 +413,47 @@ TEST(PlannerClosedLoopTest, RoomWithoutTargetEndsInNoTargetWithinTheBudget) {
   EXPECT_GT(log.summary.path_length_mm, 5000.0);  // it did search
 }
 
+// The target stands in the middle of a plain carpet (untextured: landmarks on its edges only, the floor under it hidden),
+// so the map never shows the floor of the orbit circle as free: the approach can only explore frontiers. Reaching
+// one must not start the orbit there (room_04, 7 Dec: "on the orbit circle (3601 mm from the target)" at a frontier
+// goal, then no orbit and an empty model); RunMission checks every orbit start against the circle's radius. The
+// approach ends after its budget; the mission ends without an orbit, as "partial", and says why.
+TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFrontier) {
+  PlannerOptions options = TestOptions();
+  options.explore_budget_s = 200;
+  options.map.free_support_mm = 250;  // the circle (<= 1.2 m) lies >= 350 mm inside the carpet: never free
+  toy::Room room = toy::MakeLivingRoom(true);
+  Eigen::Vector2d target_xy = Eigen::Vector2d::Zero();
+  for (const toy::Solid& s : room.solids)
+    if (s.is_target) target_xy = s.centre_mm;
+  toy::Solid carpet;
+  carpet.name = "plain_carpet";
+  carpet.centre_mm = target_xy + Eigen::Vector2d(-100, 0);
+  carpet.size_mm = Eigen::Vector3d(3300, 3600, 5);  // edges >= 1.55 m from the target, clear of the table
+  carpet.drivable = true;
+  carpet.textured = false;
+  room.solids.push_back(carpet);
+  toy::ToyWorld world(room, options.robot);
+  const RunLog log = RunMission(world, options, 30 * 300);
+  int approach_explores = 0;
+  for (const std::string& e : log.events) approach_explores += e.find("phase EXPLORE -> APPROACH") != std::string::npos;
+  std::printf("end %s after %.1f s, orbit frames %lld, path %.0f mm\n", PhaseName(log.end_phase), log.frames / 30.0,
+              static_cast<long long>(log.orbit_frames), log.summary.path_length_mm);
+  const int64_t approach = log.first_seq[static_cast<int>(Phase::kApproach)];
+  ASSERT_GE(approach, 0) << "the target was never confirmed";
+  EXPECT_GE(approach_explores, 1);
+  EXPECT_EQ(log.orbit_frames, 0) << "an orbit started away from the circle";
+  // The approach gives up after its budget (not at the frame limit) and the run ends as a failure that says why.
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+  const int64_t finish = log.first_seq[static_cast<int>(Phase::kFinish)];  // NEXT_VIEWS had no view to add
+  EXPECT_NEAR((finish - approach) / 30.0, options.approach_budget_s, 1.0);
+  EXPECT_EQ(PlanOutcome(log.summary), "partial");
+  bool says_why = false;
+  for (const std::string& e : log.events) says_why = says_why || e.find("orbit circle was not reached") != std::string::npos;
+  EXPECT_TRUE(says_why);
+  EXPECT_EQ(log.collisions, 0);
+}
+
 // An unjoined map restart in the middle of the search (the pose solver's map starts again from nothing): the search
 // goes on over the new map, with the old map's obstacles remembered, until the room is explored again; it neither
 // ends early nor drives into what the new map has not seen yet.
