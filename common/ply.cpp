@@ -56,28 +56,27 @@ std::string Trim(const std::string& s) {
   return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
 }
 
-}  // namespace
+// The next line of data from *pos (trimmed), advancing *pos past its newline; false at the end of data.
+bool NextLine(const std::string& data, size_t* pos, std::string* line) {
+  if (*pos >= data.size()) return false;
+  size_t end = data.find('\n', *pos);
+  if (end == std::string::npos) end = data.size();
+  *line = Trim(data.substr(*pos, end - *pos));
+  *pos = end + 1;
+  return true;
+}
 
-bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
-  *out = PlyData();
-  size_t pos = 0;
-  auto next_line = [&](std::string* line) {
-    if (pos >= data.size()) return false;
-    size_t end = data.find('\n', pos);
-    if (end == std::string::npos) end = data.size();
-    *line = Trim(data.substr(pos, end - pos));
-    pos = end + 1;
-    return true;
-  };
+// Parses the header from the "ply" line to end_header: the format word and the elements with their properties;
+// *pos ends at the first byte of the data. False with *error on a malformed header.
+bool ParsePlyHeader(const std::string& data, size_t* pos, std::string* format, std::vector<PlyElement>* elements,
+                    std::string* error) {
   std::string line;
-  if (!next_line(&line) || line != "ply") {
+  if (!NextLine(data, pos, &line) || line != "ply") {
     *error = "not a PLY file";
     return false;
   }
-  std::string format;
-  std::vector<PlyElement> elements;
   for (;;) {
-    if (!next_line(&line)) {
+    if (!NextLine(data, pos, &line)) {
       *error = "PLY header without end_header";
       return false;
     }
@@ -86,7 +85,7 @@ bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
     in >> word;
     if (word == "end_header") break;
     if (word == "format") {
-      in >> format;
+      in >> *format;
     } else if (word == "element") {
       PlyElement e;
       in >> e.name >> e.count;
@@ -94,9 +93,9 @@ bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
         *error = "bad PLY element line '" + line + "'";
         return false;
       }
-      elements.push_back(e);
+      elements->push_back(e);
     } else if (word == "property") {
-      if (elements.empty()) {
+      if (elements->empty()) {
         *error = "PLY property before element";
         return false;
       }
@@ -115,104 +114,159 @@ bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
         *error = "unknown PLY property type '" + p.type + "'";
         return false;
       }
-      elements.back().properties.push_back(p);
+      elements->back().properties.push_back(p);
     }
   }
+  return true;
+}
+
+// Reads the data's scalars one after the other: ascii text after the header, or binary little-endian from data.
+class PlyValueReader {
+ public:
+  // pos: first byte of the data (after end_header).
+  PlyValueReader(const std::string& data, size_t pos, bool ascii)
+      : data_(data), pos_(pos), ascii_(ascii), text_(ascii ? data.substr(pos) : std::string()) {}
+
+  // The next value, stored as the PLY type `type` (binary); false when the data ends (or is no number, ascii).
+  bool Read(const std::string& type, double* v) {
+    if (ascii_) return static_cast<bool>(text_ >> *v);
+    const size_t s = static_cast<size_t>(PlyTypeSize(type));
+    if (pos_ + s > data_.size()) return false;
+    *v = PlyReadBinary(type, reinterpret_cast<const uint8_t*>(&data_[pos_]));
+    pos_ += s;
+    return true;
+  }
+
+ private:
+  const std::string& data_;
+  size_t pos_;
+  bool ascii_;
+  std::istringstream text_;
+};
+
+// Indices in an element's property list of the properties we read (-1 when absent).
+struct PlyPropertyIndices {
+  int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1;
+  int face = -1;  // the list vertex_indices (or vertex_index)
+};
+
+// Where x y z, nx ny nz and the face index list are among element e's properties.
+PlyPropertyIndices FindPropertyIndices(const PlyElement& e) {
+  PlyPropertyIndices idx;
+  for (size_t k = 0; k < e.properties.size(); ++k) {
+    const std::string& n = e.properties[k].name;
+    const int i = static_cast<int>(k);
+    if (e.properties[k].is_list) {
+      if (n == "vertex_indices" || n == "vertex_index") idx.face = i;
+      continue;
+    }
+    if (n == "x") idx.x = i;
+    if (n == "y") idx.y = i;
+    if (n == "z") idx.z = i;
+    if (n == "nx") idx.nx = i;
+    if (n == "ny") idx.ny = i;
+    if (n == "nz") idx.nz = i;
+  }
+  return idx;
+}
+
+// Reads row i of element e: its scalar properties into values (by property index) and, when the list property iface
+// is read, its entries into *poly. False with *error on truncated data or a list longer than 1000.
+bool ReadPlyRow(const PlyElement& e, int64_t i, int iface, PlyValueReader* reader, std::vector<double>* values,
+                std::vector<int64_t>* poly, std::string* error) {
+  for (size_t k = 0; k < e.properties.size(); ++k) {
+    const HeaderProperty& p = e.properties[k];
+    if (!p.is_list) {
+      if (!reader->Read(p.type, &(*values)[k])) {
+        *error =
+            "PLY data truncated in element '" + e.name + "' " + std::to_string(i) + " of " + std::to_string(e.count);
+        return false;
+      }
+      continue;
+    }
+    double count = 0;
+    if (!reader->Read(p.count_type, &count)) {
+      *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
+      return false;
+    }
+    if (count < 0 || count > 1000) {
+      *error = "bad PLY list length " + std::to_string(count);
+      return false;
+    }
+    if (static_cast<int>(k) == iface) poly->clear();
+    for (int j = 0; j < static_cast<int>(count); ++j) {
+      double v = 0;
+      if (!reader->Read(p.type, &v)) {
+        *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
+        return false;
+      }
+      if (static_cast<int>(k) == iface) poly->push_back(static_cast<int64_t>(v));
+    }
+  }
+  return true;
+}
+
+// Reads all rows of element e into out: a vertex element's points (and normals), a face element's fan-triangulated
+// faces (indices checked against *num_vertices, the vertex element's count; -1 before it). Other elements are
+// skipped. False with *error on a vertex element without x y z, truncated data or an index out of range.
+bool ReadPlyElement(const PlyElement& e, PlyValueReader* reader, int64_t* num_vertices, bool* have_vertex, PlyData* out,
+                    std::string* error) {
+  const bool is_vertex = e.name == "vertex";
+  const bool is_face = e.name == "face";
+  const PlyPropertyIndices idx = FindPropertyIndices(e);
+  if (is_vertex && (idx.x < 0 || idx.y < 0 || idx.z < 0)) {
+    *error = "PLY vertex without x, y, z";
+    return false;
+  }
+  const bool with_normals = is_vertex && idx.nx >= 0 && idx.ny >= 0 && idx.nz >= 0;
+  if (is_vertex) {
+    *have_vertex = true;
+    *num_vertices = e.count;
+    out->has_normals = with_normals;
+    out->points.reserve(static_cast<size_t>(e.count));
+  }
+  if (is_face && idx.face >= 0) out->has_faces = true;
+  std::vector<double> values(e.properties.size());
+  std::vector<int64_t> poly;
+  for (int64_t i = 0; i < e.count; ++i) {
+    if (!ReadPlyRow(e, i, idx.face, reader, &values, &poly, error)) return false;
+    if (is_vertex) {
+      out->points.emplace_back(values[idx.x], values[idx.y], values[idx.z]);
+      if (with_normals) out->normals.emplace_back(values[idx.nx], values[idx.ny], values[idx.nz]);
+    }
+    if (is_face && idx.face >= 0) {
+      for (int64_t index : poly)
+        if (index < 0 || index >= *num_vertices) {
+          *error = "face " + std::to_string(i) + " has vertex index " + std::to_string(index) + " out of range" +
+                   (*have_vertex ? "" : " (no vertex element before the faces)");
+          return false;
+        }
+      for (size_t k = 2; k < poly.size(); ++k)
+        out->triangles.emplace_back(static_cast<int>(poly[0]), static_cast<int>(poly[k - 1]),
+                                    static_cast<int>(poly[k]));
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool ParsePly(const std::string& data, PlyData* out, std::string* error) {
+  *out = PlyData();
+  size_t pos = 0;
+  std::string format;
+  std::vector<PlyElement> elements;
+  if (!ParsePlyHeader(data, &pos, &format, &elements, error)) return false;
   const bool ascii = format == "ascii";
   if (!ascii && format != "binary_little_endian") {
     *error = "unsupported PLY format '" + format + "' (ascii or binary_little_endian)";
     return false;
   }
-  std::istringstream text(ascii ? data.substr(pos) : std::string());
+  PlyValueReader reader(data, pos, ascii);
   int64_t num_vertices = -1;
   bool have_vertex = false;
-  for (const PlyElement& e : elements) {
-    const bool is_vertex = e.name == "vertex";
-    const bool is_face = e.name == "face";
-    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iface = -1;
-    for (size_t k = 0; k < e.properties.size(); ++k) {
-      const std::string& n = e.properties[k].name;
-      const int i = static_cast<int>(k);
-      if (e.properties[k].is_list) {
-        if (n == "vertex_indices" || n == "vertex_index") iface = i;
-        continue;
-      }
-      if (n == "x") ix = i;
-      if (n == "y") iy = i;
-      if (n == "z") iz = i;
-      if (n == "nx") inx = i;
-      if (n == "ny") iny = i;
-      if (n == "nz") inz = i;
-    }
-    if (is_vertex && (ix < 0 || iy < 0 || iz < 0)) {
-      *error = "PLY vertex without x, y, z";
-      return false;
-    }
-    const bool with_normals = is_vertex && inx >= 0 && iny >= 0 && inz >= 0;
-    if (is_vertex) {
-      have_vertex = true;
-      num_vertices = e.count;
-      out->has_normals = with_normals;
-      out->points.reserve(static_cast<size_t>(e.count));
-    }
-    if (is_face && iface >= 0) out->has_faces = true;
-    std::vector<double> values(e.properties.size());
-    std::vector<int64_t> poly;
-    const auto read_value = [&](const std::string& type, double* v) {
-      if (ascii) return static_cast<bool>(text >> *v);
-      const size_t s = static_cast<size_t>(PlyTypeSize(type));
-      if (pos + s > data.size()) return false;
-      *v = PlyReadBinary(type, reinterpret_cast<const uint8_t*>(&data[pos]));
-      pos += s;
-      return true;
-    };
-    for (int64_t i = 0; i < e.count; ++i) {
-      for (size_t k = 0; k < e.properties.size(); ++k) {
-        const HeaderProperty& p = e.properties[k];
-        if (!p.is_list) {
-          if (!read_value(p.type, &values[k])) {
-            *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i) + " of " +
-                     std::to_string(e.count);
-            return false;
-          }
-          continue;
-        }
-        double count = 0;
-        if (!read_value(p.count_type, &count)) {
-          *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
-          return false;
-        }
-        if (count < 0 || count > 1000) {
-          *error = "bad PLY list length " + std::to_string(count);
-          return false;
-        }
-        if (static_cast<int>(k) == iface) poly.clear();
-        for (int j = 0; j < static_cast<int>(count); ++j) {
-          double v = 0;
-          if (!read_value(p.type, &v)) {
-            *error = "PLY data truncated in element '" + e.name + "' " + std::to_string(i);
-            return false;
-          }
-          if (static_cast<int>(k) == iface) poly.push_back(static_cast<int64_t>(v));
-        }
-      }
-      if (is_vertex) {
-        out->points.emplace_back(values[ix], values[iy], values[iz]);
-        if (with_normals) out->normals.emplace_back(values[inx], values[iny], values[inz]);
-      }
-      if (is_face && iface >= 0) {
-        for (int64_t idx : poly)
-          if (idx < 0 || idx >= num_vertices) {
-            *error = "face " + std::to_string(i) + " has vertex index " + std::to_string(idx) + " out of range" +
-                     (have_vertex ? "" : " (no vertex element before the faces)");
-            return false;
-          }
-        for (size_t k = 2; k < poly.size(); ++k)
-          out->triangles.emplace_back(static_cast<int>(poly[0]), static_cast<int>(poly[k - 1]),
-                                      static_cast<int>(poly[k]));
-      }
-    }
-  }
+  for (const PlyElement& e : elements)
+    if (!ReadPlyElement(e, &reader, &num_vertices, &have_vertex, out, error)) return false;
   if (!have_vertex) {
     *error = "no vertex element";
     return false;
