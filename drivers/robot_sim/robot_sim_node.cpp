@@ -238,66 +238,75 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
                  std::to_string(sim_options_.footprint_radius_mm) + " mm)");
   }
 
-  if (!options_.ground_truth_dir.empty()) {
-    const std::string& dir = options_.ground_truth_dir;
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    const auto samples = SampleSurface(scene_->target(), options_.surface_density_per_mm2,
-                                       MixSeed(static_cast<uint64_t>(options_.seed), 0x9f));
-    std::vector<Eigen::Vector3f> points, normals;
-    for (const auto& s : samples) {
-      points.push_back(s.position);
-      normals.push_back(s.normal);
-    }
-    if (!WritePly(dir + "/target_surface.ply", points, normals, {}))
-      throw std::runtime_error("cannot write " + dir + "/target_surface.ply");
-    // The surface as rendered (the tessellation, within 0.05 mm of a curved primitive): exact surface distances.
-    const TriangleMesh& target_mesh = scene_->target().mesh;
-    if (!WritePly(dir + "/target_mesh.ply", target_mesh.positions, {}, target_mesh.triangles))
-      throw std::runtime_error("cannot write " + dir + "/target_mesh.ply");
-    std::ofstream scene_txt(dir + "/scene.txt");
-    scene_txt << scene_->Describe();
-    scene_txt << "# robot_sim: seed=" << options_.seed << " mode=" << options_.mode << " frames=" << options_.frames
-              << " rate=" << options_.rate_hz << " orbit_radius=" << options_.orbit_radius_mm
-              << " orbit_center=" << sim_->orbit_center().x() << "," << sim_->orbit_center().y()
-              << " orbit_degrees=" << options_.orbit_degrees << " orbit_start_deg=" << options_.orbit_start_deg
-              << " look_at=" << sim_->look_at().x() << "," << sim_->look_at().y() << "," << sim_->look_at().z()
-              << " footprint_radius=" << sim_options_.footprint_radius_mm << " start=" << sim_->start_state().x_mm << ","
-              << sim_->start_state().y_mm << "," << sim_->start_state().theta_rad * 180 / 3.14159265358979323846
-              << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx
-              << " fy=" << camera_.fy << " cx=" << camera_.cx << " cy=" << camera_.cy
-              << " noise_sigma=" << options_.noise_sigma << "\n# robot: mast_height=" << sim_options_.geometry.mast_height_mm
-              << " camera_offset_x=" << sim_options_.geometry.camera_offset_mm.x()
-              << "\n# odometry errors: scale=" << options_.odometry_scale_error
-              << " yaw_scale=" << options_.odometry_yaw_scale_error
-              << " heading_drift_deg_per_m=" << options_.heading_drift_deg_per_m
-              << " distance_noise=" << options_.distance_noise
-              << " heading_noise_deg_per_sqrt_m=" << options_.heading_noise_deg_per_sqrt_m
-              << " pan_bias_deg=" << options_.pan_bias_deg << " tilt_bias_deg=" << options_.tilt_bias_deg
-              << " head_noise_deg=" << options_.head_noise_deg << " sync_offset_ms=" << options_.sync_offset_ms
-              << " odometry_origin=" << options_.odometry_origin << "\n";
-    if (!scene_txt) throw std::runtime_error("cannot write " + dir + "/scene.txt");
-    // The robot's description, as a real robot's owner writes it (objscan_export --robot-file): the simulated robot
-    // reports its head angles in objscan's convention.
-    RobotDescription robot;
-    robot.geometry = sim_->options().geometry;
-    robot.footprint_radius_mm = sim_->options().footprint_radius_mm;
-    robot.max_speed_mm_s = sim_->options().max_speed_mm_s;
-    robot.max_omega_deg_s = sim_->options().max_omega_rad_s / kDeg;
-    std::string robot_error;
-    if (!WriteRobotFile(dir + "/" + kRobotFileName, robot, &robot_error)) throw std::runtime_error(robot_error);
-    poses_gt_.open(dir + "/poses_gt.txt");
-    robot_gt_.open(dir + "/robot_gt.txt");
-    if (!poses_gt_ || !robot_gt_) throw std::runtime_error("cannot write poses_gt.txt / robot_gt.txt in " + dir);
-    poses_gt_ << "# robot_sim true camera poses, TUM format: t tx ty tz qx qy qz qw; t = utime / 1e6 s, "
-                 "camera-to-world (world_from_camera), positions in mm (not metres)\n";
-    robot_gt_ << "# robot_sim true robot state per frame: t seq x_mm y_mm theta_rad pan_rad tilt_rad v_mm_s "
-                 "omega_rad_s (world frame, t = image utime / 1e6 s)\n";
-    poses_gt_ << std::setprecision(10);
-    robot_gt_ << std::setprecision(10);
-    LogInfo("ground truth in " + dir + " (" + std::to_string(points.size()) + " surface points)");
-  }
+  if (!options_.ground_truth_dir.empty()) WriteGroundTruthFiles();
+  SubscribeInputs();
+  status_.SetState(process_status_t::STATE_STARTING, options_.scene);
+  status_.SetValue("frames_published", 0);
+  status_.SetValue("collisions", 0);
+  status_.SetValue("blocked_frames", 0);
+}
 
+void RobotSimNode::WriteGroundTruthFiles() {
+  const std::string& dir = options_.ground_truth_dir;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const auto samples = SampleSurface(scene_->target(), options_.surface_density_per_mm2,
+                                     MixSeed(static_cast<uint64_t>(options_.seed), 0x9f));
+  std::vector<Eigen::Vector3f> points, normals;
+  for (const auto& s : samples) {
+    points.push_back(s.position);
+    normals.push_back(s.normal);
+  }
+  if (!WritePly(dir + "/target_surface.ply", points, normals, {}))
+    throw std::runtime_error("cannot write " + dir + "/target_surface.ply");
+  // The surface as rendered (the tessellation, within 0.05 mm of a curved primitive): exact surface distances.
+  const TriangleMesh& target_mesh = scene_->target().mesh;
+  if (!WritePly(dir + "/target_mesh.ply", target_mesh.positions, {}, target_mesh.triangles))
+    throw std::runtime_error("cannot write " + dir + "/target_mesh.ply");
+  std::ofstream scene_txt(dir + "/scene.txt");
+  scene_txt << scene_->Describe();
+  scene_txt << "# robot_sim: seed=" << options_.seed << " mode=" << options_.mode << " frames=" << options_.frames
+            << " rate=" << options_.rate_hz << " orbit_radius=" << options_.orbit_radius_mm
+            << " orbit_center=" << sim_->orbit_center().x() << "," << sim_->orbit_center().y()
+            << " orbit_degrees=" << options_.orbit_degrees << " orbit_start_deg=" << options_.orbit_start_deg
+            << " look_at=" << sim_->look_at().x() << "," << sim_->look_at().y() << "," << sim_->look_at().z()
+            << " footprint_radius=" << sim_options_.footprint_radius_mm << " start=" << sim_->start_state().x_mm << ","
+            << sim_->start_state().y_mm << "," << sim_->start_state().theta_rad * 180 / 3.14159265358979323846
+            << "\n# camera: " << camera_.width << "x" << camera_.height << " fx=" << camera_.fx << " fy=" << camera_.fy
+            << " cx=" << camera_.cx << " cy=" << camera_.cy << " noise_sigma=" << options_.noise_sigma
+            << "\n# robot: mast_height=" << sim_options_.geometry.mast_height_mm
+            << " camera_offset_x=" << sim_options_.geometry.camera_offset_mm.x()
+            << "\n# odometry errors: scale=" << options_.odometry_scale_error
+            << " yaw_scale=" << options_.odometry_yaw_scale_error
+            << " heading_drift_deg_per_m=" << options_.heading_drift_deg_per_m
+            << " distance_noise=" << options_.distance_noise
+            << " heading_noise_deg_per_sqrt_m=" << options_.heading_noise_deg_per_sqrt_m
+            << " pan_bias_deg=" << options_.pan_bias_deg << " tilt_bias_deg=" << options_.tilt_bias_deg
+            << " head_noise_deg=" << options_.head_noise_deg << " sync_offset_ms=" << options_.sync_offset_ms
+            << " odometry_origin=" << options_.odometry_origin << "\n";
+  if (!scene_txt) throw std::runtime_error("cannot write " + dir + "/scene.txt");
+  // The robot's description, as a real robot's owner writes it (objscan_export --robot-file): the simulated robot
+  // reports its head angles in objscan's convention.
+  RobotDescription robot;
+  robot.geometry = sim_->options().geometry;
+  robot.footprint_radius_mm = sim_->options().footprint_radius_mm;
+  robot.max_speed_mm_s = sim_->options().max_speed_mm_s;
+  robot.max_omega_deg_s = sim_->options().max_omega_rad_s / kDeg;
+  std::string robot_error;
+  if (!WriteRobotFile(dir + "/" + kRobotFileName, robot, &robot_error)) throw std::runtime_error(robot_error);
+  poses_gt_.open(dir + "/poses_gt.txt");
+  robot_gt_.open(dir + "/robot_gt.txt");
+  if (!poses_gt_ || !robot_gt_) throw std::runtime_error("cannot write poses_gt.txt / robot_gt.txt in " + dir);
+  poses_gt_ << "# robot_sim true camera poses, TUM format: t tx ty tz qx qy qz qw; t = utime / 1e6 s, "
+               "camera-to-world (world_from_camera), positions in mm (not metres)\n";
+  robot_gt_ << "# robot_sim true robot state per frame: t seq x_mm y_mm theta_rad pan_rad tilt_rad v_mm_s "
+               "omega_rad_s (world frame, t = image utime / 1e6 s)\n";
+  poses_gt_ << std::setprecision(10);
+  robot_gt_ << std::setprecision(10);
+  LogInfo("ground truth in " + dir + " (" + std::to_string(points.size()) + " surface points)");
+}
+
+void RobotSimNode::SubscribeInputs() {
   if (options_.mode == "command") {
     bus_.SubscribeMessage<robot_command_t>(
         options_.command_channel,
@@ -357,10 +366,6 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
       if (seq > lockstep_max_seq_) lockstep_max_seq_ = seq;
     });
   }
-  status_.SetState(process_status_t::STATE_STARTING, options_.scene);
-  status_.SetValue("frames_published", 0);
-  status_.SetValue("collisions", 0);
-  status_.SetValue("blocked_frames", 0);
 }
 
 RobotSimNode::~RobotSimNode() = default;

@@ -154,6 +154,12 @@ class RobotSimNode : public Node {
   const RobotGeometry& geometry() const { return sim_options_.geometry; }
 
  private:
+  // Writes the start-up ground-truth files in options_.ground_truth_dir (target_surface.ply, target_mesh.ply,
+  // scene.txt, robot.cfg) and opens poses_gt.txt / robot_gt.txt with their headers; throws std::runtime_error when
+  // a file cannot be written.
+  void WriteGroundTruthFiles();
+  // Subscribes to ROBOT_COMMAND (command mode), OBJSCAN_CONTROL (SHUTDOWN) and the lock-step channel (when set).
+  void SubscribeInputs();
   bool LockstepReady(int64_t wall_utime);
   void PublishFrame();
   void FinishStream();
