@@ -953,11 +953,21 @@ bool Planner::StartBypass(double azimuth) {
     bypass_deadline_ =
         now_ + static_cast<int64_t>((2 * PathLength(path) / options_.orbit_speed_mm_s + 15) * kSecond);
     follower_.SetPath(std::move(path));
+    if (orbit_bypass_) SettleBypassProgress(azimuth, false);  // replaced on the way
     orbit_bypass_ = true;
+    bypass_skip_rad_ = delta;
+    bypass_start_azimuth_ = azimuth;
     Event("orbit: circle blocked ahead, bypass to " + Mm(goal));
     return true;
   }
   return false;
+}
+
+void Planner::SettleBypassProgress(double azimuth, bool reached) {
+  if (bypass_skip_rad_ < 0) return;
+  orbit_progress_ += reached ? bypass_skip_rad_ : WrapAngle(azimuth - bypass_start_azimuth_);
+  orbit_last_azimuth_ = azimuth;
+  bypass_skip_rad_ = -1;
 }
 
 bool Planner::TargetHidden() const {
@@ -1012,7 +1022,7 @@ Planner::Motion Planner::Orbit() {
     orbit_progress_ = 0;
     orbit_radius_set_ = options_.orbit_radius_mm;
   }
-  orbit_progress_ += WrapAngle(azimuth - orbit_last_azimuth_);
+  if (!orbit_bypass_ || bypass_skip_rad_ < 0) orbit_progress_ += WrapAngle(azimuth - orbit_last_azimuth_);
   orbit_last_azimuth_ = azimuth;
   const bool hidden = TargetHidden();
   if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
@@ -1049,6 +1059,7 @@ Planner::Motion Planner::Orbit() {
       orbit_mapping_ = false;
       if (PlanToOrbit()) {
         orbit_bypass_ = true;
+        bypass_skip_rad_ = -1;
         Event("orbit: back to the circle");
       }
     } else {
@@ -1060,6 +1071,7 @@ Planner::Motion Planner::Orbit() {
     if (now_ > bypass_deadline_ && !follower_.empty() && !follower_.Reached(base_, 80))
       Event("orbit: the bypass to " + Mm(follower_.goal()) + " was not reached in time");
     if (follower_.empty() || follower_.Reached(base_, 80) || Stuck() || now_ > bypass_deadline_) {
+      SettleBypassProgress(azimuth, !follower_.empty() && follower_.Reached(base_, 80));
       blocked_since_ = -1;
       orbit_bypass_ = false;
       follower_.Clear();

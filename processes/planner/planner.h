@@ -242,6 +242,9 @@ class Planner {
   bool ChooseFrontier(const Eigen::Vector2d* near = nullptr, double within_mm = 0);
   bool PlanToOrbit();
   bool StartBypass(double azimuth);
+  // Ends the bypass's own progress accounting: the skipped arc when it was reached, else the azimuth change since
+  // its start (signed).
+  void SettleBypassProgress(double azimuth, bool reached);
   // Orbit radius (circle first, then up to kMaxDetourMm outward) whose next 0.9 m of arc is Traversable; -1 when
   // none. *blocked_azimuth: the first blocked point of the circle itself.
   double OrbitRadiusAhead(double azimuth, double* blocked_azimuth) const;
@@ -364,6 +367,11 @@ class Planner {
   double last_bypass_progress_ = 0;  // rad, orbit_progress_ when it was chosen
   int bypass_repeats_ = 0;
   int64_t bypass_deadline_ = 0;  // µs, data time by which the current bypass should have been driven
+  // A bypass counts as the counter-clockwise arc it skips, whichever way its path goes round the target (room_09
+  // rerun: bypasses east -> west -> east whose paths went clockwise took back the progress they made; the orbit
+  // stood at 25 % for 150 s until the frame budget). < 0: the progress follows the base (a way back to the circle).
+  double bypass_skip_rad_ = -1;      // rad, from bypass_start_azimuth_ to the goal, counter-clockwise
+  double bypass_start_azimuth_ = 0;  // rad, the base's azimuth round the target when the bypass started
   bool orbit_mapping_ = false;     // driving to unknown floor near the target (the circle ran into it)
   int orbit_mappings_ = 0;
   bool glancing_ = false;          // looking at the blocked arc ahead

@@ -454,6 +454,38 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFr
   EXPECT_EQ(log.collisions, 0);
 }
 
+// A bench across the circle north of the target, from the target to the wall: the bypass past it can only go all the
+// way round, clockwise (backwards). A bypass counts as the arc it skips, not as the way its path goes round (room_09
+// rerun: a bypass of 69 deg counter-clockwise drove 290 deg clockwise, past the target, taking back the progress the
+// orbit had made; the orbit took 157 s).
+TEST(PlannerClosedLoopTest, ABypassBackwardsRoundTheTargetCountsTheArcItSkips) {
+  const PlannerOptions options = TestOptions();
+  toy::Room room = toy::MakeLivingRoom(true);
+  Eigen::Vector2d target_xy = Eigen::Vector2d::Zero();
+  for (const toy::Solid& s : room.solids)
+    if (s.is_target) target_xy = s.centre_mm;
+  toy::Solid bench;
+  bench.name = "bench";
+  // From 250 mm north of the target's centre to the wall: no way past it on that side, inside or outside the circle.
+  bench.centre_mm = Eigen::Vector2d(target_xy.x(), 0.5 * (target_xy.y() + 250 + room.max_mm.y()));
+  bench.size_mm = Eigen::Vector3d(300, room.max_mm.y() - (target_xy.y() + 250), 400);
+  room.solids.push_back(bench);
+  toy::ToyWorld world(room, options.robot);
+  const RunLog log = RunMission(world, options, 30 * 600);
+  int bypasses = 0;
+  bool complete = false;
+  for (const std::string& e : log.events) {
+    bypasses += e.find("bypass to") != std::string::npos;
+    complete = complete || e.find("orbit complete") != std::string::npos;
+  }
+  std::printf("end %s after %.1f s, orbit %.0f %%, bypasses %d\n", PhaseName(log.end_phase), log.frames / 30.0,
+              log.summary.orbit_percent, bypasses);
+  EXPECT_GE(bypasses, 1) << "the circle was not blocked: the test does not test anything";
+  EXPECT_TRUE(complete) << "the orbit did not come round";
+  EXPECT_LE(bypasses, 2);
+  EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
+}
+
 // An unjoined map restart in the middle of the search (the pose solver's map starts again from nothing): the search
 // goes on over the new map, with the old map's obstacles remembered, until the room is explored again; it neither
 // ends early nor drives into what the new map has not seen yet.
