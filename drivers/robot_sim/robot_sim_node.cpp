@@ -42,6 +42,7 @@ bool EncodingFromName(const std::string& name, int8_t* encoding) {
 
 // Parses "a,b" / "a,b,c" into values; false on a wrong count or a non-finite number.
 bool ParseList(const std::string& text, size_t count, double* values) {
+  if (!text.empty() && text.back() == ',') return false;  // getline would drop the empty last field
   std::stringstream in(text);
   std::string part;
   size_t n = 0;
@@ -111,7 +112,7 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("exit-when-finished", &o->exit_when_finished, "exit after END_OF_STREAM");
 }
 
-RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
+RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o, const RobotDescription* robot_file) {
   RobotSimOptions s;
   s.mode = o.mode;
   s.frames = o.frames;
@@ -129,10 +130,8 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.geometry.mast_offset_y_mm = o.mast_offset_y_mm;
   s.geometry.camera_offset_mm = Eigen::Vector3d(o.camera_offset_x_mm, 0, 0);
   s.geometry.wheel_base_mm = o.wheel_base_mm;
-  RobotDescription robot;
-  std::string robot_why;
-  const bool from_file = !o.robot_file.empty() && ReadRobotFile(o.robot_file, &robot, &robot_why);
-  if (from_file) s.geometry = robot.geometry;
+  const bool from_file = robot_file != nullptr;
+  if (from_file) s.geometry = robot_file->geometry;
   s.errors.scale_error = o.odometry_scale_error;
   s.errors.yaw_scale_error = o.odometry_yaw_scale_error;
   s.errors.heading_drift_rad_per_mm = o.heading_drift_deg_per_m * kDeg / 1000.0;
@@ -144,11 +143,11 @@ RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& o) {
   s.errors.sync_offset_us = std::isfinite(o.sync_offset_ms) ? std::llround(o.sync_offset_ms * 1000.0) : 0;
   s.odometry_origin = o.odometry_origin;
   s.seed = static_cast<uint64_t>(o.seed);
-  s.max_speed_mm_s = from_file ? robot.max_speed_mm_s : o.max_speed_mm_s;
-  s.max_omega_rad_s = (from_file ? robot.max_omega_deg_s : o.max_omega_deg_s) * kDeg;
+  s.max_speed_mm_s = from_file ? robot_file->max_speed_mm_s : o.max_speed_mm_s;
+  s.max_omega_rad_s = (from_file ? robot_file->max_omega_deg_s : o.max_omega_deg_s) * kDeg;
   s.max_head_rate_rad_s = o.max_head_rate_deg_s * kDeg;
   s.command_timeout_us = static_cast<int64_t>(o.command_timeout_ms) * 1000;
-  s.footprint_radius_mm = from_file ? robot.footprint_radius_mm : o.footprint_radius_mm;
+  s.footprint_radius_mm = from_file ? robot_file->footprint_radius_mm : o.footprint_radius_mm;
   return s;
 }
 
@@ -164,7 +163,7 @@ PinholeCamera ToCamera(const RobotSimNodeOptions& o) {
   return c;
 }
 
-bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why) {
+bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why, RobotSimOptions* sim_options) {
   auto fail = [why](const std::string& text) {
     if (why) *why = text;
     return false;
@@ -175,17 +174,18 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
   if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("orbit_center must be x,y");
   if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
   if (o.seed < 0) return fail("--seed must be >= 0");
+  RobotDescription robot;  // read once: the simulator runs with what was validated
   if (!o.robot_file.empty()) {
-    RobotDescription robot;
     std::string robot_why;
     if (!ReadRobotFile(o.robot_file, &robot, &robot_why)) return fail("--robot-file: " + robot_why);
   }
+  const RobotSimOptions sim = ToRobotSimOptions(o, o.robot_file.empty() ? nullptr : &robot);
   if (!std::isfinite(o.sync_offset_ms) || std::abs(o.sync_offset_ms) > 1e6)
     return fail("sync_offset_ms out of range");
   if (!std::isfinite(o.max_omega_deg_s) || !std::isfinite(o.max_head_rate_deg_s))
     return fail("rate limits must be finite");
   std::string sim_why;
-  if (!ValidateRobotSimOptions(ToRobotSimOptions(o), &sim_why)) return fail(sim_why);
+  if (!ValidateRobotSimOptions(sim, &sim_why)) return fail(sim_why);
   std::string camera_why;
   if (!ToCamera(o).IsValid(&camera_why)) return fail("camera: " + camera_why);
   if (o.width > 8192 || o.height > 8192) return fail("width/height must be <= 8192");
@@ -208,16 +208,16 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why)
       o.ground_truth_channel.empty() || o.command_channel.empty() || o.control_channel.empty() ||
       o.status_channel.empty())
     return fail("channel names must not be empty");
+  if (sim_options) *sim_options = sim;
   return true;
 }
 
 RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
     : bus_(bus), options_(options), status_(&bus, kProcessName, options.status_channel) {
   std::string why;
-  if (!ValidateRobotSimNodeOptions(options_, &why)) throw std::invalid_argument(why);
+  if (!ValidateRobotSimNodeOptions(options_, &why, &sim_options_)) throw std::invalid_argument(why);
   EncodingFromName(options_.encoding, &encoding_);
   ParseBlank(options_.blank, &blank_first_, &blank_count_);
-  sim_options_ = ToRobotSimOptions(options_);
   camera_ = ToCamera(options_);
   scene_ = std::make_unique<Scene>(LoadScene(options_.scene));
   RenderOptions render_options;

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "common/node.h"
+#include "common/recorded_run.h"
 #include "common/status.h"
 #include "drivers/robot_sim/renderer.h"
 #include "drivers/robot_sim/robot_sim.h"
@@ -122,10 +123,13 @@ struct RobotSimNodeOptions {
 // Registers the RobotSimNodeOptions fields a user sets on the command line (--scene, --mode, --frames, --rate,
 // --realtime, ...; the rest keep their defaults: code and tests set the struct's fields directly).
 void AddRobotSimNodeOptions(OptionParser& parser, RobotSimNodeOptions* options);
-// Checks the option values (not the scene file). False with *why on the first problem.
-bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& options, std::string* why);
-// The simulation / camera parts of the node options.
-RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& options);
+// Checks the option values (not the scene file), reading robot_file once. False with *why on the first problem;
+// true with the simulation part of the options in *sim_options (when not null).
+bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& options, std::string* why,
+                                 RobotSimOptions* sim_options = nullptr);
+// The simulation part of the node options; robot_file (the parsed options.robot_file, null when none) replaces the
+// geometry, speed limits and footprint fields.
+RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& options, const RobotDescription* robot_file);
 PinholeCamera ToCamera(const RobotSimNodeOptions& options);
 
 class RobotSimNode : public Node {

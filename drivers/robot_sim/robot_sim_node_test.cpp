@@ -222,7 +222,7 @@ TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {
 TEST(RobotSimNodeTest, BlankFramesAreGreyAndBadSpecsRefused) {
   RobotSimNodeOptions options = FastOptions(4);
   std::string why;
-  for (const char* bad : {"80", "80,", "-1,5", "80,2.5", "a,b", "1,2,3"}) {
+  for (const char* bad : {"80", "80,", "80,20,", "-1,5", "80,2.5", "a,b", "1,2,3"}) {
     options.blank = bad;
     EXPECT_FALSE(ValidateRobotSimNodeOptions(options, &why)) << bad;
     EXPECT_NE(why.find("--blank"), std::string::npos) << why;

@@ -119,7 +119,10 @@ bool ToPlannerOptions(const PlannerNodeOptions& o, PlannerOptions* out, std::str
   return true;
 }
 
-bool ValidatePlannerNodeOptions(const PlannerNodeOptions& o, std::string* why) {
+namespace {
+// ValidatePlannerNodeOptions, with the converted options in *planner_options (when not null) on success: the robot
+// file is read once.
+bool ValidateAndConvert(const PlannerNodeOptions& o, std::string* why, PlannerOptions* planner_options) {
   std::ostringstream e;
   for (const auto& [value, name] :
        {std::pair{&o.name, "name"}, {&o.pose_channel, "pose-channel"}, {&o.odometry_channel, "odometry-channel"},
@@ -136,17 +139,24 @@ bool ValidatePlannerNodeOptions(const PlannerNodeOptions& o, std::string* why) {
   else if (!ValidatePlannerOptions(p, &sub))
     e << sub << (o.robot_file.empty() ? "" : " (with the limits of " + o.robot_file + ")") << "; ";
   const std::string message = e.str();
-  if (message.empty()) return true;
+  if (message.empty()) {
+    if (planner_options) *planner_options = p;
+    return true;
+  }
   if (why) *why = message.substr(0, message.size() - 2);
   return false;
+}
+}  // namespace
+
+bool ValidatePlannerNodeOptions(const PlannerNodeOptions& o, std::string* why) {
+  return ValidateAndConvert(o, why, nullptr);
 }
 
 namespace {
 PlannerOptions PlannerOptionsOrThrow(const PlannerNodeOptions& o) {
   std::string why;
   PlannerOptions p;
-  if (!ValidatePlannerNodeOptions(o, &why) || !ToPlannerOptions(o, &p, &why))
-    throw std::invalid_argument("planner node: " + why);
+  if (!ValidateAndConvert(o, &why, &p)) throw std::invalid_argument("planner node: " + why);
   return p;
 }
 }  // namespace
