@@ -1,24 +1,15 @@
-// The floor of the sparse map: a near-horizontal plane found by RANSAC among the landmarks, refit by least squares.
-// Frames: world z up (the pose solver's world; its floor is near z = 0, but nothing here assumes it), mm.
-// LCM-free, deterministic (fixed RNG seed, no timing).
+// The object finder's floor: the lowest near-horizontal plane among the sparse map's landmarks (the planner uses it
+// too). Plane type and RANSAC / refit machinery: common/floor_fit.h (FloorPlane: Height(p) = normal . p + offset_mm,
+// mm, positive above). Frames: world z up (the pose solver's world; its floor is near z = 0, but nothing here assumes
+// it), mm. LCM-free, deterministic (fixed RNG seed, no timing).
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Geometry>
 #include <vector>
 
+#include "common/floor_fit.h"
+
 namespace objscan {
-
-// height(p) = normal . p + offset_mm: signed distance of p above the plane (mm, positive on the normal's side).
-struct FloorPlane {
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit, world, normal.z() > 0 (up)
-  double offset_mm = 0.0;                             // mm
-
-  double Height(const Eigen::Vector3d& p) const { return normal.dot(p) + offset_mm; }
-  // floor_from_world: the smallest rotation taking normal to +z, then a shift so that z = Height(p). For a level
-  // floor at z = 0 it is the identity; x and y stay the world's x and y rotated by the floor's tilt only.
-  Eigen::Isometry3d FloorFromWorld() const;
-};
 
 struct FloorFitOptions {
   double inlier_mm = 15.0;   // mm, max |height| of a floor point
@@ -32,9 +23,10 @@ struct FloorFit {
   int inliers = 0;  // points within inlier_mm of the final plane
 };
 
-// Fits the floor to points (world, mm; all finite). RANSAC on up to 512 points (3-point samples, fixed seed,
-// normals tilted more than max_tilt_deg skipped), `previous` (may be null) scored as one more hypothesis, then two
-// least-squares refits on the inliers among all points. The floor is the lowest such plane: when many points lie
+// Fits the floor to points (world, mm; all finite). RANSAC (common/floor_fit.h MostSupportedPlane: 400 3-point
+// samples, seed 24, normals tilted more than max_tilt_deg skipped) on up to 512 evenly spread points, `previous` (may
+// be null) scored as one more hypothesis, then two total-least-squares refits on the inliers among all points (a
+// refit tilted more than max_tilt_deg: not found). The floor is the lowest such plane: when many points lie
 // clearly below the fitted plane (a table top won), the fit is repeated on those points (at most twice).
 // Cost O(points). Never throws beyond std::bad_alloc.
 FloorFit FitFloor(const std::vector<Eigen::Vector3d>& points, const FloorFitOptions& options,
