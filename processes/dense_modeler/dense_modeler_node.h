@@ -231,6 +231,10 @@ class DenseModelerNode : public Node {
   // Final phase: the final_* status values and the end state (an empty model is the error state, saying why and
   // what to try), published at once.
   void ReportFinalState(const FinalModel& model, int64_t start_us);
+  // The final map's floor around the target (map_consistency.h): "" when thin enough or not measurable (no floor in
+  // the region, not the final map's landmarks, too few floor points, lengths not metric), else why the model is not
+  // to be trusted and what to try. Sets the status values final_floor_thickness_mm / final_floor_points.
+  std::string CheckMapConsistency();
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
   // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). The floor
   // moves with it only when the landmarks in use are live ones; fitted among the final map's landmarks (they arrive
