@@ -110,6 +110,25 @@ class NodeFixture : public ::testing::Test {
     PublishPose(seq, n_views, status, live_scale);
     Drain();
   }
+  // The true ring pose of frame seq, status TRACKING, with the given scale source.
+  CameraPoseEstimate RingPoseEstimate(int seq, int n_views, ScaleSource scale = ScaleSource::kNone) const {
+    CameraPoseEstimate est;
+    est.seq = seq;
+    est.utime = std::llround(seq * 1e6 / 30);
+    est.world_from_camera = scene_.RingPose(seq, n_views);
+    est.status = PoseStatus::kTracking;
+    est.scale_source = scale;
+    return est;
+  }
+  // A CONFIRMED target: the sphere's box (2.2 radii wide) around centre.
+  void PublishSphereTarget(const Eigen::Vector3d& centre) {
+    target_t target{};
+    target.state = target_t::STATE_CONFIRMED;
+    target.frame = "world";
+    for (int k = 0; k < 3; ++k) target.center_mm[k] = centre[k];
+    target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 2.2 * scene_.radius;
+    bus_->PublishMessage("TARGET", target);
+  }
   void PublishFinalPose(int seq, int n_views) {
     CameraPoseEstimate est;
     est.seq = seq;
@@ -430,22 +449,12 @@ TEST_F(NodeFixture, RegionFloorInTheFinalFrameWhateverFrameItWasFittedIn) {
     Restart();
     DenseModelerNode node(*bus_, options_);
     PublishInfo();
-    target_t target{};  // the sphere's box in the live frame
-    target.state = target_t::STATE_CONFIRMED;
-    target.frame = "world";
-    const Eigen::Vector3d centre = scene_.center + live_shift;
-    for (int k = 0; k < 3; ++k) target.center_mm[k] = centre[k];
-    target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 2.2 * scene_.radius;
-    bus_->PublishMessage("TARGET", target);
+    PublishSphereTarget(scene_.center + live_shift);  // the sphere's box in the live frame
     for (int i = 0; i <= n; ++i) {
       PublishImageAndTracks(i, n, features);
-      CameraPoseEstimate est;
-      est.seq = i;
-      est.utime = std::llround(i * 1e6 / 30);
-      est.world_from_camera = scene_.RingPose(i, n);
+      CameraPoseEstimate est = RingPoseEstimate(i, n);
       const Eigen::Vector3d sideways = est.world_from_camera.linear().col(0);  // the camera's x axis
       est.world_from_camera.translation() += live_shift + (i % 2 == 0 ? sideways_mm : -sideways_mm) * sideways;
-      est.status = PoseStatus::kTracking;
       bus_->PublishMessage("CAMERA_POSE", PoseToMessage(est));
       Drain();
     }
@@ -500,32 +509,13 @@ TEST_F(NodeFixture, AFloorInTwoLayersAroundTheTargetIsAnError) {
     Restart();
     DenseModelerNode node(*bus_, options_);
     PublishInfo();
-    target_t target{};
-    target.state = target_t::STATE_CONFIRMED;
-    target.frame = "world";
-    for (int k = 0; k < 3; ++k) target.center_mm[k] = scene_.center[k];
-    target.size_mm[0] = target.size_mm[1] = target.size_mm[2] = 2.2 * scene_.radius;
-    bus_->PublishMessage("TARGET", target);
+    PublishSphereTarget(scene_.center);
     for (int i = 0; i <= n; ++i) {
       PublishImageAndTracks(i, n, features);
-      CameraPoseEstimate est;
-      est.seq = i;
-      est.utime = std::llround(i * 1e6 / 30);
-      est.world_from_camera = scene_.RingPose(i, n);
-      est.status = PoseStatus::kTracking;
-      est.scale_source = c.scale;
-      bus_->PublishMessage("CAMERA_POSE", PoseToMessage(est));
+      bus_->PublishMessage("CAMERA_POSE", PoseToMessage(RingPoseEstimate(i, n, c.scale)));
       Drain();
     }
-    for (int i = 0; i <= n; ++i) {
-      CameraPoseEstimate est;
-      est.seq = i;
-      est.utime = std::llround(i * 1e6 / 30);
-      est.world_from_camera = scene_.RingPose(i, n);
-      est.status = PoseStatus::kTracking;
-      est.scale_source = c.scale;
-      bus_->PublishMessage("CAMERA_POSE_FINAL", PoseToMessage(est));
-    }
+    for (int i = 0; i <= n; ++i) bus_->PublishMessage("CAMERA_POSE_FINAL", PoseToMessage(RingPoseEstimate(i, n, c.scale)));
     bus_->PublishMessage("LANDMARKS", LandmarksMessage(points, n, 1000000));  // the pose solver's final map
     Drain();
     ::testing::internal::CaptureStderr();

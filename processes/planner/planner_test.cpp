@@ -56,6 +56,13 @@ PlannerOptions TestOptions() {
   return o;
 }
 
+// Where the room's target stands (mm, world); the origin when it has none.
+Eigen::Vector2d TargetXy(const toy::Room& room) {
+  for (const toy::Solid& s : room.solids)
+    if (s.is_target) return s.centre_mm;
+  return Eigen::Vector2d::Zero();
+}
+
 bool Verbose() { return std::getenv("PLANNER_TEST_VERBOSE") != nullptr; }
 
 // Called every frame after the planner's step (may change the world, e.g. force the finder to lose the target).
@@ -423,9 +430,7 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFr
   options.explore_budget_s = 200;
   options.map.free_support_mm = 250;  // the circle (<= 1.2 m) lies >= 350 mm inside the carpet: never free
   toy::Room room = toy::MakeLivingRoom(true);
-  Eigen::Vector2d target_xy = Eigen::Vector2d::Zero();
-  for (const toy::Solid& s : room.solids)
-    if (s.is_target) target_xy = s.centre_mm;
+  const Eigen::Vector2d target_xy = TargetXy(room);
   toy::Solid carpet;
   carpet.name = "plain_carpet";
   carpet.centre_mm = target_xy + Eigen::Vector2d(-100, 0);
@@ -461,9 +466,7 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFr
 TEST(PlannerClosedLoopTest, ABypassBackwardsRoundTheTargetCountsTheArcItSkips) {
   const PlannerOptions options = TestOptions();
   toy::Room room = toy::MakeLivingRoom(true);
-  Eigen::Vector2d target_xy = Eigen::Vector2d::Zero();
-  for (const toy::Solid& s : room.solids)
-    if (s.is_target) target_xy = s.centre_mm;
+  const Eigen::Vector2d target_xy = TargetXy(room);
   toy::Solid bench;
   bench.name = "bench";
   // From 250 mm north of the target's centre to the wall: no way past it on that side, inside or outside the circle.
