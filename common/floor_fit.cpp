@@ -17,6 +17,37 @@ namespace {
 
 double MinCosine(double max_tilt_deg) { return std::cos(max_tilt_deg * M_PI / 180.0); }
 
+// Indices in [0, n) from the chosen sequence (see SampleIndexSequence).
+class SampleIndices {
+ public:
+  SampleIndices(SampleIndexSequence sequence, uint64_t seed, size_t n)
+      : sequence_(sequence),
+        mt_(static_cast<uint32_t>(seed)),
+        uniform_(0, static_cast<int>(n) - 1),
+        lcg_(seed),
+        n_(n) {}
+
+  size_t Next() {
+    switch (sequence_) {
+      case SampleIndexSequence::kMt19937Uniform:
+        return static_cast<size_t>(uniform_(mt_));
+      case SampleIndexSequence::kLcg:
+        lcg_ = lcg_ * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<uint32_t>(lcg_ >> 33) % n_;
+      case SampleIndexSequence::kMt19937Modulo:
+        break;
+    }
+    return mt_() % n_;
+  }
+
+ private:
+  SampleIndexSequence sequence_;
+  std::mt19937 mt_;
+  std::uniform_int_distribution<int> uniform_;
+  uint64_t lcg_;
+  size_t n_;
+};
+
 }  // namespace
 
 PlaneSupport MostSupportedPlane(const std::vector<Eigen::Vector3d>& points, const PlaneSampling& sampling,
@@ -30,9 +61,9 @@ PlaneSupport MostSupportedPlane(const std::vector<Eigen::Vector3d>& points, cons
   const size_t n = points.size();
   if (n < 3) return best;
   const double min_cos = MinCosine(sampling.max_tilt_deg);
-  std::mt19937 rng(sampling.seed);
+  SampleIndices indices(sampling.sequence, sampling.seed, n);
   for (int it = 0; it < sampling.iterations; ++it) {
-    const size_t a = rng() % n, b = rng() % n, c = rng() % n;
+    const size_t a = indices.Next(), b = indices.Next(), c = indices.Next();
     if (a == b || b == c || a == c) continue;
     const Eigen::Vector3d& p = points[a];
     Eigen::Vector3d normal = (points[b] - p).cross(points[c] - p);

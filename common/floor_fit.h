@@ -5,9 +5,8 @@
 //   - processes/pose_solver/pose_estimator.cpp PoseEstimator::DetectFloor: the plane with the most landmarks and
 //     almost none beneath it, "up" taken from the odometry or from the cameras.
 // Units: mm. Frame: the points' frame (for the robot's world: z up, the floor near z = 0 but never assumed there).
-// LCM-free, Eigen only. Deterministic: hypotheses come from std::mt19937's raw output (defined by the standard, the
-// same on every platform) with the caller's seed; no timing, no global state. Never throws beyond std::bad_alloc;
-// points must be finite.
+// LCM-free, Eigen only. Deterministic: the samples come from a seeded generator (SampleIndexSequence), no timing, no
+// global state. Never throws beyond std::bad_alloc; points must be finite.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,12 +30,24 @@ struct FloorPlane {
   Eigen::Isometry3d FloorFromWorld() const;
 };
 
+// The generator of the sample indices (each in [0, n)). Every fitter keeps the sequence its results were measured
+// with: a new sequence is a new random draw, and on issue 27 the pose solver's floor was then missed on an image-only
+// test run (scale metric -> arbitrary) and the dense modeler's automatic region changed.
+enum class SampleIndexSequence {
+  kMt19937Modulo,   // std::mt19937(seed)() % n (object finder); the same on every platform
+  kMt19937Uniform,  // std::uniform_int_distribution<int>(0, n - 1) on std::mt19937(seed) (pose solver); the draws
+                    // depend on the standard library's distribution
+  kLcg,             // (state = state * 6364136223846793005 + 1442695040888963407, from seed) >> 33, % n (dense
+                    // modeler); the same on every platform
+};
+
 // How the 3-point plane hypotheses are drawn.
 struct PlaneSampling {
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // unit; hypotheses' normals are turned to this side
   double max_tilt_deg = 10.0;                     // deg, hypotheses whose normal is further from up are skipped
   int iterations = 400;                           // 3-point samples drawn (degenerate and tilted ones included)
-  uint32_t seed = 24;                             // std::mt19937 seed: the same input gives the same hypotheses
+  SampleIndexSequence sequence = SampleIndexSequence::kMt19937Modulo;
+  uint64_t seed = 24;  // the generator's seed (mt19937: its low 32 bits): the same input gives the same hypotheses
 };
 
 struct PlaneSupport {
@@ -44,7 +55,7 @@ struct PlaneSupport {
   int inliers = 0;  // points within the inlier distance of plane (0: no admissible hypothesis had any)
 };
 
-// RANSAC: draws sampling.iterations samples of 3 points (indices = mt19937() % points.size()); each sample of
+// RANSAC: draws sampling.iterations samples of 3 point indices from sampling.sequence; each sample of
 // distinct, non-collinear points whose normal lies within max_tilt_deg of up gives a hypothesis through them. The
 // result is the hypothesis with the most points within inlier_mm (the first on ties); `start` (may be null) is
 // scored first, as one more hypothesis; `admissible` (may be empty) rejects hypotheses before they are scored.

@@ -1,6 +1,5 @@
 #include "processes/dense_modeler/region_of_interest.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -17,15 +16,6 @@ double Median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
   return v[mid];
 }
-
-// Small deterministic generator (the same samples on every platform, unlike std::uniform_int_distribution).
-struct Lcg {
-  uint64_t state;
-  uint32_t Next() {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<uint32_t>(state >> 33);
-  }
-};
 
 }  // namespace
 
@@ -124,54 +114,27 @@ void CountCentralTracks(const PinholeCamera& camera, const std::vector<std::pair
 }
 
 bool FitFloorPlane(const std::vector<Eigen::Vector3d>& points, double tolerance, double max_tilt_deg, int min_points,
-                   int iterations, FloorPlane* plane) {
-  const int n = static_cast<int>(points.size());
-  if (n < std::max(3, min_points)) return false;
-  const double min_cos = std::cos(max_tilt_deg * kDegToRad);
-  Lcg rng{0x5eed0f100dULL};
-  int best_count = 0;
-  Eigen::Vector3d best_n = Eigen::Vector3d::UnitZ();
-  double best_d = 0;
-  for (int it = 0; it < iterations; ++it) {
-    const int i = static_cast<int>(rng.Next() % n), j = static_cast<int>(rng.Next() % n),
-              k = static_cast<int>(rng.Next() % n);
-    if (i == j || j == k || i == k) continue;
-    Eigen::Vector3d nrm = (points[j] - points[i]).cross(points[k] - points[i]);
-    const double len = nrm.norm();
-    if (!(len > 1e-9)) continue;
-    nrm /= len;
-    if (nrm.z() < 0) nrm = -nrm;
-    if (nrm.z() < min_cos) continue;
-    const double d = nrm.dot(points[i]);
-    int count = 0;
-    for (const Eigen::Vector3d& p : points) count += std::abs(nrm.dot(p) - d) <= tolerance;
-    if (count > best_count) best_count = count, best_n = nrm, best_d = d;
-  }
-  if (best_count < min_points) return false;
-  // Least-squares refit to the inliers (twice: the inlier set can change a little).
+                   int iterations, PlaneSupport* floor) {
+  if (static_cast<int>(points.size()) < std::max(3, min_points)) return false;
+  PlaneSampling sampling;
+  sampling.max_tilt_deg = max_tilt_deg;
+  sampling.iterations = iterations;
+  sampling.sequence = SampleIndexSequence::kLcg;
+  sampling.seed = 0x5eed0f100dULL;
+  PlaneSupport best = MostSupportedPlane(points, sampling, tolerance);
+  if (best.inliers < min_points) return false;
+  // Least-squares refit to the inliers (twice: the inlier set can change a little); a refit tilted too far is not
+  // taken.
   for (int pass = 0; pass < 2; ++pass) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (const Eigen::Vector3d& p : points)
-      if (std::abs(best_n.dot(p) - best_d) <= tolerance) mean += p, ++count;
-    if (count < 3) break;
-    mean /= count;
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const Eigen::Vector3d& p : points)
-      if (std::abs(best_n.dot(p) - best_d) <= tolerance) cov += (p - mean) * (p - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    Eigen::Vector3d nrm = eig.eigenvectors().col(0);
-    if (nrm.z() < 0) nrm = -nrm;
-    if (nrm.z() < min_cos) break;
-    best_n = nrm;
-    best_d = nrm.dot(mean);
+    FloorPlane refit = best.plane;
+    if (!RefitPlaneToInliers(points, tolerance, sampling.up, &refit) ||
+        !NormalWithinTilt(refit, sampling.up, max_tilt_deg))
+      break;
+    best.plane = refit;
   }
-  int count = 0;
-  for (const Eigen::Vector3d& p : points) count += std::abs(best_n.dot(p) - best_d) <= tolerance;
-  if (count < min_points) return false;
-  plane->normal = best_n;
-  plane->offset_mm = best_d;
-  plane->inliers = count;
+  best.inliers = CountPlaneInliers(points, best.plane, tolerance);
+  if (best.inliers < min_points) return false;
+  *floor = best;
   return true;
 }
 
@@ -180,13 +143,13 @@ int AddFloorNear(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vec
   std::vector<Eigen::Vector3d> local;
   for (const Eigen::Vector3d& p : landmarks)
     if (p.allFinite() && (p - centre).head<2>().norm() <= o.floor_radius_mm) local.push_back(p);
-  FloorPlane floor;
+  PlaneSupport floor;
   if (!FitFloorPlane(local, o.floor_tolerance_mm, o.max_floor_tilt_deg, o.min_floor_points, o.ransac_iterations,
                      &floor))
     return 0;
   region->has_floor = true;
-  region->floor_normal = floor.normal;
-  region->floor_offset_mm = floor.offset_mm;
+  region->floor_normal = floor.plane.normal;
+  region->floor_offset_mm = -floor.plane.offset_mm;  // the region's sign: height = normal.x - floor_offset_mm
   region->floor_clearance_mm = o.floor_clearance_mm;
   return floor.inliers;
 }

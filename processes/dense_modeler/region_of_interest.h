@@ -8,9 +8,9 @@
 //      occlusion-aware, unlike projecting landmarks);
 //   2. floor = the plane with the most landmarks within floor_tolerance_mm among the landmarks within floor_radius_mm
 //      (horizontally) of the central landmarks' median, normal within max_floor_tilt_deg of world +z (deterministic
-//      RANSAC + least-squares refit). The pose solver's world frame is z-up but its floor is only approximately
-//      z = 0 (6-DOF: odometry frame of the first posed frame; see processes/pose_solver/pose_estimator.h), so the
-//      plane is measured, never assumed;
+//      RANSAC + least-squares refit, common/floor_fit.h). The pose solver's world frame is z-up but its floor is
+//      only approximately z = 0 (6-DOF: odometry frame of the first posed frame; see
+//      processes/pose_solver/pose_estimator.h), so the plane is measured, never assumed;
 //   3. central landmarks less than floor_clearance_mm above the floor are dropped; the rest are clustered robustly
 //      (distance to their coordinate-wise median <= cluster_k x the median distance);
 //   4. box = bounding box of the cluster, grown on every side by max(margin_mm, margin_fraction x its extent).
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "common/camera_model.h"
+#include "common/floor_fit.h"
 #include "common/geometry.h"
 
 namespace objscan {
@@ -37,6 +38,7 @@ struct RegionOfInterest {
   bool has_floor = false;                                   // the floor half-space applies
   Eigen::Vector3d floor_normal = Eigen::Vector3d::UnitZ();  // unit, world, pointing up (away from the floor)
   double floor_offset_mm = 0.0;                             // mm, height of x above the floor = normal·x - offset
+                                                            // (the opposite sign of FloorPlane::offset_mm)
   double floor_clearance_mm = 0.0;                          // mm, points lower than this above the floor are outside
 
   // Height of x above the floor (mm; +infinity when there is no floor).
@@ -87,16 +89,14 @@ bool ValidateAutoRoiOptions(const AutoRoiOptions& options, std::string* why);
 void CountCentralTracks(const PinholeCamera& camera, const std::vector<std::pair<int64_t, Eigen::Vector2d>>& tracks,
                         double central_fraction, std::unordered_map<int64_t, int>* counts);
 
-// Floor plane among points: normal (unit, +z side), offset (normal·x = offset on the plane), inlier count.
-struct FloorPlane {
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-  double offset_mm = 0.0;
-  int inliers = 0;
-};
-// Deterministic RANSAC for the plane with the most points within tolerance_mm whose normal is within
-// max_tilt_deg of +z, refitted by least squares to its inliers. False when fewer than min_points inliers.
+// The dense modeler's floor policy: the plane with the most points. Deterministic RANSAC (common/floor_fit.h
+// MostSupportedPlane: `iterations` 3-point samples, LCG sequence, fixed seed) for the plane with the most points (mm, world)
+// within tolerance_mm whose normal is within max_tilt_deg of +z, refitted twice by total least squares to its
+// inliers (a refit tilted more than max_tilt_deg is not taken). False (*floor unchanged) when fewer than min_points
+// inliers. floor->plane uses common/floor_fit.h's sign (height = normal.x + offset_mm), the opposite of
+// RegionOfInterest::floor_offset_mm.
 bool FitFloorPlane(const std::vector<Eigen::Vector3d>& points, double tolerance_mm, double max_tilt_deg, int min_points,
-                   int iterations, FloorPlane* plane);
+                   int iterations, PlaneSupport* floor);
 
 // Fits the floor (FitFloorPlane with the options' floor settings) to the landmarks within floor_radius_mm
 // (horizontally) of centre and, when found, sets the floor half-space of *region (clearance floor_clearance_mm).

@@ -127,18 +127,18 @@ TEST(RegionOfInterestTest, FloorPlaneRejectsSteepPlanesAndIsDeterministic) {
       wall.emplace_back(10.0 * i, 500.0, 50.0 + 10.0 * j);    // vertical plane
       floor.emplace_back(10.0 * i, 10.0 * j, 3.0 + 0.1 * i);  // tilted floor: slope 0.01
     }
-  FloorPlane plane;
-  EXPECT_FALSE(FitFloorPlane(wall, 2.0, 20.0, 30, 200, &plane));
+  PlaneSupport floor_fit;
+  EXPECT_FALSE(FitFloorPlane(wall, 2.0, 20.0, 30, 200, &floor_fit));
   std::vector<Eigen::Vector3d> both = wall;
   both.insert(both.end(), floor.begin(), floor.end());
-  ASSERT_TRUE(FitFloorPlane(both, 2.0, 20.0, 30, 200, &plane));
-  EXPECT_EQ(plane.inliers, 400);
-  EXPECT_NEAR(plane.normal.x(), -0.01, 1e-6);
-  EXPECT_NEAR(plane.offset_mm / plane.normal.z(), 3.0, 1e-6);
-  FloorPlane again;
+  ASSERT_TRUE(FitFloorPlane(both, 2.0, 20.0, 30, 200, &floor_fit));
+  EXPECT_EQ(floor_fit.inliers, 400);
+  EXPECT_NEAR(floor_fit.plane.normal.x(), -0.01, 1e-6);
+  EXPECT_NEAR(-floor_fit.plane.offset_mm / floor_fit.plane.normal.z(), 3.0, 1e-6);  // z = 3 + 0.01 x
+  PlaneSupport again;
   ASSERT_TRUE(FitFloorPlane(both, 2.0, 20.0, 30, 200, &again));
-  EXPECT_EQ(again.normal, plane.normal);
-  EXPECT_EQ(again.offset_mm, plane.offset_mm);
+  EXPECT_EQ(again.plane.normal, floor_fit.plane.normal);
+  EXPECT_EQ(again.plane.offset_mm, floor_fit.plane.offset_mm);
 }
 
 TEST(RegionOfInterestTest, CentralWindowCountsOnlyTracksNearThePrincipalPoint) {
