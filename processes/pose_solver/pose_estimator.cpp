@@ -7,7 +7,6 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
-#include <random>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -16,6 +15,7 @@
 
 #include <ctime>
 
+#include "common/floor_fit.h"
 #include "common/geometry.h"
 #include "common/point_grid.h"
 
@@ -560,11 +560,11 @@ void PoseEstimator::LevelAndScaleSpanByFloor(int first, int last, const std::vec
   }
   if (options_.model == MotionModel::kFourDof) {
     std::vector<int64_t> floor_ids;
-    Eigen::Vector4d plane;
+    FloorPlane plane;
     if (options_.use_floor_for_scale && DetectFloor(new_points, &floor_ids, &plane)) {
       // Level: plane normal -> +z, plane -> z = 0.
-      Eigen::Vector3d n = plane.head<3>();
-      double d = plane(3);
+      Eigen::Vector3d n = plane.normal;
+      double d = plane.offset_mm;
       if (n.dot(frames_[first].world_from_camera.translation()) + d < 0) {
         n = -n;
         d = -d;
@@ -762,7 +762,7 @@ constexpr double kMaxLateFloorRescale = 1.5;
 constexpr double kMaxBelowFloorFraction = 0.05;
 
 bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
-                                Eigen::Vector4d* plane) const {
+                                FloorPlane* plane) const {
   std::vector<int64_t> ids;
   std::vector<Eigen::Vector3d> xs;
   for (int64_t id : candidates) {
@@ -788,50 +788,26 @@ bool PoseEstimator::DetectFloor(const std::vector<int64_t>& candidates, std::vec
     up = sum.normalized();
     max_angle_deg = 70.0;
   }
-  std::mt19937 rng(static_cast<uint32_t>(options_.seed));
-  std::uniform_int_distribution<int> pick(0, n - 1);
-  int best_count = 0;
-  Eigen::Vector4d best(0, 0, 1, 0);
-  const double cos_max = std::cos(max_angle_deg * M_PI / 180.0);
-  for (int it = 0; it < 300; ++it) {
-    const int i = pick(rng), j = pick(rng), k = pick(rng);
-    Eigen::Vector3d nrm = (xs[j] - xs[i]).cross(xs[k] - xs[i]);
-    if (nrm.norm() < 1e-9) continue;
-    nrm.normalize();
-    if (std::abs(nrm.dot(up)) < cos_max) continue;
-    if (nrm.dot(up) < 0) nrm = -nrm;  // up
-    const double d = -nrm.dot(xs[i]);
-    int count = 0, below = 0;
-    for (const auto& x : xs) {
-      const double h = nrm.dot(x) + d;
-      count += std::abs(h) < options_.floor_tolerance_mm ? 1 : 0;
-      below += h < -3 * options_.floor_tolerance_mm ? 1 : 0;
-    }
-    // The floor has (almost) nothing beneath it: a flat patch higher up (the top of an object, a table) has the
-    // floor and the object's sides below it (a restart's span on a sphere took its top cap for the floor).
-    if (below > kMaxBelowFloorFraction * n) continue;
-    if (count > best_count) {
-      best_count = count;
-      best << nrm, d;
-    }
-  }
-  if (best_count < options_.min_floor_points) return false;
-  // Least-squares refit on the inliers.
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  std::vector<int> in;
-  for (int i = 0; i < n; ++i)
-    if (std::abs(best.head<3>().dot(xs[i]) + best(3)) < options_.floor_tolerance_mm) {
-      in.push_back(i);
-      centroid += xs[i];
-    }
-  centroid /= static_cast<double>(in.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (int i : in) cov += (xs[i] - centroid) * (xs[i] - centroid).transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  Eigen::Vector3d nrm = eig.eigenvectors().col(0);
-  *plane << nrm, -nrm.dot(centroid);
+  PlaneSampling sampling;
+  sampling.up = up;
+  sampling.max_tilt_deg = max_angle_deg;
+  sampling.iterations = 300;
+  sampling.sequence = SampleIndexSequence::kMt19937Uniform;
+  sampling.seed = static_cast<uint32_t>(options_.seed);
+  const double tolerance = options_.floor_tolerance_mm;
+  // The floor has (almost) nothing beneath it: a flat patch higher up (the top of an object, a table) has the
+  // floor and the object's sides below it (a restart's span on a sphere took its top cap for the floor).
+  const auto nothing_beneath = [&](const FloorPlane& hypothesis) {
+    return CountPointsBelow(xs, hypothesis, 3 * tolerance) <= kMaxBelowFloorFraction * n;
+  };
+  const PlaneSupport best = MostSupportedPlane(xs, sampling, tolerance, nullptr, nothing_beneath);
+  if (best.inliers < options_.min_floor_points) return false;
   inlier_ids->clear();
-  for (int i : in) inlier_ids->push_back(ids[i]);
+  for (int i = 0; i < n; ++i)
+    if (std::abs(best.plane.Height(xs[i])) <= tolerance) inlier_ids->push_back(ids[i]);
+  // Least-squares refit on the inliers (at least min_floor_points of them).
+  *plane = best.plane;
+  RefitPlaneToInliers(xs, tolerance, up, plane);
   return true;
 }
 
@@ -1711,11 +1687,11 @@ bool PoseEstimator::RescaleToFloorHeight(int first_frame, int last_frame, const 
                                          int pivot_frame, double* applied_scale, double max_factor, double min_change) {
   if (pivot_frame < 0 || !frames_[pivot_frame].posed) return false;
   std::vector<int64_t> floor_ids;
-  Eigen::Vector4d plane;
+  FloorPlane plane;
   if (!DetectFloor(point_ids, &floor_ids, &plane)) return false;
   const Eigen::Vector3d c0 = frames_[pivot_frame].world_from_camera.translation();
-  Eigen::Vector3d n = plane.head<3>();
-  double d = plane(3);
+  Eigen::Vector3d n = plane.normal;
+  double d = plane.offset_mm;
   if (n.dot(c0) + d < 0) {
     n = -n;
     d = -d;

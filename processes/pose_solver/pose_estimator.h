@@ -72,6 +72,7 @@
 #include <vector>
 
 #include "common/camera_model.h"
+#include "common/floor_fit.h"
 #include "common/robot_model.h"
 #include "common/sensor_data.h"
 #include "processes/pose_solver/bundle_adjustment.h"
@@ -403,8 +404,13 @@ class PoseEstimator {
   bool OdometryStepScale(int first_frame, int last_frame, double* scale) const;
   void RescaleSixDof(int first_frame);
   void PruneLandmarks(const std::vector<int64_t>& ids, const std::vector<int>& frames);
-  bool DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids,
-                   Eigen::Vector4d* plane) const;
+  // The pose solver's floor policy among the candidates' landmarks: the plane with the most landmarks within
+  // floor_tolerance_mm and at most 5 % of them more than 3 tolerances beneath it (a table or an object's top has the
+  // floor below it). Up = world +z (max tilt 20 deg) with odometry, else the posed cameras' mean image-up (70 deg).
+  // RANSAC (common/floor_fit.h MostSupportedPlane: 300 samples, mt19937-uniform sequence, seed options_.seed), inlier_ids = the winning
+  // hypothesis's inliers, *plane its total-least-squares refit (mm, world; Height = normal.x + offset_mm, normal on
+  // up's side). False (outputs unspecified) with fewer than min_floor_points inliers. Deterministic.
+  bool DetectFloor(const std::vector<int64_t>& candidates, std::vector<int64_t>* inlier_ids, FloorPlane* plane) const;
   void ApplySimilarity(double scale, const Eigen::Isometry3d& world_new_from_old, int first_frame, int last_frame,
                        const std::vector<int64_t>& point_ids);
   CameraPoseEstimate Estimate(int f) const;
