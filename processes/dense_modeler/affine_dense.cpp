@@ -1129,7 +1129,7 @@ bool NccAccepted(const PairInputs& in, const TrianglePrediction& tri, const Wind
   // high), P is ambiguous and dropped.
   if (junction && o.junction_floor_ncc_margin >= 0) {
     const Eigen::Vector3d ray = (in.g.rwa * na.homogeneous()).normalized();
-    const double along = o.region.floor_normal.dot(ray);
+    const double along = o.region.floor.normal.dot(ray);
     if (along < -1e-9) {
       const Eigen::Vector3d& center_a = in.g.center_a;
       const Eigen::Vector3d x_floor = center_a - (o.region.HeightAboveFloor(center_a) / along) * ray;

@@ -94,7 +94,7 @@ FinalModel BuildFinalModel(const VoxelVoteGrid& grid, const std::vector<CarvingV
     std::vector<SurfaceVoxel> kept;
     kept.reserve(surface.size());
     for (const SurfaceVoxel& s : surface) {
-      const double height = region.HeightAboveFloor(s.point_in_world), up = s.normal.dot(region.floor_normal);
+      const double height = region.HeightAboveFloor(s.point_in_world), up = s.normal.dot(region.floor.normal);
       if (height < o.floor_band_mm && up >= min_up_cos)
         ++model.floor_band_dropped;
       else if (height < o.crevice_band_mm && up <= max_down_cos)

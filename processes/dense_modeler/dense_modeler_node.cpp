@@ -730,8 +730,7 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
   if (landmarks_final_ && options_.roi.detect_floor) {
     RegionOfInterest refit = moved_region;  // region_'s (final) floor, unless one is found around the moved box
     refit.has_floor = region_.has_floor;
-    refit.floor_normal = region_.floor_normal;
-    refit.floor_offset_mm = region_.floor_offset_mm;
+    refit.floor = region_.floor;
     const Eigen::Vector3d moved_centre = 0.5 * (moved_region.box_min + moved_region.box_max);
     const int inliers = AddFloorNear(landmark_points_, moved_centre, options_.roi, &refit);
     refit.floor_clearance_mm = region_.floor_clearance_mm;
@@ -947,8 +946,8 @@ std::string DenseModelerNode::CheckMapConsistency() {
   const Eigen::Vector3d centre = 0.5 * (region_.box_min + region_.box_max);
   const double half_diagonal = 0.5 * (region_.box_max - region_.box_min).head<2>().norm();
   const FloorThicknessOptions options;
-  const FloorThickness floor = MeasureFloorThickness(landmark_points_, centre, region_.floor_normal,
-                                                     region_.floor_offset_mm, half_diagonal, options);
+  const FloorThickness floor =
+      MeasureFloorThickness(landmark_points_, centre, region_.floor, half_diagonal, options);
   status_.SetValue("final_floor_points", floor.points);
   if (!floor.measured) {
     LogInfo("map consistency: not measured (" + std::to_string(floor.points) +
@@ -983,7 +982,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     r << "region of interest (source " << region_source_ << "): box [" << region_.box_min.transpose() << "] .. ["
       << region_.box_max.transpose() << "] mm";
     if (region_.has_floor)
-      r << ", floor normal [" << region_.floor_normal.transpose() << "] offset " << region_.floor_offset_mm << " mm";
+      r << ", floor normal [" << region_.floor.normal.transpose() << "] offset " << region_.floor.offset_mm
+        << " mm (height = normal.x + offset)";
     LogInfo(r.str());
   } else {
     LogWarning("no region of interest: the model is not restricted");

@@ -16,18 +16,18 @@ double Percentile(std::vector<double>* values, double fraction) {
 }  // namespace
 
 FloorThickness MeasureFloorThickness(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vector3d& centre,
-                                     const Eigen::Vector3d& floor_normal, double floor_offset_mm,
+                                     const FloorPlane& floor,
                                      double min_inner_radius_mm, const FloorThicknessOptions& options) {
   FloorThickness result;
   result.inner_radius_mm = std::max(options.inner_radius_mm, min_inner_radius_mm);
   const double outer = result.inner_radius_mm + options.ring_width_mm;
-  if (!centre.allFinite() || !floor_normal.allFinite() || !std::isfinite(floor_offset_mm)) return result;
+  if (!centre.allFinite() || !floor.normal.allFinite() || !std::isfinite(floor.offset_mm)) return result;
   std::vector<double> heights;
   for (const Eigen::Vector3d& p : landmarks) {
     if (!p.allFinite()) continue;
     const double r = (p - centre).head<2>().norm();
     if (r < result.inner_radius_mm || r > outer) continue;
-    const double h = floor_normal.dot(p) - floor_offset_mm;
+    const double h = floor.Height(p);
     if (std::abs(h) <= options.band_mm) heights.push_back(h);
   }
   result.points = static_cast<int>(heights.size());

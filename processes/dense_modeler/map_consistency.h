@@ -12,6 +12,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "common/floor_fit.h"
+
 namespace objscan {
 
 struct FloorThicknessOptions {
@@ -34,10 +36,10 @@ struct FloorThickness {
 };
 
 // Floor landmarks (world, mm; non-finite ones skipped) in the horizontal ring [inner, inner + width] around centre,
-// with |height| <= band_mm above the plane normal . x = floor_offset_mm (unit normal pointing up); inner is
+// with |floor.Height(x)| <= band_mm (common/floor_fit.h: unit normal pointing up); inner is
 // max(options.inner_radius_mm, min_inner_radius_mm). Percentiles by nth_element (deterministic). O(landmarks).
 FloorThickness MeasureFloorThickness(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vector3d& centre,
-                                     const Eigen::Vector3d& floor_normal, double floor_offset_mm,
+                                     const FloorPlane& floor,
                                      double min_inner_radius_mm, const FloorThicknessOptions& options);
 
 }  // namespace objscan

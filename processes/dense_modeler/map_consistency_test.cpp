@@ -9,6 +9,12 @@
 namespace objscan {
 namespace {
 
+FloorPlane Plane(const Eigen::Vector3d& normal) {  // through the origin
+  FloorPlane plane;
+  plane.normal = normal;
+  return plane;
+}
+
 // Floor landmarks on a disc of 800 mm around centre: height = layer offset + N(0, sigma) above the plane z = 0
 // tilted by the given normal; plus the target's own points (a 100 mm-radius column up to 200 mm) that must not count.
 std::vector<Eigen::Vector3d> Floor(const Eigen::Vector3d& centre, const Eigen::Vector3d& normal, double sigma_mm,
@@ -36,14 +42,14 @@ TEST(FloorThickness, AThinFloorIsThinAndTwoLayersAreThick) {
   const FloorThicknessOptions options;
   // One layer, 0.5 mm noise: p90 - p10 = 2 x 1.28 sigma = 1.3 mm.
   const FloorThickness thin =
-      MeasureFloorThickness(Floor(centre, normal, 0.5, {0.0}, 4000, 1), centre, normal, 0.0, 0.0, options);
+      MeasureFloorThickness(Floor(centre, normal, 0.5, {0.0}, 4000, 1), centre, Plane(normal), 0.0, options);
   ASSERT_TRUE(thin.measured);
   EXPECT_NEAR(thin.thickness_mm(), 1.28, 0.2);
   EXPECT_NEAR(thin.p50_mm, 0.0, 0.1);
   EXPECT_LT(thin.thickness_mm(), options.max_thickness_mm);
   // Two passes 8 mm apart (room_09's rerun: 9.0 mm): thick.
   const FloorThickness two =
-      MeasureFloorThickness(Floor(centre, normal, 0.5, {0.0, 8.0}, 4000, 2), centre, normal, 0.0, 0.0, options);
+      MeasureFloorThickness(Floor(centre, normal, 0.5, {0.0, 8.0}, 4000, 2), centre, Plane(normal), 0.0, options);
   ASSERT_TRUE(two.measured);
   EXPECT_NEAR(two.thickness_mm(), 8.0 + 2 * 0.84 * 0.5, 0.3);  // p10 and p90: the 20th / 80th of each layer
   EXPECT_GT(two.thickness_mm(), options.max_thickness_mm);
@@ -57,23 +63,23 @@ TEST(FloorThickness, TheRingStartsOutsideTheTargetAndFewPointsAreNotJudged) {
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   FloorThicknessOptions options;
   const std::vector<Eigen::Vector3d> floor = Floor(centre, up, 0.5, {0.0}, 4000, 3);
-  const FloorThickness wide = MeasureFloorThickness(floor, centre, up, 0.0, 300.0, options);  // a big target
+  const FloorThickness wide = MeasureFloorThickness(floor, centre, Plane(up), 300.0, options);  // a big target
   EXPECT_DOUBLE_EQ(wide.inner_radius_mm, 300.0);
-  const FloorThickness narrow = MeasureFloorThickness(floor, centre, up, 0.0, 0.0, options);
+  const FloorThickness narrow = MeasureFloorThickness(floor, centre, Plane(up), 0.0, options);
   EXPECT_DOUBLE_EQ(narrow.inner_radius_mm, 150.0);
   EXPECT_NE(wide.points, narrow.points);
   options.min_points = 100000;
-  const FloorThickness few = MeasureFloorThickness(floor, centre, up, 0.0, 0.0, options);
+  const FloorThickness few = MeasureFloorThickness(floor, centre, Plane(up), 0.0, options);
   EXPECT_FALSE(few.measured);
   EXPECT_GT(few.points, 0);
   // Bad input: nothing measured, no crash.
   std::vector<Eigen::Vector3d> with_nan = floor;
   with_nan.push_back(Eigen::Vector3d::Constant(std::nan("")));
-  EXPECT_TRUE(MeasureFloorThickness(with_nan, centre, up, 0.0, 0.0, FloorThicknessOptions()).measured);
+  EXPECT_TRUE(MeasureFloorThickness(with_nan, centre, Plane(up), 0.0, FloorThicknessOptions()).measured);
   EXPECT_FALSE(
-      MeasureFloorThickness(floor, Eigen::Vector3d::Constant(std::nan("")), up, 0.0, 0.0, FloorThicknessOptions())
+      MeasureFloorThickness(floor, Eigen::Vector3d::Constant(std::nan("")), Plane(up), 0.0, FloorThicknessOptions())
           .measured);
-  EXPECT_FALSE(MeasureFloorThickness({}, centre, up, 0.0, 0.0, FloorThicknessOptions()).measured);
+  EXPECT_FALSE(MeasureFloorThickness({}, centre, Plane(up), 0.0, FloorThicknessOptions()).measured);
 }
 
 }  // namespace

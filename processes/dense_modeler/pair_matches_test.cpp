@@ -220,11 +220,11 @@ TEST(PairMatches, CornersAmongFloorTracksAreNotMatched) {
       testing_scene::FloorRegion(Eigen::Vector3d(-1000, -1000, -1000), Eigen::Vector3d(1000, 1000, 1000));
   PairMatchStats none, all, no_region;
   AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), RegionOfInterest(), o, &no_region);
-  region.floor_offset_mm = -1000;  // the floor far below: no tracked feature is on it
+  region.floor.offset_mm = 1000;  // the floor z = -1000 mm, far below: no tracked feature is on it
   AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), region, o, &none);
   EXPECT_EQ(none.skipped_floor, 0);
   EXPECT_EQ(none.added, no_region.added);
-  region.floor_offset_mm = 300;  // a "floor" above the whole sphere: every tracked feature is under it
+  region.floor.offset_mm = -300;  // a "floor" z = 300 mm above the whole sphere: every tracked feature is under it
   const std::vector<PointMatch> added = AddPairMatches(d.a, d.b, d.tracked, cv::Rect(), region, o, &all);
   EXPECT_TRUE(added.empty());
   EXPECT_EQ(all.skipped_floor, all.corners);

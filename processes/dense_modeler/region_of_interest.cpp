@@ -21,7 +21,7 @@ double Median(std::vector<double> v) {
 
 double RegionOfInterest::HeightAboveFloor(const Eigen::Vector3d& x) const {
   if (!has_floor) return std::numeric_limits<double>::infinity();
-  return floor_normal.dot(x) - floor_offset_mm;
+  return floor.Height(x);
 }
 
 bool RegionOfInterest::Contains(const Eigen::Vector3d& x) const {
@@ -148,8 +148,7 @@ int AddFloorNear(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vec
                      &floor))
     return 0;
   region->has_floor = true;
-  region->floor_normal = floor.plane.normal;
-  region->floor_offset_mm = -floor.plane.offset_mm;  // the region's sign: height = normal.x - floor_offset_mm
+  region->floor = floor.plane;
   region->floor_clearance_mm = o.floor_clearance_mm;
   return floor.inliers;
 }
@@ -273,9 +272,9 @@ RegionOfInterest TransformRegion(const RegionOfInterest& region, const Sim3& sim
   }
   out.box_min = lo;
   out.box_max = hi;
-  if (region.has_floor) {  // n'.x' = s n.x + n'.t: heights scale by s
-    out.floor_normal = (sim.rotation * region.floor_normal).normalized();
-    out.floor_offset_mm = sim.scale * region.floor_offset_mm + out.floor_normal.dot(sim.translation);
+  if (region.has_floor) {  // n'.x' + o' = s (n.x + o) with x' = s R x + t, n' = R n: o' = s o - n'.t
+    out.floor.normal = (sim.rotation * region.floor.normal).normalized();
+    out.floor.offset_mm = sim.scale * region.floor.offset_mm - out.floor.normal.dot(sim.translation);
     out.floor_clearance_mm = sim.scale * region.floor_clearance_mm;
   }
   return out;

@@ -36,8 +36,7 @@ struct RegionOfInterest {
   Eigen::Vector3d box_min = Eigen::Vector3d::Zero();        // mm, world
   Eigen::Vector3d box_max = Eigen::Vector3d::Zero();        // mm, world
   bool has_floor = false;                                   // the floor half-space applies
-  Eigen::Vector3d floor_normal = Eigen::Vector3d::UnitZ();  // unit, world, pointing up (away from the floor)
-  double floor_offset_mm = 0.0;                             // mm, height of x above the floor = normal·x - offset
+  FloorPlane floor;                                         // world: height of x = floor.Height(x), mm, up > 0
                                                             // (the opposite sign of FloorPlane::offset_mm)
   double floor_clearance_mm = 0.0;                          // mm, points lower than this above the floor are outside
 
@@ -93,8 +92,7 @@ void CountCentralTracks(const PinholeCamera& camera, const std::vector<std::pair
 // MostSupportedPlane: `iterations` 3-point samples, LCG sequence, fixed seed) for the plane with the most points (mm, world)
 // within tolerance_mm whose normal is within max_tilt_deg of +z, refitted twice by total least squares to its
 // inliers (a refit tilted more than max_tilt_deg is not taken). False (*floor unchanged) when fewer than min_points
-// inliers. floor->plane uses common/floor_fit.h's sign (height = normal.x + offset_mm), the opposite of
-// RegionOfInterest::floor_offset_mm.
+// inliers. floor->plane: common/floor_fit.h's FloorPlane, as RegionOfInterest::floor.
 bool FitFloorPlane(const std::vector<Eigen::Vector3d>& points, double tolerance_mm, double max_tilt_deg, int min_points,
                    int iterations, PlaneSupport* floor);
 

@@ -76,8 +76,8 @@ TEST(RegionOfInterestTest, AutoRegionHoldsTheSphereAndCutsTheTiltedFloor) {
   ASSERT_TRUE(roi.has_floor);
   EXPECT_GT(stats.floor_inliers, 150);  // ~190 floor landmarks lie within floor_radius_mm
   // The measured floor is the true (tilted, offset) one.
-  EXPECT_GT(roi.floor_normal.dot(s.floor_normal), std::cos(0.2 * M_PI / 180.0));
-  EXPECT_NEAR(roi.floor_offset_mm, s.floor_offset, 0.5);
+  EXPECT_GT(roi.floor.normal.dot(s.floor_normal), std::cos(0.2 * M_PI / 180.0));
+  EXPECT_NEAR(roi.floor.offset_mm, -s.floor_offset, 0.5);  // the scene's plane: normal.x = floor_offset
   // Every sphere point at least the clearance above the floor is inside; the box is not much larger than the
   // sphere (3 wild points were clustered away) and every floor landmark is outside.
   int sphere_inside = 0, sphere_high = 0;
@@ -208,8 +208,8 @@ TEST(RegionOfInterestTest, FloorJunctionTriangles) {
   const Eigen::Vector3d floor(0, 0, 1), low(10, 0, 3), high(0, 10, 40), higher(5, 5, 60);
   EXPECT_FALSE(r.TriangleSpansFloorJunction(low, high, higher));  // no floor known
   r.has_floor = true;
-  r.floor_normal = Eigen::Vector3d::UnitZ();
-  r.floor_offset_mm = 0;
+  r.floor.normal = Eigen::Vector3d::UnitZ();
+  r.floor.offset_mm = 0;
   r.floor_clearance_mm = 10;
   EXPECT_TRUE(r.TriangleSpansFloorJunction(floor, high, higher));  // floor vertex + object vertices
   EXPECT_TRUE(r.TriangleSpansFloorJunction(high, low, higher));    // order does not matter
@@ -237,8 +237,8 @@ TEST(RegionOfInterestTest, TransformRegionCarriesBoxAndFloor) {
   r.box_min = Eigen::Vector3d(-100, -50, -10);
   r.box_max = Eigen::Vector3d(100, 50, 200);
   r.has_floor = true;
-  r.floor_normal = Eigen::Vector3d(0.05, 0, 1).normalized();
-  r.floor_offset_mm = 4;
+  r.floor.normal = Eigen::Vector3d(0.05, 0, 1).normalized();
+  r.floor.offset_mm = -4;
   r.floor_clearance_mm = 3;
   Sim3 sim;
   sim.scale = 1.2;

@@ -53,8 +53,8 @@ inline RegionOfInterest FloorRegion(const Eigen::Vector3d& box_min, const Eigen:
   r.box_min = box_min;
   r.box_max = box_max;
   r.has_floor = true;
-  r.floor_normal = Eigen::Vector3d::UnitZ();
-  r.floor_offset_mm = floor_offset_mm;
+  r.floor.normal = Eigen::Vector3d::UnitZ();
+  r.floor.offset_mm = -floor_offset_mm;  // the floor z = floor_offset_mm
   r.floor_clearance_mm = clearance_mm;
   return r;
 }
