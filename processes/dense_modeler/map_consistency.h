@@ -3,10 +3,10 @@
 // drift between the exploration and the orbit) the floor around the target comes out as two or more layers some
 // millimetres apart, and the model built from those poses is distorted too. LCM-free.
 //
-// Measured on the simulator's rooms (final map, the final region's floor; docs/benchmarks.md): the floor's thickness
-// (p90 - p10 of the floor landmarks' heights, 150-600 mm from the target) was 1.2-3.4 mm in the 14 runs whose model
-// held (mesh p90 0.55-2.3 mm on its own frames) and 5.8-26.5 mm in the 9 runs with a distorted or failed model
-// (room_05 three times, room_10 twice, room_04 twice, room_09 once: mesh p90 7.6-30 mm or completeness 1-44 %).
+// Measured on 25 stored room runs (final map, the final region's floor; docs/benchmarks.md): the floor's thickness
+// (p90 - p10 of the floor landmarks' heights, 150-650 mm from the target) was above 5 mm in 11 runs, all with a
+// distorted or failed model (5.8-26.5 mm; mesh p90 3-30 mm or completeness 1-79 %), and 1.2-4.7 mm in 14 runs, 12 of
+// them with a model that held (2 not caught: a map bent away from the target, an older floor-ring bug).
 #pragma once
 
 #include <Eigen/Core>
