@@ -297,6 +297,7 @@ void Planner::EnterPhase(Phase phase, const std::string& why) {
   phase_ = phase;
   last_phase_reason_ = why;
   follower_.Clear();
+  approach_exploring_since_ = -1;
   if (phase == Phase::kExplore && from == Phase::kExplore)
     Event(std::string("phase ") + PhaseName(phase) + ": " + why);
   else
@@ -892,11 +893,12 @@ Planner::Motion Planner::Approach() {
     EnterPhase(Phase::kOrbit, "on the orbit circle (" + std::to_string(static_cast<int>(d)) + " mm from the target)");
     return Orbit();
   }
-  if (PhaseSeconds() >= options_.approach_budget_s) {
-    char why[200];
+  if (approach_exploring_since_ >= 0 &&
+      now_ - approach_exploring_since_ >= static_cast<int64_t>(options_.approach_budget_s * kSecond)) {
+    char why[220];
     std::snprintf(why, sizeof(why),
-                  "the orbit circle was not reached in %.0f s (its floor is not free in the map: not seen, "
-                  "untextured or blocked; try another --radius)",
+                  "the orbit circle was not reachable for %.0f s of exploring (its floor is not free in the map: not "
+                  "seen, untextured or blocked; try another --radius)",
                   options_.approach_budget_s);
     EnterPhase(Phase::kNextViews, why);
     return NextViews();
@@ -908,10 +910,16 @@ Planner::Motion Planner::Approach() {
     next_replan_ = now_ + kReplanUs;
     blocked_since_ = -1;
     approach_to_circle_ = PlanToOrbit();
-    if (!approach_to_circle_) {
+    if (approach_to_circle_) {
+      approach_exploring_since_ = -1;
+    } else {
       if (!ChooseFrontier()) {
         EnterPhase(Phase::kNextViews, "the orbit circle is not reachable and nothing is left to explore");
         return NextViews();
+      }
+      if (approach_exploring_since_ < 0) {
+        approach_exploring_since_ = now_;
+        Event("approach: the orbit circle is not reachable yet: exploring frontiers");
       }
       activity_ = "approach: circle not reachable yet, exploring";
     }
@@ -922,6 +930,7 @@ Planner::Motion Planner::Approach() {
 // ---------------------------------------------------------------- ORBIT
 
 bool Planner::StartBypass(double azimuth) {
+  if (orbit_bypass_) SettleBypassProgress(false);  // replaced on the way: its progress counts before the repeat test
   cost_field_.Compute(map_, base_.position());
   const Eigen::Vector2d c = TargetCentre().head<2>();
   const double r = options_.orbit_radius_mm;
@@ -953,21 +962,20 @@ bool Planner::StartBypass(double azimuth) {
     bypass_deadline_ =
         now_ + static_cast<int64_t>((2 * PathLength(path) / options_.orbit_speed_mm_s + 15) * kSecond);
     follower_.SetPath(std::move(path));
-    if (orbit_bypass_) SettleBypassProgress(azimuth, false);  // replaced on the way
     orbit_bypass_ = true;
     bypass_skip_rad_ = delta;
-    bypass_start_azimuth_ = azimuth;
+    bypass_travelled_rad_ = 0;
     Event("orbit: circle blocked ahead, bypass to " + Mm(goal));
     return true;
   }
   return false;
 }
 
-void Planner::SettleBypassProgress(double azimuth, bool reached) {
+void Planner::SettleBypassProgress(bool reached) {
   if (bypass_skip_rad_ < 0) return;
-  orbit_progress_ += reached ? bypass_skip_rad_ : WrapAngle(azimuth - bypass_start_azimuth_);
-  orbit_last_azimuth_ = azimuth;
+  orbit_progress_ += reached ? bypass_skip_rad_ : bypass_travelled_rad_;
   bypass_skip_rad_ = -1;
+  bypass_travelled_rad_ = 0;
 }
 
 bool Planner::TargetHidden() const {
@@ -1022,7 +1030,9 @@ Planner::Motion Planner::Orbit() {
     orbit_progress_ = 0;
     orbit_radius_set_ = options_.orbit_radius_mm;
   }
-  if (!orbit_bypass_ || bypass_skip_rad_ < 0) orbit_progress_ += WrapAngle(azimuth - orbit_last_azimuth_);
+  // (during a bypass that skips an arc the azimuth driven is kept apart: see SettleBypassProgress)
+  (orbit_bypass_ && bypass_skip_rad_ >= 0 ? bypass_travelled_rad_ : orbit_progress_) +=
+      WrapAngle(azimuth - orbit_last_azimuth_);
   orbit_last_azimuth_ = azimuth;
   const bool hidden = TargetHidden();
   if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
@@ -1058,8 +1068,8 @@ Planner::Motion Planner::Orbit() {
       follower_.Clear();
       orbit_mapping_ = false;
       if (PlanToOrbit()) {
+        SettleBypassProgress(false);
         orbit_bypass_ = true;
-        bypass_skip_rad_ = -1;
         Event("orbit: back to the circle");
       }
     } else {
@@ -1071,13 +1081,17 @@ Planner::Motion Planner::Orbit() {
     if (now_ > bypass_deadline_ && !follower_.empty() && !follower_.Reached(base_, 80))
       Event("orbit: the bypass to " + Mm(follower_.goal()) + " was not reached in time");
     if (follower_.empty() || follower_.Reached(base_, 80) || Stuck() || now_ > bypass_deadline_) {
-      SettleBypassProgress(azimuth, !follower_.empty() && follower_.Reached(base_, 80));
+      SettleBypassProgress(!follower_.empty() && follower_.Reached(base_, 80));
       blocked_since_ = -1;
       orbit_bypass_ = false;
       follower_.Clear();
     } else if (follower_.StillFree(map_, 1000) || StartBypass(azimuth)) {
       activity_ = "orbit: bypass";
       return FollowPathLookingAt(centre, options_.orbit_speed_mm_s);
+    } else {  // its path blocked, no other: the circle goes on from here
+      SettleBypassProgress(false);
+      orbit_bypass_ = false;
+      follower_.Clear();
     }
   }
   double blocked_azimuth;

@@ -17,7 +17,7 @@
 //                 Nothing reachable at all (no usable camera pose yet): the look-around starts again.
 //   1 APPROACH    to the nearest reachable free point of the orbit circle (orbit_radius_mm around the target centre),
 //                 head on the target centre; while none is reachable, exploring frontiers (the orbit starts only at
-//                 the circle, never at a frontier). After approach_budget_s without reaching it (-> NEXT_VIEWS, which
+//                 the circle, never at a frontier). After approach_budget_s of that without a path to it (-> NEXT_VIEWS, which
 //                 ends "partial" when the views it can reach leave the coverage under min_coverage).
 //   2 ORBIT       counter-clockwise around the target at orbit_radius_mm and orbit_speed_mm_s, head on the target.
 //                 An obstacle on the next 0.9 m of circle: the radius rises locally (up to +600 mm) where that is
@@ -25,7 +25,8 @@
 //                 blocked arc for up to 3 s while the robot creeps on, then the robot takes the shortest path past
 //                 the blocked part to the next free circle point. A LOST target pauses the orbit (head on its last
 //                 position, sweeping) for at most lost_search_s, unless an obstacle of the map lies on the line of
-//                 sight (hidden, not lost: the orbit goes on). Ends after a full turn (-> NEXT_VIEWS).
+//                 sight (hidden, not lost: the orbit goes on). Ends after a full turn, arcs skipped by bypasses
+//                 included (-> NEXT_VIEWS).
 //   3 NEXT_VIEWS  next-best-view (next_best_view.h) from the coverage model: go to the view, turn along its ring,
 //                 aim the head, drive capture_arc_deg along the ring (frames for motion stereo), choose again; until
 //                 coverage_target, max_next_views, next_views_budget_s, or no view adds coverage (-> FINISH).
@@ -85,9 +86,10 @@ struct PlannerOptions {
   double capture_speed_mm_s = 100;                 // mm/s, along the ring at a next view
   double tracking_turn_rad_s = 30 * M_PI / 180;    // rad/s, fastest base and camera rotation
   double explore_budget_s = 300;                   // s of EXPLORE before NO_TARGET
-  double approach_budget_s = 120;                  // s of APPROACH before NEXT_VIEWS without an orbit (a circle
-                                                   // whose floor the map never shows free: a frontier search
-                                                   // around it would go on until the frame budget)
+  double approach_budget_s = 120;                  // s of APPROACH exploring frontiers without a path to the
+                                                   // circle before NEXT_VIEWS without an orbit (a circle whose
+                                                   // floor the map never shows free: the search would go on until
+                                                   // the frame budget)
   double start_free_mm = 400;                      // mm of floor ahead of the start taken as free: one camera sees
                                                    // depth only once it moves, so the robot's first motion (a
                                                    // gentle forward arc that starts the pose solver's map) goes
@@ -242,9 +244,9 @@ class Planner {
   bool ChooseFrontier(const Eigen::Vector2d* near = nullptr, double within_mm = 0);
   bool PlanToOrbit();
   bool StartBypass(double azimuth);
-  // Ends the bypass's own progress accounting: the skipped arc when it was reached, else the azimuth change since
-  // its start (signed).
-  void SettleBypassProgress(double azimuth, bool reached);
+  // Ends a skipping bypass's accounting: orbit_progress_ gains the skipped arc when it was reached, else the azimuth
+  // driven during it (signed, summed per frame). No-op outside such a bypass.
+  void SettleBypassProgress(bool reached);
   // Orbit radius (circle first, then up to kMaxDetourMm outward) whose next 0.9 m of arc is Traversable; -1 when
   // none. *blocked_azimuth: the first blocked point of the circle itself.
   double OrbitRadiusAhead(double azimuth, double* blocked_azimuth) const;
@@ -283,6 +285,7 @@ class Planner {
   std::string activity_ = "waiting";
   std::string last_phase_reason_;  // EnterPhase's why, for the summary
   bool approach_to_circle_ = false;  // APPROACH: the follower's goal is a point of the orbit circle (not a frontier)
+  int64_t approach_exploring_since_ = -1;  // µs, APPROACH: since when no path to the circle was found (-1: one is)
   std::vector<PhaseRecord> phases_;
   std::vector<std::string> events_;
   int64_t now_ = 0;             // µs, utime of the current pose
@@ -356,7 +359,7 @@ class Planner {
 
   // ORBIT
   bool orbit_started_ = false;
-  double orbit_progress_ = 0;   // rad, counter-clockwise azimuth travelled
+  double orbit_progress_ = 0;   // rad, counter-clockwise azimuth driven plus the arcs bypasses skipped
   double orbit_last_azimuth_ = 0;
   std::vector<uint8_t> orbit_bins_ = std::vector<uint8_t>(360, 0);
   double orbit_radius_set_ = 0;
@@ -370,8 +373,8 @@ class Planner {
   // A bypass counts as the counter-clockwise arc it skips, whichever way its path goes round the target (room_09
   // rerun: bypasses east -> west -> east whose paths went clockwise took back the progress they made; the orbit
   // stood at 25 % for 150 s until the frame budget). < 0: the progress follows the base (a way back to the circle).
-  double bypass_skip_rad_ = -1;      // rad, from bypass_start_azimuth_ to the goal, counter-clockwise
-  double bypass_start_azimuth_ = 0;  // rad, the base's azimuth round the target when the bypass started
+  double bypass_skip_rad_ = -1;      // rad, from the bypass's start to its goal, counter-clockwise
+  double bypass_travelled_rad_ = 0;  // rad, azimuth driven since the bypass started (signed, per-frame sum)
   bool orbit_mapping_ = false;     // driving to unknown floor near the target (the circle ran into it)
   int orbit_mappings_ = 0;
   bool glancing_ = false;          // looking at the blocked arc ahead

@@ -425,7 +425,7 @@ TEST(PlannerClosedLoopTest, RoomWithoutTargetEndsInNoTargetWithinTheBudget) {
 // one must not start the orbit there (room_04, 7 Dec: "on the orbit circle (3601 mm from the target)" at a frontier
 // goal, then no orbit and an empty model); RunMission checks every orbit start against the circle's radius. The
 // approach ends after its budget; the mission ends without an orbit, as "partial", and says why.
-TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFrontier) {
+TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachEndsTheApproachAfterItsBudgetWithoutAnOrbit) {
   PlannerOptions options = TestOptions();
   options.explore_budget_s = 200;
   options.map.free_support_mm = 250;  // the circle (<= 1.2 m) lies >= 350 mm inside the carpet: never free
@@ -441,7 +441,8 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFr
   toy::ToyWorld world(room, options.robot);
   const RunLog log = RunMission(world, options, 30 * 300);
   int approach_explores = 0;
-  for (const std::string& e : log.events) approach_explores += e.find("phase EXPLORE -> APPROACH") != std::string::npos;
+  for (const std::string& e : log.events)
+    approach_explores += e.find("approach: the orbit circle is not reachable yet: exploring") != std::string::npos;
   std::printf("end %s after %.1f s, orbit frames %lld, path %.0f mm\n", PhaseName(log.end_phase), log.frames / 30.0,
               static_cast<long long>(log.orbit_frames), log.summary.path_length_mm);
   const int64_t approach = log.first_seq[static_cast<int>(Phase::kApproach)];
@@ -451,10 +452,10 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachIsExploredForNotOrbitedAtAFr
   // The approach gives up after its budget (not at the frame limit) and the run ends as a failure that says why.
   EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
   const int64_t finish = log.first_seq[static_cast<int>(Phase::kFinish)];  // NEXT_VIEWS had no view to add
-  EXPECT_NEAR((finish - approach) / 30.0, options.approach_budget_s, 1.0);
+  EXPECT_NEAR((finish - approach) / 30.0, options.approach_budget_s, 2.0);  // it explored from the start
   EXPECT_EQ(PlanOutcome(log.summary), "partial");
   bool says_why = false;
-  for (const std::string& e : log.events) says_why = says_why || e.find("orbit circle was not reached") != std::string::npos;
+  for (const std::string& e : log.events) says_why = says_why || e.find("orbit circle was not reachable for") != std::string::npos;
   EXPECT_TRUE(says_why);
   EXPECT_EQ(log.collisions, 0);
 }
