@@ -51,7 +51,9 @@
 // (matches the re-triangulation's checks rejected, the final region's included), final_revote_s, live_final_offset_mm
 // (live votes kept although final poses came: the median camera centre offset between them, mm; -1 otherwise) and
 // model_off_trajectory_frame (1 when that offset is over 5 mm: the model is not in trajectory.txt's frame, the
-// session fails the run). Handlers run inside
+// session fails the run), final_floor_thickness_mm, final_floor_local_thickness_mm and final_floor_points (the final
+// map's floor around the target, map_consistency.h; -1 = not measured; an inconsistent map is the error state).
+// Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
 
@@ -228,12 +230,13 @@ class DenseModelerNode : public Node {
   void ReportLiveFinalOffset(bool use_final_poses);
   // Final phase: the model's figures (ridge, mesh clean-up, weak vertices, carving, times, pair times) to the log.
   void LogFinalModel(const FinalModel& model, size_t views, int final_used) const;
-  // Final phase: the final_* status values and the end state (an empty model is the error state, saying why and
-  // what to try), published at once.
+  // Final phase: the final_* status values and the end state (an empty model and an inconsistent map are the error
+  // state, saying why and what to try; the files are written either way), published at once.
   void ReportFinalState(const FinalModel& model, int64_t start_us);
-  // The final map's floor around the target (map_consistency.h): "" when thin enough or not measurable (no floor in
-  // the region, not the final map's landmarks, too few floor points, lengths not metric), else why the model is not
-  // to be trusted and what to try. Sets the status values final_floor_thickness_mm / final_floor_points.
+  // The final map's floor around the target (map_consistency.h): "" when consistent or not measurable (no floor in
+  // the region, not the final map's landmarks, live votes kept, too few floor points, lengths not metric), else why
+  // the model is not to be trusted and what to try. Sets the status values final_floor_thickness_mm,
+  // final_floor_local_thickness_mm (-1 = not measured) and final_floor_points.
   std::string CheckMapConsistency();
   // The region in the final poses' frame: region_ moved by the Sim(3) from the pairs' live to their final camera
   // centres when that moves its centre by more than a voxel and fits within 20 mm RMS (else region_). The floor
@@ -290,6 +293,7 @@ class DenseModelerNode : public Node {
   int64_t carving_keep_stride_ = 1;  // keep frames whose processed index % stride == 0
   int64_t complete_frames_ = 0;
   int final_poses_used_ = 0;
+  bool final_votes_from_final_poses_ = false;  // the final phase re-voted with the final poses (region_ is final)
   bool finished_ = false;
 };
 

@@ -53,9 +53,49 @@ TEST(FloorThickness, AThinFloorIsThinAndTwoLayersAreThick) {
   ASSERT_TRUE(two.measured);
   EXPECT_NEAR(two.thickness_mm(), 8.0 + 2 * 0.84 * 0.5, 0.3);  // p10 and p90: the 20th / 80th of each layer
   EXPECT_GT(two.thickness_mm(), options.max_thickness_mm);
-  // The target's points (inside the inner radius) and landmarks far off the floor never count.
+  EXPECT_TRUE(two.Inconsistent(options));
+  EXPECT_FALSE(thin.Inconsistent(options));
+  // The layers overlap in space: every cell holds both. (Cells of 8-12 points: their p10 / p90 lie closer in than
+  // the whole ring's.)
+  EXPECT_GE(two.cells, options.min_cells);
+  EXPECT_GT(two.local_thickness_mm, 7.5);
+  EXPECT_LT(two.local_thickness_mm, 9.5);
+  EXPECT_GT(thin.local_thickness_mm, 0.3);
+  EXPECT_LT(thin.local_thickness_mm, 1.5);
+  // The target's points (inside the inner radius) never count.
   EXPECT_LT(thin.points, 4000);
   EXPECT_GT(thin.points, 4000 * (0.6 * 0.6 - 0.15 * 0.15) / (0.8 * 0.8) * 0.9);
+}
+
+// Landmarks in the ring but off the floor (an obstacle's, 30-300 mm up) change nothing: only the floor band counts.
+TEST(FloorThickness, PointsAboveTheFloorBandDoNotCount) {
+  const Eigen::Vector3d centre(0, 0, 0);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  std::vector<Eigen::Vector3d> floor = Floor(centre, up, 0.5, {0.0}, 4000, 4);
+  const FloorThickness before = MeasureFloorThickness(floor, centre, Plane(up), 0.0, FloorThicknessOptions());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> height(30.0, 300.0), along(200.0, 550.0);
+  for (int i = 0; i < 1000; ++i) floor.emplace_back(along(rng), 0.2 * along(rng), height(rng));
+  const FloorThickness after = MeasureFloorThickness(floor, centre, Plane(up), 0.0, FloorThicknessOptions());
+  EXPECT_EQ(after.points, before.points);
+  EXPECT_DOUBLE_EQ(after.thickness_mm(), before.thickness_mm());
+  EXPECT_DOUBLE_EQ(after.local_thickness_mm, before.local_thickness_mm);
+}
+
+// A real step in the floor (a 8 mm rug under half the ring) makes the ring thick but leaves the cells thin: not
+// inconsistent. The same 8 mm between two overlapping layers is.
+TEST(FloorThickness, AStepInTheFloorIsNotAnInconsistentMap) {
+  const Eigen::Vector3d centre(0, 0, 0);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  std::vector<Eigen::Vector3d> floor = Floor(centre, up, 0.5, {0.0}, 4000, 6);
+  for (Eigen::Vector3d& p : floor)
+    if (p.x() > 0 && std::abs(p.z()) < 5) p.z() += 8.0;  // the rug's top, east of the target
+  const FloorThicknessOptions options;
+  const FloorThickness step = MeasureFloorThickness(floor, centre, Plane(up), 0.0, options);
+  ASSERT_TRUE(step.measured);
+  EXPECT_GT(step.thickness_mm(), options.max_thickness_mm);  // the ring alone would call it inconsistent
+  EXPECT_LT(step.local_thickness_mm, 2.0);
+  EXPECT_FALSE(step.Inconsistent(options));
 }
 
 TEST(FloorThickness, TheRingStartsOutsideTheTargetAndFewPointsAreNotJudged) {

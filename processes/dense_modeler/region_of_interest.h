@@ -37,7 +37,6 @@ struct RegionOfInterest {
   Eigen::Vector3d box_max = Eigen::Vector3d::Zero();        // mm, world
   bool has_floor = false;                                   // the floor half-space applies
   FloorPlane floor;                                         // world: height of x = floor.Height(x), mm, up > 0
-                                                            // (the opposite sign of FloorPlane::offset_mm)
   double floor_clearance_mm = 0.0;                          // mm, points lower than this above the floor are outside
 
   // Height of x above the floor (mm; +infinity when there is no floor).
