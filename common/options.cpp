@@ -41,6 +41,25 @@ bool ParseFiniteNumber(const std::string& text, double* value) {
   return true;
 }
 
+bool ParseNumberList(const std::string& text, std::vector<double>* values) {
+  values->clear();
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    std::string field = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const size_t first = field.find_first_not_of(" \t"), last = field.find_last_not_of(" \t");
+    field = first == std::string::npos ? std::string() : field.substr(first, last - first + 1);
+    double v = 0;
+    if (!ParseFiniteNumber(field, &v)) {
+      values->clear();
+      return false;
+    }
+    values->push_back(v);
+    if (comma == std::string::npos) return true;
+    start = comma + 1;
+  }
+}
+
 OptionParser::OptionParser(std::string program, std::string description)
     : program_(std::move(program)), description_(std::move(description)) {}
 

@@ -14,6 +14,9 @@ namespace objscan {
 // A whole, finite number: strtod consumed every character ("2mm", "abc", "", "nan", "inf" are refused instead of
 // read as 2, 0 or NaN). For positional arguments of the tools; options go through OptionParser.
 bool ParseFiniteNumber(const std::string& text, double* value);
+// "a,b,c" (at least one field): every field, blanks around it ignored ("-100, -100, 0"), a ParseFiniteNumber number;
+// an empty field anywhere ("1,,2", "1,2,", ",1", "1, ,2") is refused. False (and *values cleared) otherwise. The one parser of the number lists of options and scene keys.
+bool ParseNumberList(const std::string& text, std::vector<double>* values);
 
 class OptionParser {
  public:

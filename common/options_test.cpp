@@ -132,4 +132,21 @@ TEST(ParseFiniteNumberTest, WholeFiniteNumbersOnly) {
   }
 }
 
+// Number lists (--radii, --roi-box, robot_sim's --blank and --orbit-center, scene vectors): an empty field anywhere is
+// an error, a trailing comma included (std::getline dropped it: "80,20," was taken as 80,20).
+TEST(ParseNumberListTest, EveryFieldANumber) {
+  std::vector<double> v;
+  EXPECT_TRUE(ParseNumberList("500,650.5,-1e3", &v));
+  EXPECT_EQ(v, (std::vector<double>{500, 650.5, -1e3}));
+  EXPECT_TRUE(ParseNumberList("7", &v));
+  EXPECT_EQ(v, std::vector<double>{7});
+  EXPECT_TRUE(ParseNumberList(" -100, -100 ,0", &v));
+  EXPECT_EQ(v, (std::vector<double>{-100, -100, 0}));
+  for (const char* bad : {"", ",", " ", "1,", ",1", "1,,2", "1,2,", "1, ,2", "1;2", "1 2", "1,nan", "a,b"}) {
+    v = {9};
+    EXPECT_FALSE(ParseNumberList(bad, &v)) << bad;
+    EXPECT_TRUE(v.empty()) << bad;
+  }
+}
+
 }  // namespace objscan

@@ -42,22 +42,10 @@ bool EncodingFromName(const std::string& name, int8_t* encoding) {
 
 // Parses "a,b" / "a,b,c" into values; false on a wrong count or a non-finite number.
 bool ParseList(const std::string& text, size_t count, double* values) {
-  if (!text.empty() && text.back() == ',') return false;  // getline would drop the empty last field
-  std::stringstream in(text);
-  std::string part;
-  size_t n = 0;
-  while (std::getline(in, part, ',')) {
-    if (n >= count) return false;
-    try {
-      size_t used = 0;
-      values[n] = std::stod(part, &used);
-      if (used != part.size() || !std::isfinite(values[n])) return false;
-    } catch (const std::exception&) {
-      return false;
-    }
-    ++n;
-  }
-  return n == count;
+  std::vector<double> parsed;
+  if (!ParseNumberList(text, &parsed) || parsed.size() != count) return false;
+  std::copy(parsed.begin(), parsed.end(), values);
+  return true;
 }
 
 // "FIRST,COUNT" (whole numbers >= 0) into *first, *count; "" = none (count 0).

@@ -70,6 +70,7 @@ TEST(SceneRobotLineTest, RejectsBadValuesWithTheLineNumber) {
   const std::map<std::string, std::string> cases = {
       {"robot pan=10", "start=x,y,yaw_deg is required"},
       {"robot start=1,2", "expected x,y,z"},
+      {"robot start=1,2,3,", "expected x,y,z"},  // a trailing comma is a fourth, empty field
       {"robot start=nan,0,0", "not a finite number"},
       {"robot start=0,inf,0", "not a finite number"},
       {"robot start=200000,0,0", "within +-100000 mm"},

@@ -594,10 +594,13 @@ double ParseDouble(const std::string& key, const std::string& v) {
 }
 
 Eigen::Vector3d ParseVector3(const std::string& key, const std::string& v) {
-  std::vector<std::string> parts;
-  std::stringstream in(v);
-  std::string part;
-  while (std::getline(in, part, ',')) parts.push_back(part);
+  std::vector<std::string> parts(1);  // every field, empty ones too ("1,2,3," has four)
+  for (char ch : v) {
+    if (ch == ',')
+      parts.emplace_back();
+    else
+      parts.back() += ch;
+  }
   if (parts.size() != 3) throw std::runtime_error(key + ": expected x,y,z, got '" + v + "'");
   return Eigen::Vector3d(ParseDouble(key, parts[0]), ParseDouble(key, parts[1]), ParseDouble(key, parts[2]));
 }

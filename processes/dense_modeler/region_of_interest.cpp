@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/geometry.h"
+#include "common/options.h"
 
 namespace objscan {
 namespace {
@@ -229,18 +230,9 @@ bool ParseRoiBox(const std::string& text, RegionOfInterest* roi, std::string* wh
   *roi = RegionOfInterest{};
   if (text.empty()) return true;
   std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      size_t used = 0;
-      const double x = std::stod(item, &used);
-      if (item.find_first_not_of(" \t", used) != std::string::npos || !std::isfinite(x)) throw std::exception();
-      v.push_back(x);
-    } catch (const std::exception&) {
-      if (why) *why = "roi box: '" + item + "' is not a number";
-      return false;
-    }
+  if (!ParseNumberList(text, &v)) {
+    if (why) *why = "roi box: '" + text + "' is not a list of numbers xmin,ymin,zmin,xmax,ymax,zmax (mm)";
+    return false;
   }
   if (v.size() != 6) {
     if (why) *why = "roi box needs 6 numbers xmin,ymin,zmin,xmax,ymax,zmax (mm)";

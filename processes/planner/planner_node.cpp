@@ -22,22 +22,7 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 
-bool ParseRadii(const std::string& text, std::vector<double>* radii) {
-  radii->clear();
-  std::stringstream in(text);
-  std::string part;
-  while (std::getline(in, part, ',')) {
-    try {
-      size_t used = 0;
-      const double r = std::stod(part, &used);
-      if (used != part.size() || !std::isfinite(r)) return false;
-      radii->push_back(r);
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return !radii->empty();
-}
+bool ParseRadii(const std::string& text, std::vector<double>* radii) { return ParseNumberList(text, radii); }
 
 const char* kWorld = "world";
 
