@@ -44,17 +44,17 @@ inline Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3
 }
 
 // Smooth colour texture as a function of a world point (BGR, 0..255).
-// A valid region: the box [box_min, box_max] (world, mm) cut by the floor z = floor_offset_mm (normal +z) with this
+// A valid region: the box [box_min, box_max] (world, mm) cut by the floor z = floor_z_mm (normal +z) with this
 // clearance (mm).
 inline RegionOfInterest FloorRegion(const Eigen::Vector3d& box_min, const Eigen::Vector3d& box_max,
-                                    double clearance_mm = 4, double floor_offset_mm = 0) {
+                                    double clearance_mm = 4, double floor_z_mm = 0) {
   RegionOfInterest r;
   r.valid = true;
   r.box_min = box_min;
   r.box_max = box_max;
   r.has_floor = true;
   r.floor.normal = Eigen::Vector3d::UnitZ();
-  r.floor.offset_mm = -floor_offset_mm;  // the floor z = floor_offset_mm
+  r.floor.offset_mm = -floor_z_mm;  // Height(x) = z - floor_z_mm
   r.floor_clearance_mm = clearance_mm;
   return r;
 }
