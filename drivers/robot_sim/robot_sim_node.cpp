@@ -151,7 +151,8 @@ PinholeCamera ToCamera(const RobotSimNodeOptions& o) {
   return c;
 }
 
-bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why, RobotSimOptions* sim_options) {
+bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why, RobotSimOptions* sim_options,
+                                 RobotDescription* robot_out) {
   auto fail = [why](const std::string& text) {
     if (why) *why = text;
     return false;
@@ -197,13 +198,15 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why,
       o.status_channel.empty())
     return fail("channel names must not be empty");
   if (sim_options) *sim_options = sim;
+  if (robot_out) *robot_out = robot;  // geometry, speeds and footprint: the writer takes sim's
   return true;
 }
 
 RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
     : bus_(bus), options_(options), status_(&bus, kProcessName, options.status_channel) {
   std::string why;
-  if (!ValidateRobotSimNodeOptions(options_, &why, &sim_options_)) throw std::invalid_argument(why);
+  if (!ValidateRobotSimNodeOptions(options_, &why, &sim_options_, &robot_description_))
+    throw std::invalid_argument(why);
   EncodingFromName(options_.encoding, &encoding_);
   ParseBlank(options_.blank, &blank_first_, &blank_count_);
   camera_ = ToCamera(options_);
@@ -274,8 +277,10 @@ void RobotSimNode::WriteGroundTruthFiles() {
             << " odometry_origin=" << options_.odometry_origin << "\n";
   if (!scene_txt) throw std::runtime_error("cannot write " + dir + "/scene.txt");
   // The robot's description, as a real robot's owner writes it (objscan_export --robot-file): the simulated robot
-  // reports its head angles in objscan's convention.
-  RobotDescription robot;
+  // reports its head angles in objscan's convention; the head's limits are --robot-file's when given.
+  RobotDescription robot = robot_description_;
+  robot.pan_sign = robot.tilt_sign = 1;
+  robot.pan_zero_rad = robot.tilt_zero_rad = 0;
   robot.geometry = sim_->options().geometry;
   robot.footprint_radius_mm = sim_->options().footprint_radius_mm;
   robot.max_speed_mm_s = sim_->options().max_speed_mm_s;

@@ -124,9 +124,11 @@ struct RobotSimNodeOptions {
 // --realtime, ...; the rest keep their defaults: code and tests set the struct's fields directly).
 void AddRobotSimNodeOptions(OptionParser& parser, RobotSimNodeOptions* options);
 // Checks the option values (not the scene file), reading robot_file once. False with *why on the first problem;
-// true with the simulation part of the options in *sim_options (when not null).
+// true with the simulation part of the options in *sim_options and the robot's description (robot_file's, with its
+// head limits and encoder conventions, else the defaults with the options' geometry, speeds and footprint) in *robot
+// (each when not null).
 bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& options, std::string* why,
-                                 RobotSimOptions* sim_options = nullptr);
+                                 RobotSimOptions* sim_options = nullptr, RobotDescription* robot = nullptr);
 // The simulation part of the node options; robot_file (the parsed options.robot_file, null when none) replaces the
 // geometry, speed limits and footprint fields.
 RobotSimOptions ToRobotSimOptions(const RobotSimNodeOptions& options, const RobotDescription* robot_file);
@@ -174,6 +176,7 @@ class RobotSimNode : public Node {
   Bus& bus_;
   RobotSimNodeOptions options_;
   RobotSimOptions sim_options_;
+  RobotDescription robot_description_;  // written to the ground-truth folder's robot.cfg
   PinholeCamera camera_;
   int8_t encoding_ = 1;
   int64_t blank_first_ = 0, blank_count_ = 0;  // options_.blank: frames rendered grey

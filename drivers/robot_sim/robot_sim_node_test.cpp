@@ -12,6 +12,7 @@
 #include "common/adapters.h"
 #include "common/bus.h"
 #include "common/geometry.h"
+#include "common/recorded_run.h"
 #include "common/robot_model.h"
 #include "common/time.h"
 #include "objscan/camera_info_t.hpp"
@@ -186,6 +187,39 @@ TEST(RobotSimNodeTest, PublishesTenFramesWithTruthAndErroneousOdometry) {
   ASSERT_GT(truth_mesh.positions.size(), 100u);
   for (const Eigen::Vector3d& p : truth_mesh.positions)
     EXPECT_NEAR((p - node.scene().target().center_mm).norm(), node.scene().target().radius_mm, 1e-3);
+}
+
+// The ground-truth folder's robot.cfg describes the robot that ran: with --robot-file, its geometry, footprint and
+// head limits (not the defaults), in objscan's angle convention (the simulator reports its head angles in it).
+TEST(RobotSimNodeTest, TheGroundTruthRobotFileKeepsTheRobotFilesLimits) {
+  const std::string dir = ::testing::TempDir() + "/robot_sim_robot_file";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  RobotDescription given;
+  given.geometry.mast_height_mm = 520;
+  given.footprint_radius_mm = 180;
+  given.pan_limit_deg = 120;
+  given.tilt_min_deg = -10;
+  given.tilt_max_deg = 45;
+  given.pan_sign = -1;
+  std::string error;
+  ASSERT_TRUE(WriteRobotFile(dir + "/given.cfg", given, &error)) << error;
+  auto bus = MakeLcmBus("memq://");
+  RobotSimNodeOptions options = FastOptions(2);
+  options.robot_file = dir + "/given.cfg";
+  options.ground_truth_dir = dir + "/gt";
+  {
+    RobotSimNode node(*bus, options);
+    RunToEnd(*bus, node);
+  }
+  RobotDescription written;
+  ASSERT_TRUE(ReadRobotFile(dir + "/gt/robot.cfg", &written, &error)) << error;
+  EXPECT_EQ(written.geometry.mast_height_mm, 520);
+  EXPECT_EQ(written.footprint_radius_mm, 180);
+  EXPECT_EQ(written.pan_limit_deg, 120);
+  EXPECT_EQ(written.tilt_min_deg, -10);
+  EXPECT_EQ(written.tilt_max_deg, 45);
+  EXPECT_EQ(written.pan_sign, 1);  // objscan's convention
 }
 
 TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {
