@@ -210,6 +210,7 @@ bool PoseFromMessage(const pose_t& m, CameraPoseEstimate* out, std::string* erro
   p.scale_source = static_cast<ScaleSource>(m.scale_source);
   p.num_inliers = m.num_inliers;
   p.reprojection_rms_px = m.reprojection_rms_px;
+  p.map_start_seq = m.map_start_seq < 0 ? -1 : m.map_start_seq;
   *out = p;
   return true;
 }
@@ -225,6 +226,7 @@ pose_t PoseToMessage(const CameraPoseEstimate& p, const std::string& parent_fram
   m.scale_source = static_cast<int8_t>(p.scale_source);
   m.num_inliers = p.num_inliers;
   m.reprojection_rms_px = p.reprojection_rms_px;
+  m.map_start_seq = p.map_start_seq;
   return m;
 }
 

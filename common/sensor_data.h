@@ -70,6 +70,9 @@ struct CameraPoseEstimate {
   ScaleSource scale_source = ScaleSource::kNone;
   int num_inliers = 0;
   double reprojection_rms_px = 0;
+  // Frame seq where the map this pose lies in began (pose_t.map_start_seq): poses with different values lie in maps
+  // never joined, related by the odometry only. -1: not from a map (ground truth, unposed frames).
+  int64_t map_start_seq = -1;
 };
 
 }  // namespace objscan

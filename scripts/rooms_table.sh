@@ -33,14 +33,17 @@ table="$OUT/rooms.md"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$table"
 
-# The modeling segment of a run (DIR): final poses from the frame the target was confirmed at up to the pose
-# solver's next map restart, if any (a restarted map that was not joined lies in another frame). The figures
-# align the whole trajectory to the truth; the segment's own alignment shows the model apart from the exploration's
-# drift. Prints the segment's TUM file and its frame range.
+# The modeling segment of a run (DIR): final poses from the frame the target was confirmed at (or from the start of
+# the map the dense modeler kept, when it kept one of several maps never joined and that map began later) up to the
+# pose solver's next map restart, if any (a restarted map that was not joined lies in another frame). The issue's
+# figures align the whole trajectory to the truth; the segment's own alignment shows the model apart from the
+# exploration's drift. Prints the segment's TUM file and its frame range.
 model_segment() {
-  local d="$1" seg="$1/.model_segment.txt" c t0 restart t1
+  local d="$1" seg="$1/.model_segment.txt" c t0 restart t1 kept
   c=$(json_number confirmed_seq "$d/target.json" 2>/dev/null); c=${c:--1}
   [ "$c" -ge 0 ] || return 1
+  kept=$(grep -o 'keeps the map that began at frame [0-9]*' "$d/logs/dense_modeler.log" 2>/dev/null | awk '{print $NF}' | tail -1)
+  [ -n "$kept" ] && [ "$kept" -gt "$c" ] && c=$kept
   restart=$(grep -o 'initialized on frames [0-9]*' "$d/logs/pose_solver.log" 2>/dev/null | awk -v c="$c" '$4 > c {print $4; exit}')
   t0=$(awk -v k="$c" '!/^#/ {if (n++ == k) {print $1; exit}}' "$d/ground_truth/poses_gt.txt")
   t1=$( [ -n "$restart" ] && awk -v k="$restart" '!/^#/ {if (n++ == k) {print $1; exit}}' "$d/ground_truth/poses_gt.txt")

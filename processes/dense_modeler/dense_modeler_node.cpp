@@ -308,11 +308,13 @@ void DenseModelerNode::OnPose(const pose_t& msg, bool final_pose) {
     if (f != final_poses_.end() && !SamePose(f->second, pose.world_from_camera)) {
       status_.Reject("final pose: a second, different pose for the frame (forged, or a second session)", at);
       final_poses_.erase(f);
+      final_map_of_.erase(msg.seq);
       conflicting_final_.insert(msg.seq);
       return;
     }
     status_.CountIn();
     final_poses_[msg.seq] = pose.world_from_camera;
+    final_map_of_[msg.seq] = pose.map_start_seq;
     return;
   }
   auto it = frames_.find(msg.seq);
@@ -754,6 +756,35 @@ RegionOfInterest DenseModelerNode::RegionInFinalFrame(const std::vector<StoredPa
   return moved_region;
 }
 
+int64_t DenseModelerNode::KeepOneMap(std::vector<StoredPair>* pairs) {
+  std::vector<PairFrames> frames;
+  frames.reserve(pairs->size());
+  for (const StoredPair& sp : *pairs)
+    frames.push_back({sp.seq_a, sp.seq_b, static_cast<int64_t>(sp.matches.size())});
+  const ModelMapChoice choice = ChooseModelMap(frames, final_map_of_);
+  model_map_start_seq_ = choice.map_start_seq;
+  status_.SetValue("final_maps", choice.maps);
+  status_.SetValue("final_model_map_start_seq", static_cast<double>(choice.map_start_seq));
+  status_.SetValue("final_pairs_other_maps", static_cast<double>(choice.pairs_other_map + choice.pairs_across_maps));
+  const int64_t live_votes = grid_.total_votes();
+  if (choice.map_start_seq < 0) return live_votes;
+  std::vector<StoredPair> kept;
+  for (size_t i = 0; i < pairs->size(); ++i)
+    if (choice.keep[i]) kept.push_back(std::move((*pairs)[i]));
+  pairs->swap(kept);
+  const double kept_fraction = static_cast<double>(choice.matches_kept) /
+                               static_cast<double>(std::max<int64_t>(1, choice.matches_kept + choice.matches_dropped));
+  char text[420];
+  std::snprintf(text, sizeof(text),
+                "final votes from one map: the pose solver's final poses lie in %d maps never joined to each other; "
+                "the model keeps the map that began at frame %lld (%zu pairs, %.0f %% of the matches) and drops %lld "
+                "pairs of the other maps and %lld across two",
+                choice.maps, static_cast<long long>(choice.map_start_seq), pairs->size(), 100.0 * kept_fraction,
+                static_cast<long long>(choice.pairs_other_map), static_cast<long long>(choice.pairs_across_maps));
+  LogWarning(text);
+  return static_cast<int64_t>(kept_fraction * static_cast<double>(live_votes));
+}
+
 bool DenseModelerNode::RevoteWithFinalPoses() {
   status_.SetValue("final_revoted_pairs", 0);
   status_.SetValue("final_revote_rejected", 0);
@@ -767,6 +798,7 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   std::vector<StoredPair> pairs;
   pairs.swap(stored_pairs_);  // freed on return
   stored_matches_ = 0;
+  const int64_t live_votes_kept_maps = KeepOneMap(&pairs);
   VoxelVoteGrid fresh(options_.model.votes);
   AffineDenseOptions dense = DenseOptionsForNow();
   // The region (the TARGET box, the automatic region) was found in the live poses' frame. When the final poses are
@@ -797,13 +829,19 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
                              std::to_string(grid_.total_votes()) + " votes, new " + std::to_string(fresh.total_votes());
   status_.SetValue("final_revote_rejected", static_cast<double>(rejected));
   status_.SetValue("final_revote_s", seconds);
+  auto keep_live_votes = [this]() {  // the live grid (every map's votes) stays: no map was chosen after all
+    model_map_start_seq_ = -1;
+    status_.SetValue("final_model_map_start_seq", -1);
+    return false;
+  };
   if (with_final == 0) {
     LogInfo("final votes: the live ones (no pair has final poses)");
-    return false;
+    return keep_live_votes();
   }
-  if (2 * fresh.total_votes() < grid_.total_votes()) {
+  // The live grid holds the dropped maps' votes too: the fresh one is compared with the kept maps' share of it.
+  if (2 * fresh.total_votes() < live_votes_kept_maps) {
     LogWarning("final votes: the live ones, the final poses keep too few (" + counts + ")");
-    return false;
+    return keep_live_votes();
   }
   if (10 * with_final < 9 * static_cast<int64_t>(pairs.size()))  // final poses missing: lost on the bus, or unposed
     LogWarning("final votes: only " + std::to_string(with_final) + " of " + std::to_string(pairs.size()) +
@@ -1002,9 +1040,16 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
   final_votes_from_final_poses_ = use_final_poses;
   std::vector<CarvingView> views;
   int final_used = 0;
+  int other_map_views = 0;
   for (const StoredView& sv : carving_views_) {
     CarvingView v = sv.view;
     auto it = final_poses_.find(sv.seq);
+    auto map = final_map_of_.find(sv.seq);
+    if (use_final_poses && model_map_start_seq_ >= 0 && map != final_map_of_.end() && map->second >= 0 &&
+        map->second != model_map_start_seq_) {
+      ++other_map_views;  // in another frame than the votes: it would carve the model where it does not see it
+      continue;
+    }
     if (use_final_poses && it != final_poses_.end()) {
       v.world_from_camera = it->second;
       ++final_used;
@@ -1012,6 +1057,8 @@ void DenseModelerNode::RunFinalPhase(int64_t utime) {
     views.push_back(std::move(v));
   }
   final_poses_used_ = final_used;
+  if (other_map_views > 0)
+    LogInfo("carving: " + std::to_string(other_map_views) + " views of the other maps left out");
   ReportLiveFinalOffset(use_final_poses);
   const FinalModel model = BuildFinalModel(grid_, views, options_.model, region_);
   LogFinalModel(model, views.size(), final_used);

@@ -23,7 +23,8 @@
 // finish_sender (or COMMAND_FINALIZE aimed at this process): with revote_final_poses and a final_pose_channel, every
 // pair's pixel matches (kept, 20 bytes each, up to max_stored_matches) are triangulated again with the final poses
 // where both frames have one (else with the live poses) and the geometric checks, the final region included, and voted
-// into a fresh grid, which replaces the live one unless no pair had final poses or it holds under half the live votes
+// into a fresh grid (final poses in two or more maps never joined, pose_t.map_start_seq: only the pairs of the map
+// with the most matches, and only its views carve; map_consistency.h ChooseModelMap), which replaces the live one unless no pair had final poses or it holds under half the live votes
 // (then a warning; the live grid stays); seeds = voxels over the threshold (inside the target box when known), space
 // carving with the stored views in the poses the votes were cast with (final when the re-vote ran, else live), marching
 // tetrahedra mesh, files written to
@@ -52,7 +53,9 @@
 // (live votes kept although final poses came: the median camera centre offset between them, mm; -1 otherwise) and
 // model_off_trajectory_frame (1 when that offset is over 5 mm: the model is not in trajectory.txt's frame, the
 // session fails the run), final_floor_thickness_mm, final_floor_local_thickness_mm and final_floor_points (the final
-// map's floor around the target, map_consistency.h; -1 = not measured; an inconsistent map is the error state).
+// map's floor around the target, map_consistency.h; -1 = not measured; an inconsistent map is the error state),
+// final_maps (maps among the final poses of the pairs' frames), final_model_map_start_seq (the one map the re-vote
+// kept among two or more; -1 = no choice) and final_pairs_other_maps (pairs dropped for it).
 // Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
@@ -225,6 +228,11 @@ class DenseModelerNode : public Node {
   // frames without) when revote_final_poses is set and every pair was stored. True when it did (the carving views
   // then take the final poses too; otherwise the live ones the kept votes were cast with).
   bool RevoteWithFinalPoses();
+  // Final phase, before the re-vote: with final poses in two or more maps never joined (pose_t.map_start_seq), keeps
+  // the pairs of one map (ChooseModelMap), logs and reports the choice (status final_maps,
+  // final_model_map_start_seq, final_pairs_other_maps). Returns the live votes the kept pairs' share stands for
+  // (all the live votes when nothing was dropped).
+  int64_t KeepOneMap(std::vector<StoredPair>* pairs);
   // Final phase, when the live votes were kept although final poses arrived: the median camera centre offset between
   // the two (status live_final_offset_mm, model_off_trajectory_frame; a warning beyond kLiveFinalOffsetWarnMm).
   void ReportLiveFinalOffset(bool use_final_poses);
@@ -262,6 +270,8 @@ class DenseModelerNode : public Node {
   int64_t stored_matches_ = 0;
   bool stored_complete_ = true;  // false once max_stored_matches was exceeded (stored_pairs_ freed)
   std::map<int64_t, Eigen::Isometry3d> final_poses_;
+  std::unordered_map<int64_t, int64_t> final_map_of_;  // seq -> map_start_seq of its final pose (pose_t)
+  int64_t model_map_start_seq_ = -1;  // final phase: the one map kept among two or more (-1: no choice made)
   ScaleSource scale_source_ = ScaleSource::kNone;  // of the last usable pose: says mm or arbitrary in the files
   std::set<int64_t> conflicting_final_;  // frames with two different final poses: no final pose
   bool have_box_ = false;  // confirmed TARGET box

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <utility>
 
 namespace objscan {
@@ -61,6 +62,44 @@ FloorThickness MeasureFloorThickness(const std::vector<Eigen::Vector3d>& landmar
 bool FloorThickness::Inconsistent(const FloorThicknessOptions& options) const {
   if (!measured || !(thickness_mm() > options.max_thickness_mm)) return false;
   return local_thickness_mm < 0 || local_thickness_mm > options.max_local_thickness_mm;
+}
+
+ModelMapChoice ChooseModelMap(const std::vector<PairFrames>& pairs,
+                              const std::unordered_map<int64_t, int64_t>& map_of) {
+  ModelMapChoice choice;
+  choice.keep.assign(pairs.size(), true);
+  auto map_at = [&](int64_t seq) {
+    auto it = map_of.find(seq);
+    return it == map_of.end() || it->second < 0 ? int64_t{-1} : it->second;
+  };
+  std::map<int64_t, int64_t> matches_in;  // map -> matches of the pairs within it (ordered: deterministic ties)
+  for (const PairFrames& p : pairs) {
+    const int64_t a = map_at(p.seq_a), b = map_at(p.seq_b);
+    if (a >= 0) matches_in.emplace(a, 0);
+    if (b >= 0) matches_in.emplace(b, 0);
+    if (a >= 0 && a == b) matches_in[a] += p.matches;
+  }
+  choice.maps = static_cast<int>(matches_in.size());
+  if (choice.maps >= 2) {
+    int64_t best = -1;
+    for (const auto& [map, matches] : matches_in)
+      if (best < 0 || matches >= matches_in[best]) best = map;  // ascending: a tie goes to the later map
+    choice.map_start_seq = best;
+  }
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const int64_t a = map_at(pairs[i].seq_a), b = map_at(pairs[i].seq_b);
+    if (choice.map_start_seq >= 0 && a >= 0 && b >= 0) {
+      if (a != b) {
+        choice.keep[i] = false;
+        ++choice.pairs_across_maps;
+      } else if (a != choice.map_start_seq) {
+        choice.keep[i] = false;
+        ++choice.pairs_other_map;
+      }
+    }
+    (choice.keep[i] ? choice.matches_kept : choice.matches_dropped) += pairs[i].matches;
+  }
+  return choice;
 }
 
 }  // namespace objscan

@@ -9,13 +9,15 @@
 // cells thin. Inconsistent = ring thickness > max_thickness_mm and local thickness > max_local_thickness_mm (the
 // ring alone when too few cells hold enough points).
 //
-// Measured on 25 stored room runs (final map, the final region's floor; docs/benchmarks.md): ring / local thickness
-// above 5 / 3.5 mm in 11 runs (5.6-26.7 / 4.45-16.4 mm), all with a distorted or failed model (mesh p90 3-30 mm or
-// completeness 1-79 %); at most 4.7 / 4.07 mm in 14 runs, 12 of them with a model that held (2 not caught: a map
+// Measured on 27 stored room runs (final map, the final region's floor; docs/benchmarks.md): ring / local thickness
+// above 5 / 3.5 mm in 12 runs (5.6-26.7 / 4.45-16.4 mm), all with a distorted or failed model (mesh p90 3-30 mm or
+// completeness 1-79 %); at most 4.7 / 4.07 mm in 15 runs, 13 of them with a model that held (2 not caught: a map
 // bent away from the target, an older floor-ring bug). Good runs' local thickness: 0.9-2.75 mm, room_08's 4.07 mm.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "common/floor_fit.h"
@@ -56,5 +58,32 @@ struct FloorThickness {
 FloorThickness MeasureFloorThickness(const std::vector<Eigen::Vector3d>& landmarks, const Eigen::Vector3d& centre,
                                      const FloorPlane& floor,
                                      double min_inner_radius_mm, const FloorThicknessOptions& options);
+
+// One map for the model. A pose solver that restarts after a tracking loss and never joins the new map to the old one
+// leaves poses in two frames related by the odometry only, centimetres apart after a long run (pose_t.map_start_seq
+// tells them apart); a model voted from pairs in both has double walls (room_02 with next views, 7 Dec: a restart at
+// frame 3510 never joined, mesh p90 3.09 mm / 67.4 % against 0.69 mm / 92.0 % for the circle's one map). The final
+// phase keeps the pairs of one map.
+struct PairFrames {
+  int64_t seq_a = 0, seq_b = 0;  // the pair's frames
+  int64_t matches = 0;           // its pixel matches (the weight of the pair)
+};
+
+struct ModelMapChoice {
+  int64_t map_start_seq = -1;    // the map kept; -1: fewer than two maps among the pairs (every pair kept)
+  int maps = 0;                  // distinct maps among the frames of pairs with a known map
+  std::vector<bool> keep;        // per pair: voted into the model
+  int64_t pairs_other_map = 0;   // dropped: both frames in another map
+  int64_t pairs_across_maps = 0; // dropped: its two frames in two maps
+  int64_t matches_kept = 0;      // matches of the kept pairs
+  int64_t matches_dropped = 0;   // matches of the dropped ones
+};
+
+// map_of: frame seq -> map_start_seq of its final pose (>= 0). A pair with a frame missing from map_of (no final
+// pose: it keeps its live poses) or mapped to a negative value is kept whatever the choice. With two or more maps,
+// keeps the map whose pairs hold the most matches (ties: the later map, where the robot ended) and drops the pairs
+// of the others and those across two maps. Deterministic; O(pairs).
+ModelMapChoice ChooseModelMap(const std::vector<PairFrames>& pairs,
+                              const std::unordered_map<int64_t, int64_t>& map_of);
 
 }  // namespace objscan

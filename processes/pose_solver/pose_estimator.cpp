@@ -189,7 +189,16 @@ CameraPoseEstimate PoseEstimator::Estimate(int f) const {
   p.scale_source = fr.posed ? scale_source_ : ScaleSource::kNone;
   p.num_inliers = fr.posed ? fr.inliers : 0;
   p.reprojection_rms_px = fr.posed ? fr.rms : 0.0;
+  p.map_start_seq = fr.posed ? MapStartSeq(fr.seq) : -1;
   return p;
+}
+
+int64_t PoseEstimator::MapStartSeq(int64_t seq) const {
+  if (frames_.empty()) return -1;
+  int64_t start = frames_.front().seq;  // the first map (frames before its span are registered into it)
+  for (int64_t restart : UnjoinedRestartSeqs())
+    if (restart <= seq) start = std::max(start, restart);
+  return start;
 }
 
 FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReading* odometry) {

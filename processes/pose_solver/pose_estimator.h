@@ -222,6 +222,10 @@ class PoseEstimator {
   // model built from views on both sides mixes two frames. In order; the current map's start included while it is
   // unjoined.
   std::vector<int64_t> UnjoinedRestartSeqs() const;
+  // The frame seq where the map holding frame seq began (CameraPoseEstimate::map_start_seq): the first frame's seq,
+  // or the latest unjoined restart at or before seq. Changes for earlier frames when a restart is joined late. -1
+  // before any frame.
+  int64_t MapStartSeq(int64_t seq) const;
   int num_fused() const { return static_cast<int>(fused_tracks_.size()); }
   ScaleSource scale_source() const { return scale_source_; }
   int span_first_frame() const { return span_first_; }  // index of the last preliminary span's first frame (-1: none)

@@ -326,8 +326,10 @@ TEST(PoseEstimator, AMapTooSmallToJoinAtItsStartJoinsLater) {
 
 // While a restarted map is not joined to the old one, Landmarks(true) (what the node publishes at keyframes) holds
 // the new map's landmarks only: every track after the loss has a new id, so they are the ones with ids above every
-// landmark of the old map. Once joined (late, here), the whole map again.
-TEST(PoseEstimator, AnUnjoinedRestartPublishesItsOwnLandmarksOnly) {
+// landmark of the old map. Once joined (late, here), the whole map again. The poses say which map they lie in
+// (map_start_seq): the restart's first frame for the new map's, online and, when never joined, in the final poses;
+// once joined, the final poses are all in the first map.
+TEST(PoseEstimator, AnUnjoinedRestartIsAMapOfItsOwnInLandmarksAndPoses) {
   SyntheticOrbitOptions so = SimLikeOdometryErrors();
   so.lost_begin = 80;
   so.lost_end = 95;
@@ -339,8 +341,17 @@ TEST(PoseEstimator, AnUnjoinedRestartPublishesItsOwnLandmarksOnly) {
     PoseEstimator est(s.camera, o);
     int64_t old_max_id = -1;
     size_t restarted_current = 0, restarted_all = 0;
+    int64_t restart_seq = -1;  // map_start_seq of the restarted map's online poses
     for (size_t f = 0; f < s.frames.size(); ++f) {
-      est.AddFrame(s.frames[f], &s.odometry[f]);
+      const FrameResult r = est.AddFrame(s.frames[f], &s.odometry[f]);
+      if (f < 80) {  // no map yet: -1; then the first map
+        EXPECT_EQ(r.pose.map_start_seq, r.pose.status == PoseStatus::kTracking ? s.frames[0].seq : -1) << f;
+      }
+      if (f == 110) {
+        restart_seq = r.pose.map_start_seq;
+        EXPECT_GE(restart_seq, s.frames[95].seq) << "the restarted map began after the loss";
+        EXPECT_LE(restart_seq, s.frames[110].seq);
+      }
       if (f == 79)
         for (const Landmark& l : est.Landmarks()) old_max_id = std::max(old_max_id, l.id);
       if (f == 110) {
@@ -357,6 +368,24 @@ TEST(PoseEstimator, AnUnjoinedRestartPublishesItsOwnLandmarksOnly) {
       EXPECT_EQ(end_current, end_all);  // joined
     else
       EXPECT_LT(end_current, end_all);  // still apart
+    const std::vector<CameraPoseEstimate> fin = est.Finish();
+    int first_map = 0, restarted_map = 0;
+    for (const CameraPoseEstimate& p : fin) {
+      if (p.status != PoseStatus::kTracking && p.status != PoseStatus::kRelocalized) continue;
+      const bool in_first = p.map_start_seq == s.frames[0].seq;
+      first_map += in_first;
+      restarted_map += p.map_start_seq == restart_seq;
+      if (min_landmarks == 200 || p.seq < restart_seq) {
+        EXPECT_TRUE(in_first) << "frame " << p.seq << " map " << p.map_start_seq;
+      } else {
+        EXPECT_EQ(p.map_start_seq, restart_seq) << "frame " << p.seq;
+      }
+    }
+    std::printf("join_min_landmarks %d: restart began at frame %lld; final poses in the first map %d, in the "
+                "restarted map %d\n",
+                min_landmarks, static_cast<long long>(restart_seq), first_map, restarted_map);
+    EXPECT_GT(first_map, 70);
+    if (min_landmarks != 200) EXPECT_GT(restarted_map, 50);
   }
 }
 
