@@ -775,7 +775,24 @@ Planner::Motion Planner::Frontier() {
         explore_step_ = ExploreStep::kLookAround;
         return LookAround();
       }
-      EnterPhase(Phase::kNoTarget, "room explored (no frontier left), no target found");
+      // A candidate the finder still reports but could not confirm from its 4 places: with the room explored, it
+      // is the only lead left, so it gets new rounds of places before the mission gives up.
+      const bool candidate = have_target_position_ &&
+                             (target_state_ == TargetState::kCandidate || target_state_ == TargetState::kLost);
+      if (candidate && candidate_rounds_ < kMaxCandidateRounds) {
+        ++candidate_rounds_;
+        Event("room explored, the candidate at " + Mm(target_.centre_mm.head<2>()) +
+              " not confirmed yet: looking at it again from new places (round " + std::to_string(candidate_rounds_) +
+              " of " + std::to_string(kMaxCandidateRounds) + ")");
+        investigate_spots_.clear();
+        candidate_missing_since_ = -1;
+        explore_step_ = ExploreStep::kInvestigate;
+        return Investigate();
+      }
+      EnterPhase(Phase::kNoTarget,
+                 candidate ? "room explored (no frontier left), the candidate at " +
+                                 Mm(target_.centre_mm.head<2>()) + " never confirmed: no target found"
+                           : std::string("room explored (no frontier left), no target found"));
       return {};
     }
   }

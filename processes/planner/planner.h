@@ -13,7 +13,8 @@
 //                 reporting is given up after 5 s, or 20 s after a map restart or a pose regained (the finder's
 //                 clusters were the old map's points), and a candidate found again after such a change starts its
 //                 places afresh. Ends when the target is
-//                 CONFIRMED (-> APPROACH), or after explore_budget_s or with nothing left to explore (-> NO_TARGET).
+//                 CONFIRMED (-> APPROACH), or after explore_budget_s or with nothing left to explore (-> NO_TARGET;
+//                 a candidate still reported then gets up to 2 more rounds of 4 places first).
 //                 Nothing reachable at all (no usable camera pose yet): the look-around starts again.
 //   1 APPROACH    to the nearest reachable free point of the orbit circle (orbit_radius_mm around the target centre),
 //                 head on the target centre; while none is reachable, exploring frontiers (the orbit starts only at
@@ -350,6 +351,10 @@ class Planner {
   static constexpr int kMaxVisitedGoalResets = 3;
   static constexpr double kVisitedGoalResetPathMm = 1000;
   std::vector<Eigen::Vector2d> investigate_spots_;
+  // Rounds of 4 places given again to a candidate still unconfirmed once the room is explored (room_01, 7 Dec: the
+  // sphere a candidate for 22 s, then "no target" with 134 s of the budget left).
+  int candidate_rounds_ = 0;
+  static constexpr int kMaxCandidateRounds = 2;
   static constexpr int64_t kInvestigateHoldUs = 5000000;  // µs, a candidate with nowhere to look from: look at it
   int64_t investigate_hold_until_ = -1;  // µs, until then (data time), shuttling on the trail with the head on it
   TrailShuttle investigate_shuttle_;

@@ -285,7 +285,7 @@ TargetObservation ToyWorld::FindTarget() {
     for (const Eigen::Vector2d& p : places_) known = known || (p - base_.position()).norm() < 150;
     if (!known) places_.push_back(base_.position());
   }
-  if (places_.size() >= 3) confirmed_ = true;
+  if (static_cast<int>(places_.size()) >= places_to_confirm_) confirmed_ = true;
   o.state = places_.empty() ? TargetState::kSearching
                             : (confirmed_ ? TargetState::kConfirmed : TargetState::kCandidate);
   if (confirmed_ && seq_ - last_in_view_ > 45) o.state = TargetState::kLost;

@@ -6,7 +6,7 @@
 //               3 m, facing the camera, not hidden by another solid; positions get seeded N(0, 3 mm) noise.
 //               Untextured solids give points on their edges only.
 //   target      the finder "sees" the target when its centre is in the image (20 px inside), within 3 m and not
-//               hidden; CANDIDATE after 1-2 places (>= 300 mm apart), CONFIRMED from 3 places; a confirmed target
+//               hidden; CANDIDATE after 1-2 places (>= 150 mm apart), CONFIRMED from 3 places (SetPlacesToConfirm); a confirmed target
 //               out of view for 1.5 s is LOST until seen again. Reported centre = truth + (8, -6, 4) mm.
 //   dense model target surface samples (10 mm) seen in 2 updates from >= 20 mm apart at incidence <= 60 deg
 //               within 2 m become voxels.
@@ -85,6 +85,8 @@ class ToyWorld {
   // set starts again from nothing (every point must be seen twice more), and the finder forgets a target it has not
   // confirmed until it has been in view kRefindFrames frames again.
   void ForceMapRestart(int64_t at_seq) { force_restart_at_ = at_seq; }
+  // Distinct places the finder needs to confirm the target (default 3; a large value: a candidate never confirmed).
+  void SetPlacesToConfirm(int places) { places_to_confirm_ = places; }
   // The finder reports LOST for frames in [from, to) (to test re-finding).
   void ForceLost(int64_t from_seq, int64_t to_seq) {
     force_lost_from_ = from_seq;
@@ -121,6 +123,7 @@ class ToyWorld {
   int64_t last_in_view_ = -1;
   int64_t force_dropped_from_ = -1;
   bool confirmed_ = false;
+  int places_to_confirm_ = 3;
   int64_t force_lost_from_ = -1, force_lost_to_ = -1;
   int64_t force_restart_at_ = -1;
   static constexpr int kRefindFrames = 240;  // frames (8 s) in view a forgotten target needs after a map restart
