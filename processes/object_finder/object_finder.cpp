@@ -547,6 +547,33 @@ bool ObjectFinder::IsConfirmable(const Track& t) const {
   return true;
 }
 
+std::string ObjectFinder::WhyNotConfirmable(const Track& t, const std::vector<Cluster>& clusters) const {
+  std::string why;
+  auto add = [&why](const std::string& part) { why += (why.empty() ? "" : "; ") + part; };
+  char text[200];
+  if (!t.passes) {
+    const bool have_cluster = t.matched && t.cluster >= 0 && t.cluster < static_cast<int>(clusters.size());
+    add("fails the rule now" + (have_cluster && !clusters[t.cluster].rejection.empty()
+                                     ? " (" + clusters[t.cluster].rejection + ")"
+                                     : std::string(t.look_closer ? " (a little too large from afar: look closer)" : "")));
+  }
+  if (static_cast<int>(t.views.size()) < options_.min_views) {
+    std::snprintf(text, sizeof(text), "%zu of %d views (a view: observed, in view, passing, %.0f mm or %.0f deg from "
+                  "the others)", t.views.size(), options_.min_views, options_.min_view_baseline_mm,
+                  options_.min_view_bearing_deg);
+    add(text);
+  }
+  double moved = 0;
+  for (const auto& c : t.recent_centres) moved = std::max(moved, (c - t.box.centre_mm).norm());
+  if (moved > options_.max_centre_motion_mm) {
+    std::snprintf(text, sizeof(text), "centre moved %.0f mm over its last views (max %.0f)", moved,
+                  options_.max_centre_motion_mm);
+    add(text);
+  }
+  if (!t.seen) add("not observed in this update");
+  return why;
+}
+
 double ObjectFinder::Distance(const FinderInput& input, const Track& t) const {
   if (!input.has_robot_position || !input.robot_xy_mm.allFinite()) return -1;
   return std::hypot(t.box.centre_mm.x() - input.robot_xy_mm.x(), t.box.centre_mm.y() - input.robot_xy_mm.y());
@@ -627,6 +654,7 @@ void ObjectFinder::FillResult(const FinderInput& input, const std::vector<Cluste
 
   const int n = options_.min_views;
   const Track* target = nullptr;
+  r.not_confirmed_why.clear();
   r.state = TargetState::kSearching;
   r.confidence = 0;
   if (target_id_ >= 0 && (target = FindTrack(target_id_))) {
@@ -640,6 +668,7 @@ void ObjectFinder::FillResult(const FinderInput& input, const std::vector<Cluste
       target = &tracks_[best];
       r.state = TargetState::kCandidate;
       r.box = ToTargetBox(target->box);
+      r.not_confirmed_why = WhyNotConfirmable(*target, clusters);
       r.confidence = 0.4 * std::min<double>(n, static_cast<double>(target->views.size())) / n;
     }
   }

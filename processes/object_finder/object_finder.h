@@ -210,6 +210,9 @@ struct FinderResult {
   // Set only in the update that dropped a confirmed target: why (the rule's reason, in how many views in a row, the
   // box it had then), e.g. "too large in 5 views in a row (box 310x250x220 mm)".
   std::string drop_reason;
+  // While CANDIDATE: why it is not confirmed yet, every unmet condition, "; "-separated, e.g. "2 of 3 views; centre
+  // moved 49 mm over its last views (max 30); not observed in this update" ("" otherwise).
+  std::string not_confirmed_why;
 };
 
 class ObjectFinder {
@@ -277,6 +280,8 @@ class ObjectFinder {
                 const std::vector<Cluster>& clusters) const;
   bool IsCandidate(const Track& track) const;
   bool IsConfirmable(const Track& track) const;
+  // The unmet conditions of IsConfirmable for a candidate, in words (FinderResult::not_confirmed_why).
+  std::string WhyNotConfirmable(const Track& track, const std::vector<Cluster>& clusters) const;
   // Index into tracks_ of the best of the tracks accepted by `accept` (nearest to the robot first), -1 if none.
   template <class Pred>
   int Best(const FinderInput& input, Pred accept) const;

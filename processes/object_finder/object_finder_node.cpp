@@ -409,6 +409,10 @@ void ObjectFinderNode::LogChanges(const FinderResult& r) {
               rejected[i]->rejection;
     LogInfo(text + at);
   }
+  // While a candidate, every 10 updates: what its confirmation still lacks (a run that never confirms its target
+  // says why: too few distinct views, a centre still moving, the rule failing now).
+  if (r.state == TargetState::kCandidate && ++candidate_updates_ % 10 == 0 && !r.not_confirmed_why.empty())
+    LogInfo("candidate " + Describe(r.box) + " not confirmed yet: " + r.not_confirmed_why + at);
   std::vector<int> others;
   for (const auto& c : r.other_candidates) others.push_back(c.track_id);
   if (others != logged_others_ && !others.empty()) {

@@ -170,6 +170,7 @@ class ObjectFinderNode : public Node {
   int64_t target_published_us_ = 0;  // wall clock of its last publication
   TargetState logged_state_ = TargetState::kSearching;
   int64_t searching_updates_ = 0;  // updates while searching (the rejected clusters are logged every 20)
+  int64_t candidate_updates_ = 0;  // updates with a candidate (what its confirmation lacks is logged every 10)
   int logged_track_ = -1;
   std::vector<int> logged_others_;
   bool logged_floor_ = false;
