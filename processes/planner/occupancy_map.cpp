@@ -215,6 +215,18 @@ void OccupancyMap::MarkFelt(const Eigen::Vector2d& p) {
   landmarks_dirty_ = true;
 }
 
+bool OccupancyMap::FeltWithin(const Eigen::Vector2d& p, double radius_mm) const {
+  if (felt_cells_ == 0 || !p.allFinite()) return false;
+  const int reach = static_cast<int>(std::ceil(radius_mm / options_.cell_mm)) + 1;
+  for (int dy = -reach; dy <= reach; ++dy)
+    for (int dx = -reach; dx <= reach; ++dx) {
+      int index;
+      const Eigen::Vector2d q = p + options_.cell_mm * Eigen::Vector2d(dx, dy);
+      if (IndexOf(q, &index) && felt_[index] && (CentreOf(index) - p).norm() <= radius_mm) return true;
+    }
+  return false;
+}
+
 void OccupancyMap::RememberOldMap() {
   for (size_t i = 0; i < obstacle_.size(); ++i) {
     if (obstacle_[i]) remembered_[i] = 1;

@@ -84,6 +84,8 @@ class OccupancyMap {
   // obstacle for the rest of the mission (no later landmark set clears it). Ignored outside the map.
   void MarkFelt(const Eigen::Vector2d& position_mm);
   int felt_cells() const { return felt_cells_; }
+  // True when a felt cell's centre lies within radius_mm of p (mm, world).
+  bool FeltWithin(const Eigen::Vector2d& p, double radius_mm) const;
   // Recomputes states and distance fields when an input changed since the last call.
   void Update();
 

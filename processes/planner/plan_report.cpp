@@ -48,7 +48,7 @@ std::string PlanJson(const PlanSummary& s, int64_t end_utime) {
     << ",\n  \"min_coverage\": " << Number(s.min_coverage, 4)
     << ",\n  \"coverage_samples\": " << s.coverage_samples << ",\n  \"disagreement_max_mm\": "
     << Number(s.max_disagreement.distance_mm, 1) << ",\n  \"disagreement_max_deg\": "
-    << Number(s.max_disagreement.angle_rad * 180.0 / M_PI, 2) << ",\n  \"safety_stops\": " << s.safety_stops << ",\n  \"orbit_glances\": " << s.orbit_glances << ",\n  \"relocalizations\": " << s.relocalizations << ",\n  \"map_restarts\": " << s.map_restarts << ",\n  \"contacts\": " << s.contacts
+    << Number(s.max_disagreement.angle_rad * 180.0 / M_PI, 2) << ",\n  \"safety_stops\": " << s.safety_stops << ",\n  \"pan_limit_reversals\": " << s.pan_limit_reversals << ",\n  \"orbit_glances\": " << s.orbit_glances << ",\n  \"relocalizations\": " << s.relocalizations << ",\n  \"map_restarts\": " << s.map_restarts << ",\n  \"contacts\": " << s.contacts
     << ",\n  \"target\": {\"confirmed\": " << (s.target_confirmed ? "true" : "false") << ", \"centre_mm\": ["
     << Number(s.target.centre_mm.x(), 1) << ", " << Number(s.target.centre_mm.y(), 1) << ", "
     << Number(s.target.centre_mm.z(), 1) << "], \"size_mm\": [" << Number(s.target.size_mm.x(), 1) << ", "

@@ -38,6 +38,7 @@ constexpr double kOrbitMappingMm = 1600;         // mm from the target: unknown 
 constexpr int kMaxOrbitMappings = 6;             // such trips per orbit at most
 constexpr double kCameraTurnPerMm = 0.2 * kDeg;  // rad per mm of base travel (see Motion)
 constexpr double kStillCameraTurn = 2 * kDeg;    // rad/s the camera may turn without travel
+constexpr double kInPlaceSpeedMm = 20;           // mm/s: slower base motion with a turn is a turn in place
 
 std::string Mm(const Eigen::Vector2d& p) {
   char buffer[64];
@@ -384,8 +385,12 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
   bool limited = false;
   const bool wants_to_move = std::abs(v.v_mm_s) > 1;
+  // The trail is where the base has been, so the map may hold it back there (a wall drawn too near); not where it
+  // has felt something since (the toy room: a look-around shuttle pushed 9 times a second into a felt box on its trail).
   const bool on_trail = motion.trail != nullptr && wants_to_move && have_odometry_base_ &&
-                        StaysOnTrail(*motion.trail, odometry_base_, v, 0.5, kTrailToleranceMm);
+                        StaysOnTrail(*motion.trail, odometry_base_, v, 0.5, kTrailToleranceMm) &&
+                        !map_.FeltWithin(Integrate(base_, v, 0.5).position(),
+                                         options_.map.footprint_radius_mm + options_.map.cell_mm);
   if (!on_trail) v = SafeVelocity(map_, base_, v, 0.5, &limited);
   if (limited) ++safety_stops_;
   if (wants_to_move && v.v_mm_s == 0) {
@@ -399,15 +404,50 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
     pan = pan_command_;
     tilt = tilt_command_;
   }
+  const double aim_pan = pan;  // the pan the aim asks for, before the limit (beyond it: the base must turn the camera)
   pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
   // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
   double camera_rate = turn;
   if (motion.camera_turn_needs_translation)
     camera_rate = std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s));
-  const double step = turn * dt, camera_step = camera_rate * dt, base_turn = v.omega_rad_s * dt;
-  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -camera_step, camera_step);
-  pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
+  const double step = turn * dt, camera_step = camera_rate * dt;
+  // A base turning in place with the head at its pan limit takes the camera round with it: a pure rotation at the
+  // base's rate, which loses the pose solver's map (ten-room run, 7 Dec: 7 of 9 pose losses came after 46-54
+  // frames of turning in place at 30 deg/s with the pan at -170.5 deg, each one a map restart). The base then
+  // turns the other way round (the long way to its heading), so the head can keep its aim; the choice holds until
+  // the motion stops asking for a turn in place the other way (the follower's request flips sign past 180 deg).
+  const bool in_place = std::abs(v.v_mm_s) < kInPlaceSpeedMm && std::abs(v.omega_rad_s) > 1e-6;
+  if (!in_place) forced_turn_sign_ = 0;
+  if (in_place && forced_turn_sign_ != 0) {
+    if ((v.omega_rad_s > 0) == (forced_turn_sign_ > 0))
+      forced_turn_sign_ = 0;  // the request turns that way by itself now
+    else
+      v.omega_rad_s = forced_turn_sign_ * std::abs(v.omega_rad_s);
+  }
+  auto pan_after = [&](double base_turn, double wanted_pan) {  // the pan that holds the aim, within the budget
+    const double camera_turn = std::clamp(base_turn + (wanted_pan - pan_command_), -camera_step, camera_step);
+    return pan_command_ + camera_turn - base_turn;
+  };
+  // The pan that would hold the aim exactly after a base turn, taken the short way round from the head's pan (a
+  // pan beyond the limit: the head cannot, the base must bring the camera round).
+  auto holding_pan = [&](double base_turn) { return pan_command_ + WrapAngle(aim_pan - pan_command_) - base_turn; };
+  const double excess = std::abs(holding_pan(v.omega_rad_s * dt)) - l.max_pan_rad;
+  // How far the camera turns this step when the head is held at its limit (beyond camera_step: swept by the base).
+  auto camera_sweep = [&](double base_turn) {
+    return std::abs(base_turn + std::clamp(pan_after(base_turn, pan), -l.max_pan_rad, l.max_pan_rad) - pan_command_);
+  };
+  const double b = v.omega_rad_s * dt;
+  const bool aim_needs_other_way =
+      motion.aim_at_point && excess > 1e-9 && std::abs(holding_pan(-b)) - l.max_pan_rad < excess;
+  const bool swept = camera_sweep(b) > camera_step + 1e-9 && camera_sweep(-b) <= camera_step + 1e-9;
+  if (in_place && forced_turn_sign_ == 0 && (aim_needs_other_way || swept)) {
+    forced_turn_sign_ = v.omega_rad_s > 0 ? -1 : 1;
+    v.omega_rad_s = -v.omega_rad_s;
+    ++pan_limit_reversals_;
+  }
+  const double base_turn = v.omega_rad_s * dt;
+  pan = std::clamp(pan_after(base_turn, pan), -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
   tilt_command_ = tilt;
@@ -1322,6 +1362,7 @@ PlanSummary Planner::Summary() const {
   s.target = target_;
   s.confirmed_seq = confirmed_seq_;
   s.safety_stops = safety_stops_;
+  s.pan_limit_reversals = pan_limit_reversals_;
   s.contacts = contacts_;
   s.orbit_glances = glances_;
   s.relocalizations = relocalizations_;

@@ -149,6 +149,7 @@ struct PlanSummary {
   TargetObservation target;           // last confirmed estimate (or last candidate)
   int64_t confirmed_seq = -1;         // frame of the first confirmation
   int64_t safety_stops = 0;           // decisions whose speed the swept-footprint check cut
+  int64_t pan_limit_reversals = 0;    // turns in place reversed to keep the head within its pan limit
   int orbit_glances = 0;              // ORBIT looked at a blocked arc ahead (target out of view meanwhile)
   int relocalizations = 0;            // times the base retraced its trail for a new map after the pose was lost
   int map_restarts = 0;               // landmark sets under half the one before (a restarted, unjoined map)
@@ -307,6 +308,8 @@ class Planner {
   Eigen::Vector2d progress_position_ = Eigen::Vector2d::Zero();
   int64_t progress_utime_ = 0;
   double commanded_v_mm_s_ = 0;
+  int forced_turn_sign_ = 0;       // a turn in place reversed at the head's pan limit (+1 ccw, -1 cw; 0 none)
+  int64_t pan_limit_reversals_ = 0;  // turns in place reversed so (status, plan.json)
   ContactDetector contact_;  // the odometry stood still while the base was driven (CheckContact)
   int contacts_ = 0;
   void CheckContact(double dt);

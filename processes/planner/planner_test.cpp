@@ -47,6 +47,9 @@ struct RunLog {
   bool backed_up = false;
   int64_t longest_push_frames = 0;  // frames in a row the planner drove a base that a solid held
   std::vector<std::string> events;  // the planner's events, "[seq] text"
+  // Frames turning in place (> 5 deg/s, < 20 mm/s) with the pan command at its limit: the camera swept round with
+  // the base, a pure rotation that loses the pose solver's map (the ten-room run's main cause of map restarts).
+  int64_t pan_limit_turn_frames = 0;
 };
 
 PlannerOptions TestOptions() {
@@ -116,6 +119,9 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
       if (planner.activity() == "look around") ++log.look_around_frames;
       log.backed_up = log.backed_up || c.v_mm_s < -1;
     }
+    if (!c.stop && std::abs(c.omega_rad_s) > 5 * kDeg && std::abs(c.v_mm_s) < 20 &&
+        std::abs(c.pan_rad) > options.limits.max_pan_rad - 0.5 * kDeg)
+      ++log.pan_limit_turn_frames;
     if (!c.stop) last_pan = c.pan_rad;
     if (!c.stop) {
       const bool ok = c.v_mm_s >= -100 && c.v_mm_s <= 400 && std::abs(c.omega_rad_s) <= 30 * kDeg + 1e-9 &&
@@ -175,14 +181,16 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
   if (Verbose())
     std::printf("frames %lld, path %.0f mm, coverage %.3f (%d samples), orbit %.0f %%, next views %zu, "
                 "min clearance %.0f mm (%s), safety stops %lld, orbit frames %lld (on the circle %lld, paused %lld), "
-                "max radius error %.1f mm, max off-axis %.2f deg (%.2f deg off the circle too), glances %d, disagreement max %.0f mm %.2f deg\n",
+                "max radius error %.1f mm, max off-axis %.2f deg (%.2f deg off the circle too), glances %d, disagreement max %.0f mm %.2f deg, "
+                "pan-limit turn frames %lld, reversals %lld\n",
                 static_cast<long long>(log.frames), log.summary.path_length_mm, log.summary.coverage,
                 log.summary.coverage_samples, log.summary.orbit_percent, log.summary.next_views.size(),
                 log.min_clearance_mm, log.min_clearance_where.c_str(), static_cast<long long>(log.summary.safety_stops),
                 static_cast<long long>(log.orbit_frames), static_cast<long long>(log.orbit_frames_checked),
                 static_cast<long long>(log.orbit_paused_frames), log.orbit_max_radius_error_mm,
                 log.orbit_max_off_axis_deg, log.orbit_max_off_axis_all_deg, log.summary.orbit_glances, log.summary.max_disagreement.distance_mm,
-                log.summary.max_disagreement.angle_rad / kDeg);
+                log.summary.max_disagreement.angle_rad / kDeg, static_cast<long long>(log.pan_limit_turn_frames),
+                static_cast<long long>(log.summary.pan_limit_reversals));
   return log;
 }
 
@@ -263,6 +271,8 @@ TEST(PlannerClosedLoopTest, ACandidateForgottenAtAMapRestartIsLookedAtAgain) {
       w.ForceMapRestart(restart_seq);
     }
   });
+  // No turn in place sweeps the camera round with the head at its pan limit (before the reversal: 25 frames).
+  EXPECT_LE(log.pan_limit_turn_frames, 5);
   ASSERT_GE(restart_seq, 0) << "no candidate was investigated";
   // The first frame after EXPLORE (APPROACH may last no frame when the robot is already on the circle).
   int64_t confirmed = -1;
@@ -430,6 +440,8 @@ TEST(PlannerClosedLoopTest, ACandidateStillUnconfirmedWhenTheRoomIsExploredGetsM
   toy::ToyWorld world(toy::MakeLivingRoom(true), options.robot);
   world.SetPlacesToConfirm(100000);
   const RunLog log = RunMission(world, options, 30 * 450);
+  // No turn in place sweeps the camera round with the head at its pan limit (before the reversal: 178 frames).
+  EXPECT_LE(log.pan_limit_turn_frames, 5);
   EXPECT_EQ(log.end_phase, Phase::kNoTarget) << PhaseName(log.end_phase);
   int rounds = 0, gave_up = 0;
   for (const std::string& e : log.events) {
@@ -464,6 +476,8 @@ TEST(PlannerClosedLoopTest, ACircleTheMapCannotReachEndsTheApproachAfterItsBudge
   room.solids.push_back(carpet);
   toy::ToyWorld world(room, options.robot);
   const RunLog log = RunMission(world, options, 30 * 300);
+  // No turn in place sweeps the camera round with the head at its pan limit (before the reversal: 298 frames).
+  EXPECT_LE(log.pan_limit_turn_frames, 5);
   int approach_explores = 0;
   for (const std::string& e : log.events)
     approach_explores += e.find("approach: the orbit circle is not reachable yet: exploring") != std::string::npos;
@@ -500,6 +514,8 @@ TEST(PlannerClosedLoopTest, ABypassBackwardsRoundTheTargetCountsTheArcItSkips) {
   room.solids.push_back(bench);
   toy::ToyWorld world(room, options.robot);
   const RunLog log = RunMission(world, options, 30 * 600);
+  // No turn in place sweeps the camera round with the head at its pan limit (before the reversal: 65 frames).
+  EXPECT_LE(log.pan_limit_turn_frames, 5);
   int bypasses = 0;
   bool complete = false;
   for (const std::string& e : log.events) {
