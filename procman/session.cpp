@@ -518,15 +518,14 @@ void SessionRun::CheckResults() {
   // frames the dense modeler voted from, and the final re-vote did not keep one map: the live votes stayed): the model
   // and the target can be centimetres off while everything else looks fine (room_08: restart at frame 2074 during
   // the orbit, target 306 mm off). Loud, with what to try.
-  // The dense modeler's re-vote with the final poses keeps one map's pairs (final_model_map_start_seq) or found them
-  // all in one (final_maps): then the model is in one frame whatever the frames' range.
+  // The dense modeler's re-vote with the final poses keeps one map's pairs and views (final_model_map_start_seq >= 0,
+  // final poses that name their map): then the model is in one frame whatever the frames' range.
   std::string mixed_frames;
   {
     double restart = -1, first = -1, last = -1, revoted = 0, maps = 0, kept_map = -1;
     const bool one_map = StatusValue("dense_modeler", "final_revoted_pairs", &revoted) && revoted > 0 &&
-                         StatusValue("dense_modeler", "final_maps", &maps) &&
-                         StatusValue("dense_modeler", "final_model_map_start_seq", &kept_map) &&
-                         (maps <= 1 || kept_map >= 0);
+                         StatusValue("dense_modeler", "final_maps", &maps) && maps >= 1 &&
+                         StatusValue("dense_modeler", "final_model_map_start_seq", &kept_map) && kept_map >= 0;
     if (!one_map && StatusValue("pose_solver", "last_unjoined_restart_seq", &restart) && restart >= 0 &&
         StatusValue("dense_modeler", "model_first_seq", &first) &&
         StatusValue("dense_modeler", "model_last_seq", &last) && first >= 0 && first < restart && restart <= last) {

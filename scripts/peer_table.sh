@@ -62,6 +62,7 @@ run_set() {
     # COLMAP made no model (e.g. "no good initial image pair"): its row says so; objscan is scored on its own.
     colmap_failed=$(grep -h -m1 -E "No good initial image pair|ERROR|error:" "$d/colmap/logs/mapper.log" "$d/colmap.out" \
                     2>/dev/null | head -1 | sed 's/^[ =>]*//' | cut -c1-120)
+    [ -n "$colmap_failed" ] || colmap_failed="colmap_peer.sh failed (see $d/colmap.out)"
     mkdir -p "$d/colmap"
     echo "method     registered  ate_rmse_mm rot_mean_deg          scale     wall_s" > "$d/colmap/results.txt"
     if [ ${#traj_args[@]} -gt 0 ]; then
@@ -69,8 +70,9 @@ run_set() {
       e=$("$BIN/objscan_evaluate" trajectory "$d/objscan/trajectory.txt" "$d/dataset/poses_gt.txt") ||
         die "$name: objscan_evaluate"
       frames=$(grep -vc '^#' "$d/dataset/poses_gt.txt")
-      awk -v w="${wall:-0}" -v f="$frames" '$1=="matched" {m=$2} $1=="ate_rmse" {a=$2} $1=="rotation_mean_deg" {r=$2}
-        $1=="scale" {s=$2} END {printf "objscan %d/%d %.4f %.4f %s %.1f\n", m, f, a, r, s, w}' <<< "$e" \
+      awk -v w="${wall:-0}" -v f="$frames" 'BEGIN {m = 0; a = "-"; r = "-"; s = "-"}
+        $1=="matched" {m=$2} $1=="ate_rmse" {a=$2} $1=="rotation_mean_deg" {r=$2}
+        $1=="scale" {s=$2} END {printf "objscan %d/%d %s %s %s %.1f\n", m, f, a, r, s, w}' <<< "$e" \
         >> "$d/colmap/results.txt"
     fi
   fi
@@ -78,12 +80,12 @@ run_set() {
   local radius
   radius=$(awk 'BEGIN {n = 0} !/^#/ && NF >= 8 {x[n]=$2; y[n]=$3; z[n]=$4; n++}
                 END {for (i=0;i<n;i++) {cx+=x[i]; cy+=y[i]; cz+=z[i]}; cx/=n; cy/=n; cz/=n;
-                     for (i=0;i<n;i++) r+=sqrt((x[i]-cx)^2+(y[i]-cy)^2+(z[i]-cz)^2); printf "%.1f", r/n}' \
+                     for (i=0;i<n;i++) r+=sqrt((x[i]-cx)^2+(y[i]-cy)^2+(z[i]-cz)^2); if (n > 0) printf "%.1f", r/n}' \
            "$d/dataset/poses_gt.txt")
   while read -r method registered ate rot scale wall_s; do
     [ "$method" = method ] && continue
-    local pct
-    pct=$(awk -v a="$ate" -v r="$radius" 'BEGIN {printf "%.2f", 100 * a / r}')
+    local pct="-"
+    [[ "$ate" =~ ^[0-9.]+$ && "$radius" =~ ^[0-9.]+$ ]] && pct=$(awk -v a="$ate" -v r="$radius" 'BEGIN {printf "%.2f", 100 * a / r}')
     local note=""
     [ "$method" = objscan ] && note="run status $status (exit $rc)"
     rows+=("| $name | $method | $registered | $ate ($pct %) | $rot | $wall_s | $note |")

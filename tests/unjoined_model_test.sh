@@ -29,26 +29,29 @@ PROCS
   echo "$rc" > "$WORK/$name.rc"
 }
 
-# mesh p90 (mm) and completeness of NAME's model, aligned on the final poses of the frames in [FIRST, END) (seq).
+# score NAME FIRST END: NAME's model against the truth, aligned on the final poses of the frames in [FIRST, END)
+# (seq); sets p90 (mm) and comp, both checked to be numbers.
 score() {
   local d="$WORK/$1" seg="$WORK/$1.segment.txt"
   awk -v a="$2" -v b="$3" '/^#/ || ($1 * 30 >= a - 0.5 && $1 * 30 < b - 0.5)' "$d/trajectory.txt" > "$seg"
   "$BIN/objscan_evaluate" surface "$d/model_mesh.ply" "$d/gt/target_surface.ply" --truth-mesh "$d/gt/target_mesh.ply" \
     --align "$seg" "$d/gt/poses_gt.txt" --visible-from "$d/gt/poses_gt.txt" > "$WORK/$1.eval" || fail "evaluate $1"
-  echo "$(awk '$1=="accuracy_p90" {print $2}' "$WORK/$1.eval") $(awk '$1=="completeness" {print $2}' "$WORK/$1.eval")"
+  p90=$(awk '$1=="accuracy_p90" {print $2}' "$WORK/$1.eval")
+  comp=$(awk '$1=="completeness" {print $2}' "$WORK/$1.eval")
+  [[ "$p90" =~ ^[0-9.]+$ && "$comp" =~ ^[0-9.]+$ ]] || { cat "$WORK/$1.eval"; fail "$1: no accuracy figures"; }
 }
 
 run unjoined 7701 "--join-search 0 --relocalize-search 0"
 d="$WORK/unjoined"; s="$d/summary.json"
 [ -f "$s" ] || { tail -n 30 "$WORK/unjoined.out"; fail "no summary.json"; }
-restart=$(grep -o 'maps never joined to the one before them, from frames [0-9]*' "$d/logs/pose_solver.log" | awk '{print $NF}')
+restart=$(grep -o 'maps never joined to the one before them, from frames [0-9]*' "$d/logs/pose_solver.log" | awk '{print $NF}' | head -1 || true)
 [ -n "$restart" ] || { tail -n 20 "$d/logs/pose_solver.log"; fail "the pose solver did not report the unjoined map"; }
-kept=$(grep -o 'keeps the map that began at frame [0-9]*' "$d/logs/dense_modeler.log" | awk '{print $NF}')
+kept=$(grep -o 'keeps the map that began at frame [0-9]*' "$d/logs/dense_modeler.log" | awk '{print $NF}' | tail -1 || true)
 [ -n "$kept" ] || { grep -i "final votes" "$d/logs/dense_modeler.log"; fail "the dense modeler did not keep one map"; }
 [ "$(cat "$WORK/unjoined.rc")" = 0 ] || { grep '"error"' "$s"; fail "one map kept, yet the session failed"; }
 grep -q '"status": "ok"' "$s" || { cat "$s"; fail "one map kept, yet status not ok"; }
-if [ "$kept" -ge "$restart" ]; then read -r p90_u comp_u < <(score unjoined "$restart" 1000000)
-else read -r p90_u comp_u < <(score unjoined 0 "$restart"); fi
+if [ "$kept" -ge "$restart" ]; then score unjoined "$restart" 1000000; else score unjoined 0 "$restart"; fi
+p90_u=$p90 comp_u=$comp
 
 run live_votes 7703 "--join-search 0 --relocalize-search 0" "--max-stored-matches 0"
 s="$WORK/live_votes/summary.json"
@@ -61,7 +64,8 @@ run joined 7702 ""
 s="$WORK/joined/summary.json"
 [ "$(cat "$WORK/joined.rc")" = 0 ] || { grep '"error"' "$s"; fail "the joined run failed"; }
 grep -q '"status": "ok"' "$s" || { cat "$s"; fail "joined run: status not ok"; }
-read -r p90_j comp_j < <(score joined 0 1000000)
+score joined 0 1000000
+p90_j=$p90 comp_j=$comp
 echo "restart at frame $restart never joined, the model kept the map from frame $kept:"
 echo "  mesh p90 $p90_u mm, completeness $comp_u (maps joined: $p90_j mm, $comp_j)"
 awk -v p="$p90_u" -v pj="$p90_j" 'BEGIN { exit !(p <= 1.0 && p <= 2 * pj + 0.1) }' ||

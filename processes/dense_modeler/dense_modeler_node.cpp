@@ -767,7 +767,8 @@ int64_t DenseModelerNode::KeepOneMap(std::vector<StoredPair>* pairs) {
   status_.SetValue("final_model_map_start_seq", static_cast<double>(choice.map_start_seq));
   status_.SetValue("final_pairs_other_maps", static_cast<double>(choice.pairs_other_map + choice.pairs_across_maps));
   const int64_t live_votes = grid_.total_votes();
-  if (choice.map_start_seq < 0) return live_votes;
+  // One map (or none known) and nothing dropped: every pair stays; the map still filters the carving views.
+  if (choice.pairs_other_map + choice.pairs_across_maps == 0) return live_votes;
   std::vector<StoredPair> kept;
   for (size_t i = 0; i < pairs->size(); ++i)
     if (choice.keep[i]) kept.push_back(std::move((*pairs)[i]));
@@ -832,6 +833,7 @@ bool DenseModelerNode::RevoteWithFinalPoses() {
   auto keep_live_votes = [this]() {  // the live grid (every map's votes) stays: no map was chosen after all
     model_map_start_seq_ = -1;
     status_.SetValue("final_model_map_start_seq", -1);
+    status_.SetValue("final_pairs_other_maps", 0);
     return false;
   };
   if (with_final == 0) {

@@ -54,8 +54,9 @@
 // model_off_trajectory_frame (1 when that offset is over 5 mm: the model is not in trajectory.txt's frame, the
 // session fails the run), final_floor_thickness_mm, final_floor_local_thickness_mm and final_floor_points (the final
 // map's floor around the target, map_consistency.h; -1 = not measured; an inconsistent map is the error state),
-// final_maps (maps among the final poses of the pairs' frames), final_model_map_start_seq (the one map the re-vote
-// kept among two or more; -1 = no choice) and final_pairs_other_maps (pairs dropped for it).
+// final_maps (maps among the final poses of the pairs' frames), final_model_map_start_seq (the map the re-voted
+// model lies in, the only one or the one kept among several; -1 = none known, or the live votes stayed) and
+// final_pairs_other_maps (pairs dropped for it: a frame in another map).
 // Handlers run inside
 // Bus::Handle() on the caller's thread; not thread-safe.
 #pragma once
@@ -228,10 +229,10 @@ class DenseModelerNode : public Node {
   // frames without) when revote_final_poses is set and every pair was stored. True when it did (the carving views
   // then take the final poses too; otherwise the live ones the kept votes were cast with).
   bool RevoteWithFinalPoses();
-  // Final phase, before the re-vote: with final poses in two or more maps never joined (pose_t.map_start_seq), keeps
-  // the pairs of one map (ChooseModelMap), logs and reports the choice (status final_maps,
-  // final_model_map_start_seq, final_pairs_other_maps). Returns the live votes the kept pairs' share stands for
-  // (all the live votes when nothing was dropped).
+  // Final phase, before the re-vote: keeps the pairs of one map (ChooseModelMap: final poses in maps never joined,
+  // pose_t.map_start_seq), logs a choice among several and reports it (status final_maps, final_model_map_start_seq,
+  // final_pairs_other_maps); the carving views of other maps are left out later. Returns the live votes the kept
+  // pairs' share stands for (all the live votes when nothing was dropped).
   int64_t KeepOneMap(std::vector<StoredPair>* pairs);
   // Final phase, when the live votes were kept although final poses arrived: the median camera centre offset between
   // the two (status live_final_offset_mm, model_off_trajectory_frame; a warning beyond kLiveFinalOffsetWarnMm).

@@ -80,7 +80,7 @@ ModelMapChoice ChooseModelMap(const std::vector<PairFrames>& pairs,
     if (a >= 0 && a == b) matches_in[a] += p.matches;
   }
   choice.maps = static_cast<int>(matches_in.size());
-  if (choice.maps >= 2) {
+  if (choice.maps >= 1) {
     int64_t best = -1;
     for (const auto& [map, matches] : matches_in)
       if (best < 0 || matches >= matches_in[best]) best = map;  // ascending: a tie goes to the later map
@@ -88,12 +88,12 @@ ModelMapChoice ChooseModelMap(const std::vector<PairFrames>& pairs,
   }
   for (size_t i = 0; i < pairs.size(); ++i) {
     const int64_t a = map_at(pairs[i].seq_a), b = map_at(pairs[i].seq_b);
-    if (choice.map_start_seq >= 0 && a >= 0 && b >= 0) {
-      if (a != b) {
+    if (choice.map_start_seq >= 0) {
+      if (a >= 0 && b >= 0 && a != b) {
         choice.keep[i] = false;
         ++choice.pairs_across_maps;
-      } else if (a != choice.map_start_seq) {
-        choice.keep[i] = false;
+      } else if ((a >= 0 && a != choice.map_start_seq) || (b >= 0 && b != choice.map_start_seq)) {
+        choice.keep[i] = false;  // in another map (a frame without a final pose keeps its live one: that map's too)
         ++choice.pairs_other_map;
       }
     }

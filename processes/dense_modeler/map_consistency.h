@@ -70,7 +70,7 @@ struct PairFrames {
 };
 
 struct ModelMapChoice {
-  int64_t map_start_seq = -1;    // the map kept; -1: fewer than two maps among the pairs (every pair kept)
+  int64_t map_start_seq = -1;    // the map kept (the only one when maps == 1); -1: no pair frame has a known map
   int maps = 0;                  // distinct maps among the frames of pairs with a known map
   std::vector<bool> keep;        // per pair: voted into the model
   int64_t pairs_other_map = 0;   // dropped: both frames in another map
@@ -79,10 +79,10 @@ struct ModelMapChoice {
   int64_t matches_dropped = 0;   // matches of the dropped ones
 };
 
-// map_of: frame seq -> map_start_seq of its final pose (>= 0). A pair with a frame missing from map_of (no final
-// pose: it keeps its live poses) or mapped to a negative value is kept whatever the choice. With two or more maps,
-// keeps the map whose pairs hold the most matches (ties: the later map, where the robot ended) and drops the pairs
-// of the others and those across two maps. Deterministic; O(pairs).
+// map_of: frame seq -> map_start_seq of its final pose (>= 0); a frame missing from it (no final pose: it keeps its
+// live pose) or mapped to a negative value has no known map. Keeps the map whose pairs hold the most matches (ties:
+// the later map, where the robot ended) and drops every pair with a frame known to lie in another map (both frames
+// in two maps: "across"). A pair of two unknown frames is kept. Deterministic; O(pairs).
 ModelMapChoice ChooseModelMap(const std::vector<PairFrames>& pairs,
                               const std::unordered_map<int64_t, int64_t>& map_of);
 

@@ -130,23 +130,25 @@ TEST(ChooseModelMap, KeepsTheMapWithTheMostMatchesAndDropsTheOthers) {
   std::vector<PairFrames> pairs;
   for (int64_t s = 0; s + 5 < 200; s += 5) pairs.push_back({s, s + 5, s < 100 ? 300 : 500});
   pairs.push_back({400, 405, 999});  // no final poses: kept with its live poses
+  pairs.push_back({20, 405, 7});     // one frame in the first map, one without a final pose: dropped
   const ModelMapChoice choice = ChooseModelMap(pairs, map_of);
   EXPECT_EQ(choice.maps, 2);
   EXPECT_EQ(choice.map_start_seq, 100);  // 19 pairs x 500 against 19 x 300 (the pair 95-100 crosses)
   EXPECT_EQ(choice.pairs_across_maps, 1);
-  EXPECT_EQ(choice.pairs_other_map, 19);
+  EXPECT_EQ(choice.pairs_other_map, 20);
   ASSERT_EQ(choice.keep.size(), pairs.size());
-  for (size_t i = 0; i + 1 < pairs.size(); ++i) EXPECT_EQ(choice.keep[i], pairs[i].seq_a >= 100) << i;
-  EXPECT_TRUE(choice.keep.back());
+  for (size_t i = 0; i + 2 < pairs.size(); ++i) EXPECT_EQ(choice.keep[i], pairs[i].seq_a >= 100) << i;
+  EXPECT_TRUE(choice.keep[pairs.size() - 2]);
+  EXPECT_FALSE(choice.keep.back());
   EXPECT_EQ(choice.matches_kept, 19 * 500 + 999);
-  EXPECT_EQ(choice.matches_dropped, 19 * 300 + 300);
+  EXPECT_EQ(choice.matches_dropped, 19 * 300 + 300 + 7);
   // The other way round: the first map holds more.
   for (PairFrames& p : pairs)
     if (p.seq_a < 100) p.matches = 700;
   EXPECT_EQ(ChooseModelMap(pairs, map_of).map_start_seq, 0);
 }
 
-// One map (or poses that do not say: old logs, map_start_seq -1): every pair kept, nothing chosen.
+// One map: it is the model's, every pair kept; poses that do not say (map_start_seq -1): every pair kept, no map.
 TEST(ChooseModelMap, OneMapOrUnknownMapsKeepEveryPair) {
   std::vector<PairFrames> pairs = {{0, 5, 10}, {5, 10, 10}, {10, 15, 10}};
   std::unordered_map<int64_t, int64_t> one, unknown;
@@ -156,7 +158,7 @@ TEST(ChooseModelMap, OneMapOrUnknownMapsKeepEveryPair) {
   }
   for (const auto* map_of : {&one, &unknown}) {
     const ModelMapChoice choice = ChooseModelMap(pairs, *map_of);
-    EXPECT_EQ(choice.map_start_seq, -1);
+    EXPECT_EQ(choice.map_start_seq, map_of == &one ? 0 : -1);
     EXPECT_EQ(choice.pairs_other_map + choice.pairs_across_maps, 0);
     EXPECT_EQ(choice.matches_kept, 30);
     for (bool k : choice.keep) EXPECT_TRUE(k);

@@ -377,16 +377,60 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
   return command;
 }
 
+// A base turning in place with the head at its pan limit takes the camera round with it: a pure rotation at the base's
+// rate, which loses the pose solver's map (ten-room run on e1489ea: 7 of 9 pose losses came after 46-54 frames of
+// turning in place at 30 deg/s with the pan at -170 deg, each one a map restart). Decided before the safety check and
+// the aim, on the aim as seen from the base now: for a base turn t this step, the head moves the camera by at most
+// its budget towards the aim (error e, short way round) and must then stand at pan_command + clamp(e) - t; beyond the
+// limit it cannot, and the camera is swept by the base. When the other direction sweeps less, the base turns that way
+// round (the long way to its heading), as a true turn in place (v = 0: always free for a round base), until the
+// motion's own request turns that way, the activity changes, or the forced direction would sweep too.
+void Planner::ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v) {
+  const RobotLimits& l = options_.limits;
+  const bool in_place = std::abs(v->v_mm_s) < kInPlaceSpeedMm && std::abs(v->omega_rad_s) > 1e-6;
+  if (!in_place || activity_ != forced_turn_activity_) forced_turn_sign_ = 0;
+  if (!in_place) return;
+  double aim_pan = motion.pan_rad, aim_tilt = motion.tilt_rad;
+  if (motion.aim_at_point) AimHead(options_.robot, base_, motion.aim_point, &aim_pan, &aim_tilt);
+  if (!std::isfinite(aim_pan)) return;
+  const double turn = std::min(options_.tracking_turn_rad_s, l.max_omega_rad_s);
+  double camera_rate = turn;
+  if (motion.camera_turn_needs_translation) camera_rate = std::min(turn, kStillCameraTurn);
+  const double camera_step = camera_rate * dt;
+  const double towards_aim = std::clamp(WrapAngle(aim_pan - pan_command_), -camera_step, camera_step);
+  auto overshoot = [&](double base_turn) {  // rad the head would have to go past its limit (<= 0: none)
+    return std::abs(pan_command_ + towards_aim - base_turn) - l.max_pan_rad;
+  };
+  const double rate = std::abs(v->omega_rad_s);
+  if (forced_turn_sign_ != 0) {
+    if ((v->omega_rad_s > 0) == (forced_turn_sign_ > 0) || overshoot(forced_turn_sign_ * rate * dt) > 1e-9) {
+      forced_turn_sign_ = 0;  // the request turns that way by itself now, or that way sweeps the camera too
+    } else {
+      *v = Velocity{0.0, forced_turn_sign_ * rate};
+      return;
+    }
+  }
+  const double b = v->omega_rad_s * dt;
+  if (overshoot(b) > 1e-9 && overshoot(-b) < overshoot(b)) {
+    forced_turn_sign_ = v->omega_rad_s > 0 ? -1 : 1;
+    forced_turn_activity_ = activity_;
+    *v = Velocity{0.0, forced_turn_sign_ * rate};
+    ++pan_limit_reversals_;
+  }
+}
+
 PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   const RobotLimits& l = options_.limits;
   const double turn = std::min(options_.tracking_turn_rad_s, l.max_omega_rad_s);
   Velocity v = motion.velocity;
   v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, -l.max_reverse_mm_s, l.max_speed_mm_s);
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
+  ReverseTurnAtPanLimit(motion, dt, &v);
   bool limited = false;
   const bool wants_to_move = std::abs(v.v_mm_s) > 1;
-  // The trail is where the base has been, so the map may hold it back there (a wall drawn too near); not where it
-  // has felt something since (the toy room: a look-around shuttle pushed 9 times a second into a felt box on its trail).
+  // The trail is where the base has been, so the map may hold it back there (a wall drawn too near); not into a cell
+  // it has felt (contact) within half a second's drive (the toy room: a look-around shuttle pushed into a felt box on
+  // its trail once a second for 9 s).
   const bool on_trail = motion.trail != nullptr && wants_to_move && have_odometry_base_ &&
                         StaysOnTrail(*motion.trail, odometry_base_, v, 0.5, kTrailToleranceMm) &&
                         !map_.FeltWithin(Integrate(base_, v, 0.5).position(),
@@ -404,7 +448,6 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
     pan = pan_command_;
     tilt = tilt_command_;
   }
-  const double aim_pan = pan;  // the pan the aim asks for, before the limit (beyond it: the base must turn the camera)
   pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
   // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
@@ -412,42 +455,9 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   if (motion.camera_turn_needs_translation)
     camera_rate = std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s));
   const double step = turn * dt, camera_step = camera_rate * dt;
-  // A base turning in place with the head at its pan limit takes the camera round with it: a pure rotation at the
-  // base's rate, which loses the pose solver's map (ten-room run, 7 Dec: 7 of 9 pose losses came after 46-54
-  // frames of turning in place at 30 deg/s with the pan at -170.5 deg, each one a map restart). The base then
-  // turns the other way round (the long way to its heading), so the head can keep its aim; the choice holds until
-  // the motion stops asking for a turn in place the other way (the follower's request flips sign past 180 deg).
-  const bool in_place = std::abs(v.v_mm_s) < kInPlaceSpeedMm && std::abs(v.omega_rad_s) > 1e-6;
-  if (!in_place) forced_turn_sign_ = 0;
-  if (in_place && forced_turn_sign_ != 0) {
-    if ((v.omega_rad_s > 0) == (forced_turn_sign_ > 0))
-      forced_turn_sign_ = 0;  // the request turns that way by itself now
-    else
-      v.omega_rad_s = forced_turn_sign_ * std::abs(v.omega_rad_s);
-  }
-  auto pan_after = [&](double base_turn, double wanted_pan) {  // the pan that holds the aim, within the budget
-    const double camera_turn = std::clamp(base_turn + (wanted_pan - pan_command_), -camera_step, camera_step);
-    return pan_command_ + camera_turn - base_turn;
-  };
-  // The pan that would hold the aim exactly after a base turn, taken the short way round from the head's pan (a
-  // pan beyond the limit: the head cannot, the base must bring the camera round).
-  auto holding_pan = [&](double base_turn) { return pan_command_ + WrapAngle(aim_pan - pan_command_) - base_turn; };
-  const double excess = std::abs(holding_pan(v.omega_rad_s * dt)) - l.max_pan_rad;
-  // How far the camera turns this step when the head is held at its limit (beyond camera_step: swept by the base).
-  auto camera_sweep = [&](double base_turn) {
-    return std::abs(base_turn + std::clamp(pan_after(base_turn, pan), -l.max_pan_rad, l.max_pan_rad) - pan_command_);
-  };
-  const double b = v.omega_rad_s * dt;
-  const bool aim_needs_other_way =
-      motion.aim_at_point && excess > 1e-9 && std::abs(holding_pan(-b)) - l.max_pan_rad < excess;
-  const bool swept = camera_sweep(b) > camera_step + 1e-9 && camera_sweep(-b) <= camera_step + 1e-9;
-  if (in_place && forced_turn_sign_ == 0 && (aim_needs_other_way || swept)) {
-    forced_turn_sign_ = v.omega_rad_s > 0 ? -1 : 1;
-    v.omega_rad_s = -v.omega_rad_s;
-    ++pan_limit_reversals_;
-  }
   const double base_turn = v.omega_rad_s * dt;
-  pan = std::clamp(pan_after(base_turn, pan), -l.max_pan_rad, l.max_pan_rad);
+  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -camera_step, camera_step);
+  pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
   tilt_command_ = tilt;

@@ -257,6 +257,9 @@ class Planner {
   bool TargetHidden() const;
   void ChooseView();
   PlannerCommand Finalize(const Motion& motion, double dt_s);
+  // Finalize's first step: a turn in place that would sweep the camera round with the head at its pan limit turns
+  // the other way round (see the definition); *v is replaced then.
+  void ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v);
   Eigen::Vector3d TargetCentre() const { return target_.centre_mm; }
 
   PlannerOptions options_;
@@ -308,8 +311,9 @@ class Planner {
   Eigen::Vector2d progress_position_ = Eigen::Vector2d::Zero();
   int64_t progress_utime_ = 0;
   double commanded_v_mm_s_ = 0;
-  int forced_turn_sign_ = 0;       // a turn in place reversed at the head's pan limit (+1 ccw, -1 cw; 0 none)
-  int64_t pan_limit_reversals_ = 0;  // turns in place reversed so (status, plan.json)
+  int forced_turn_sign_ = 0;         // a turn in place reversed at the head's pan limit (+1 ccw, -1 cw; 0 none)
+  std::string forced_turn_activity_;  // the activity it was reversed for (another activity drops it)
+  int64_t pan_limit_reversals_ = 0;   // turns in place reversed so (plan.json)
   ContactDetector contact_;  // the odometry stood still while the base was driven (CheckContact)
   int contacts_ = 0;
   void CheckContact(double dt);

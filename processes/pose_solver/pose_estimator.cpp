@@ -189,16 +189,8 @@ CameraPoseEstimate PoseEstimator::Estimate(int f) const {
   p.scale_source = fr.posed ? scale_source_ : ScaleSource::kNone;
   p.num_inliers = fr.posed ? fr.inliers : 0;
   p.reprojection_rms_px = fr.posed ? fr.rms : 0.0;
-  p.map_start_seq = fr.posed ? MapStartSeq(fr.seq) : -1;
+  p.map_start_seq = fr.posed ? fr.map_start_seq : -1;
   return p;
-}
-
-int64_t PoseEstimator::MapStartSeq(int64_t seq) const {
-  if (frames_.empty()) return -1;
-  int64_t start = frames_.front().seq;  // the first map (frames before its span are registered into it)
-  for (int64_t restart : UnjoinedRestartSeqs())
-    if (restart <= seq) start = std::max(start, restart);
-  return start;
 }
 
 FrameResult PoseEstimator::AddFrame(const TrackFrame& input, const OdometryReading* odometry) {
@@ -670,6 +662,15 @@ bool PoseEstimator::InitializeSpan(int first, int last, const std::vector<int64_
       unjoined_tried_frame_ = last;
     }
   }
+  // The map the span's frames lie in: the first map (from the stream's first frame: frames before the span are
+  // registered into it at the end), the old one when joined, else a new one from the span's first frame.
+  if (!was_recovering) {
+    if (current_map_start_ < 0) current_map_start_ = frames_.front().seq;
+  } else if (unjoined_first_ == first) {
+    map_before_restart_ = current_map_start_;
+    current_map_start_ = frames_[first].seq;
+  }
+  for (int f = first; f <= last; ++f) frames_[f].map_start_seq = current_map_start_;
   // Per-frame statistics.
   for (int f = first; f <= last; ++f) UpdateFrameStatistics(&frames_[f]);
   last_keyframe_inliers_ = frames_[last].inliers;
@@ -886,6 +887,7 @@ bool PoseEstimator::PoseFromMap(int f, const Eigen::Isometry3d* prior, std::stri
   for (size_t c = 0; c < pts.size(); ++c)
     if (!is_inlier[c]) fr.outlier[feature_index[c]] = 1;
   fr.posed = true;
+  fr.map_start_seq = current_map_start_;
   fr.world_from_camera = r.world_from_camera;
   fr.inliers = static_cast<int>(r.inliers.size());
   fr.rms = r.rms_px;
@@ -1410,6 +1412,12 @@ void PoseEstimator::TryLateJoin(int f, const std::vector<int64_t>& added) {
   m << "map restarted at frame " << frames_[unjoined_first_].seq << " " << message << ", " << fused
     << " landmarks fused";
   notice_ += (notice_.empty() ? "" : "; ") + m.str();
+  // Joined: the restart's frames lie in the map before it now.
+  if (map_before_restart_ >= 0) {
+    for (Frame& fr : frames_)
+      if (fr.map_start_seq == current_map_start_) fr.map_start_seq = map_before_restart_;
+    current_map_start_ = map_before_restart_;
+  }
   unjoined_first_ = -1;
   unjoined_points_.clear();
 }
@@ -1864,6 +1872,7 @@ bool PoseEstimator::TwoViewPose(int f) {
   f_from_ref.translation() = s * t;
   std::fill(fr.outlier.begin(), fr.outlier.end(), 0);
   fr.posed = true;
+  fr.map_start_seq = current_map_start_;
   fr.world_from_camera = ref.world_from_camera * f_from_ref.inverse();
   UpdateFrameStatistics(&fr);
   fr.status = phase_ == Phase::kLost ? PoseStatus::kRelocalized : PoseStatus::kTracking;
@@ -1902,7 +1911,8 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
           nearest = f - d;
       }
       if (nearest < 0) break;
-      RegisterAgainstMap(f, frames_[nearest].world_from_camera);
+      if (RegisterAgainstMap(f, frames_[nearest].world_from_camera))
+        frames_[f].map_start_seq = frames_[nearest].map_start_seq;  // registered from its neighbour's map
     }
     GlobalBundleAdjustment();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);

@@ -222,10 +222,6 @@ class PoseEstimator {
   // model built from views on both sides mixes two frames. In order; the current map's start included while it is
   // unjoined.
   std::vector<int64_t> UnjoinedRestartSeqs() const;
-  // The frame seq where the map holding frame seq began (CameraPoseEstimate::map_start_seq): the first frame's seq,
-  // or the latest unjoined restart at or before seq. Changes for earlier frames when a restart is joined late. -1
-  // before any frame.
-  int64_t MapStartSeq(int64_t seq) const;
   int num_fused() const { return static_cast<int>(fused_tracks_.size()); }
   ScaleSource scale_source() const { return scale_source_; }
   int span_first_frame() const { return span_first_; }  // index of the last preliminary span's first frame (-1: none)
@@ -263,6 +259,7 @@ class PoseEstimator {
     Eigen::Isometry3d odometry_world_from_camera = Eigen::Isometry3d::Identity();
     Eigen::Vector2d odometry_base_mm = Eigen::Vector2d::Zero();  // mm, base position by the odometry
     bool posed = false;
+    int64_t map_start_seq = -1;  // the map it was posed in (CameraPoseEstimate::map_start_seq), -1 while unposed
     bool keyframe = false;
     bool compacted = false;  // observations dropped (see observations_kept_frames)
     bool frozen = false;     // a keyframe whose observations were dropped (max_active_keyframes)
@@ -436,6 +433,11 @@ class PoseEstimator {
   // 300 frames later, for the whole run).
   int unjoined_first_ = -1;
   std::vector<int64_t> unjoined_restart_seqs_;  // earlier maps never joined (UnjoinedRestartSeqs)
+  // The map frames are posed in now, as the seq where it began (the stream's first frame for the first map, a
+  // restart's span start while it is not joined), and the one before an unjoined restart (a late join returns to
+  // it). Each frame keeps the map it was posed in (Frame::map_start_seq); a late join relabels the restart's frames.
+  int64_t current_map_start_ = -1;
+  int64_t map_before_restart_ = -1;
   std::vector<int64_t> unjoined_points_;
   size_t unjoined_tried_size_ = 0;
   int unjoined_tried_frame_ = 0;
