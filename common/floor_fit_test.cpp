@@ -7,21 +7,13 @@
 #include <random>
 #include <vector>
 
+#include "common/plane_test_support.h"
+
 namespace objscan {
 namespace {
 
-double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
-}
-
-// Points on the plane through `origin` with normal `normal` (height noise sigma), over a square of half side `half`.
-void AddPlane(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal, double half, int count, double sigma,
-              std::mt19937* rng, std::vector<Eigen::Vector3d>* points) {
-  const Eigen::Vector3d a = normal.unitOrthogonal(), b = normal.cross(a);
-  std::uniform_real_distribution<double> u(-half, half);
-  std::normal_distribution<double> g(0, sigma);
-  for (int i = 0; i < count; ++i) points->push_back(origin + u(*rng) * a + u(*rng) * b + g(*rng) * normal);
-}
+using testing_support::AddPlane;
+using testing_support::AngleDeg;
 
 // RANSAC, then two refits (the shared steps of every floor fitter).
 PlaneSupport FitAndRefit(const std::vector<Eigen::Vector3d>& points, const PlaneSampling& sampling, double inlier_mm) {

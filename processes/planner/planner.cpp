@@ -385,6 +385,12 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
 // limit it cannot, and the camera is swept by the base. When the other direction sweeps less, the base turns that way
 // round (the long way to its heading), as a true turn in place (v = 0: always free for a round base), until the
 // motion's own request turns that way, the activity changes, or the forced direction would sweep too.
+double Planner::CameraTurnRate(const Motion& motion, double v_mm_s) const {
+  const double turn = std::min(options_.tracking_turn_rad_s, options_.limits.max_omega_rad_s);
+  if (!motion.camera_turn_needs_translation) return turn;
+  return std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v_mm_s));
+}
+
 void Planner::ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v) {
   const RobotLimits& l = options_.limits;
   const bool in_place = std::abs(v->v_mm_s) < kInPlaceSpeedMm && std::abs(v->omega_rad_s) > 1e-6;
@@ -393,10 +399,7 @@ void Planner::ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v
   double aim_pan = motion.pan_rad, aim_tilt = motion.tilt_rad;
   if (motion.aim_at_point) AimHead(options_.robot, base_, motion.aim_point, &aim_pan, &aim_tilt);
   if (!std::isfinite(aim_pan)) return;
-  const double turn = std::min(options_.tracking_turn_rad_s, l.max_omega_rad_s);
-  double camera_rate = turn;
-  if (motion.camera_turn_needs_translation) camera_rate = std::min(turn, kStillCameraTurn);
-  const double camera_step = camera_rate * dt;
+  const double camera_step = CameraTurnRate(motion, 0.0) * dt;  // turning in place: no travel
   const double towards_aim = std::clamp(WrapAngle(aim_pan - pan_command_), -camera_step, camera_step);
   auto overshoot = [&](double base_turn) {  // rad the head would have to go past its limit (<= 0: none)
     return std::abs(pan_command_ + towards_aim - base_turn) - l.max_pan_rad;
@@ -451,10 +454,7 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
   // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
-  double camera_rate = turn;
-  if (motion.camera_turn_needs_translation)
-    camera_rate = std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s));
-  const double step = turn * dt, camera_step = camera_rate * dt;
+  const double step = turn * dt, camera_step = CameraTurnRate(motion, v.v_mm_s) * dt;
   const double base_turn = v.omega_rad_s * dt;
   const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -camera_step, camera_step);
   pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);

@@ -260,6 +260,9 @@ class Planner {
   // Finalize's first step: a turn in place that would sweep the camera round with the head at its pan limit turns
   // the other way round (see the definition); *v is replaced then.
   void ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v);
+  // rad/s the camera's yaw may turn this step (the tracking turn rate; while the motion needs translation for it,
+  // only kStillCameraTurn plus kCameraTurnPerMm per mm/s of base speed).
+  double CameraTurnRate(const Motion& motion, double v_mm_s) const;
   Eigen::Vector3d TargetCentre() const { return target_.centre_mm; }
 
   PlannerOptions options_;
