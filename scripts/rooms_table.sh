@@ -4,7 +4,7 @@
 # error against the truth (after the trajectory's Sim(3)), collisions, path, frames, wall time, and the model against
 # the target's whole surface above 10 mm, aligned on the whole trajectory (the figure) and on the modeling
 # segment alone. Usage: scripts/rooms_table.sh [--score-only] [--keep-logs] [--circle] [OUT [ROOM...]] (default out/rooms, all
-# 10); --score-only scores the runs already in OUT again without running them; each room's session.lcmlog (4-6 GB)
+# 10); --score-only scores the runs already in OUT again without running them (default: every room_* in OUT); each room's session.lcmlog (4-6 GB)
 # is deleted once the room is scored (its report.html is written already) unless --keep-logs.
 # --circle: the plain circle (objscan run --next-views 0), for the next-best-view comparison.
 # Each room runs live in its own network namespace (root), as fast as the pipeline goes (--fast), 9000-frame budget.
@@ -22,6 +22,10 @@ while [ $# -gt 0 ]; do
 done
 OUT="${1:-$ROOT/out/rooms}"; shift || true
 ROOMS=("$@")
+if [ ${#ROOMS[@]} -eq 0 ] && [ "$SCORE_ONLY" = 1 ]; then  # the rooms run into OUT already
+  ROOMS=($(cd "$OUT" 2>/dev/null && ls -d room_*/ 2>/dev/null | tr -d /))
+  [ ${#ROOMS[@]} -gt 0 ] || { echo "rooms_table.sh: no room_* runs in $OUT to score" >&2; exit 1; }
+fi
 [ ${#ROOMS[@]} -gt 0 ] || ROOMS=($(cd "$ROOT/drivers/robot_sim/scenes/rooms" && ls room_*.scene | sed 's/\.scene$//'))
 BIN="${OBJSCAN_BUILD_DIR:-$ROOT/build}/bin"
 mkdir -p "$OUT"
@@ -66,10 +70,12 @@ score() {
   grep -Eq '"state": "(confirmed|lost)"' "$d/target.json" 2>/dev/null && confirmed_target=1
   [ -s "$d/trajectory.txt" ] || confirmed_target=0
   if [ "$confirmed_target" = 1 ]; then
-    err=$("$BIN/objscan_evaluate" target "$d/target.json" "$d/ground_truth/sim_outcome.json" \
+    local mesh_arg=()  # the true box along the estimate's yaw (TrueBoxAtYaw)
+    [ -s "$d/ground_truth/target_mesh.ply" ] && mesh_arg=(--truth-mesh "$d/ground_truth/target_mesh.ply")
+    err=$("$BIN/objscan_evaluate" target "$d/target.json" "$d/ground_truth/sim_outcome.json" "${mesh_arg[@]}" \
           --align "$d/trajectory.txt" "$d/ground_truth/poses_gt.txt" 2>/dev/null | value center_error_mm)
     if read -r seg range < <(model_segment "$d"); then
-      serr=$("$BIN/objscan_evaluate" target "$d/target.json" "$d/ground_truth/sim_outcome.json" \
+      serr=$("$BIN/objscan_evaluate" target "$d/target.json" "$d/ground_truth/sim_outcome.json" "${mesh_arg[@]}" \
             --align "$seg" "$d/ground_truth/poses_gt.txt" 2>/dev/null | value center_error_mm)
     fi
   fi

@@ -198,15 +198,19 @@ int EvaluateSurfaceCommand(int argc, char** argv) {
 
 }
 
-// objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH]: the target box's centre and size errors.
+// objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH] [--truth-mesh MESH]: the target box's centre
+// and size errors. With the true surface (MESH, robot_sim's target_mesh.ply) the true box is the surface's extent
+// along the estimated box's yaw (TrueBoxAtYaw), else TRUTH.json's box.
 int EvaluateTargetCommand(int argc, char** argv) {
   std::string error;
-  std::string align_est, align_truth;
+  std::string align_est, align_truth, truth_mesh;
   for (int i = 4; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--align" && i + 2 < argc) {
       align_est = argv[++i];
       align_truth = argv[++i];
+    } else if (a == "--truth-mesh" && i + 1 < argc) {
+      truth_mesh = argv[++i];
     } else {
       return Fail("unknown option " + a);
     }
@@ -230,8 +234,18 @@ int EvaluateTargetCommand(int argc, char** argv) {
   Sim3 truth_from_estimate;
   if (!align_est.empty() && !TruthFromEstimate(align_est, align_truth, &truth_from_estimate, &error))
     return Fail(error);
-  const TargetEvaluation t = EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, {tc[0], tc[1], tc[2]},
-                                            {tsz[0], tsz[1], tsz[2]}, truth_from_estimate);
+  Eigen::Vector3d true_center(tc[0], tc[1], tc[2]), true_size(tsz[0], tsz[1], tsz[2]);
+  if (!truth_mesh.empty()) {
+    std::vector<double> yaw;
+    if (!JsonNumbers(texts[0], "yaw_rad", 1, &yaw)) return Fail(std::string(argv[2]) + ": no yaw_rad");
+    std::vector<Eigen::Vector3d> vertices;
+    std::vector<Eigen::Vector3i> triangles;
+    if (!ReadPlyMesh(truth_mesh, &vertices, &triangles, &error)) return Fail(error);
+    if (!TrueBoxAtYaw(vertices, YawInTruthFrame(yaw[0], truth_from_estimate), &true_center, &true_size))
+      return Fail(truth_mesh + ": no vertices");
+  }
+  const TargetEvaluation t =
+      EvaluateTarget({c[0], c[1], c[2]}, {sz[0], sz[1], sz[2]}, true_center, true_size, truth_from_estimate);
   std::printf("center_error_mm %.3f\ncenter_error_xy_mm %.3f\ncenter_x %.3f\ncenter_y %.3f\ncenter_z %.3f\n"
               "size_error_major_mm %.3f\nsize_error_minor_mm %.3f\nsize_error_height_mm %.3f\n",
               t.center_error_mm, t.center_error_xy_mm, t.center_aligned_mm.x(), t.center_aligned_mm.y(),
@@ -249,7 +263,7 @@ int main(int argc, char** argv) {
                  "       objscan_evaluate surface MODEL.ply TRUTH.ply [--threshold D] [--min-z Z] "
                  "[--align EST TRUTH] [--truth-mesh MESH] [--visible-from POSES] [--min-views N] [--no-occlusion] "
                  "[--intrinsics fx,fy,cx,cy,w,h] [--write-aligned F] [--write-visible F] [--write-errors F]\n"
-                 "       objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH]\n");
+                 "       objscan_evaluate target TARGET.json TRUTH.json [--align EST TRUTH] [--truth-mesh MESH]\n");
     return help ? 0 : 2;
   }
   const std::string command = argv[1];

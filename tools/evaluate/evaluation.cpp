@@ -310,4 +310,24 @@ TargetEvaluation EvaluateTarget(const Eigen::Vector3d& center_mm, const Eigen::V
   return e;
 }
 
+bool TrueBoxAtYaw(const std::vector<Eigen::Vector3d>& true_vertices_mm, double yaw_rad, Eigen::Vector3d* center_mm,
+                  Eigen::Vector3d* size_mm) {
+  if (true_vertices_mm.empty()) return false;
+  const Eigen::Matrix3d world_from_box = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Eigen::Vector3d& v : true_vertices_mm) {
+    const Eigen::Vector3d b = world_from_box.transpose() * v;
+    lo = lo.cwiseMin(b);
+    hi = hi.cwiseMax(b);
+  }
+  *center_mm = world_from_box * (0.5 * (lo + hi));
+  *size_mm = hi - lo;
+  return true;
+}
+
+double YawInTruthFrame(double yaw_rad, const Sim3& truth_from_estimate) {
+  const Eigen::Vector3d axis = truth_from_estimate.rotation * Eigen::Vector3d(std::cos(yaw_rad), std::sin(yaw_rad), 0);
+  return std::atan2(axis.y(), axis.x());
+}
+
 }  // namespace objscan

@@ -122,4 +122,15 @@ TargetEvaluation EvaluateTarget(const Eigen::Vector3d& center_mm, const Eigen::V
                                 const Eigen::Vector3d& true_center_mm, const Eigen::Vector3d& true_size_mm,
                                 const Sim3& truth_from_estimate);
 
+// The true box the estimate describes: the extents of the true surface's vertices (truth frame, mm) along the axes of
+// a box turned by yaw_rad about +z (truth frame), and its centre. A box's centre depends on its yaw for any shape but
+// a box, cylinder or sphere: an irregular mesh's world-axis bounds are centred 25 mm from the bounds along the yaw
+// the object finder chose (room_07, 7 Dec). False when there are no vertices.
+bool TrueBoxAtYaw(const std::vector<Eigen::Vector3d>& true_vertices_mm, double yaw_rad, Eigen::Vector3d* center_mm,
+                  Eigen::Vector3d* size_mm);
+
+// The estimated box's yaw (about +z of the estimate's frame) in the truth frame: its x axis mapped by the
+// alignment's rotation, projected onto the floor.
+double YawInTruthFrame(double yaw_rad, const Sim3& truth_from_estimate);
+
 }  // namespace objscan

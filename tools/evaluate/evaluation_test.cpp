@@ -380,5 +380,34 @@ TEST(EvaluateTarget, AppliesTheAlignmentBeforeComparing) {
   EXPECT_NEAR(e.size_error_mm.z(), 0.0, 1e-9);   // 2 x 60 vs 120
 }
 
+TEST(TrueBoxAtYaw, CentreOfAnIrregularShapeDependsOnTheYaw) {
+  // A right triangle's corners (legs 100 mm along x and y, 40 mm high): its world-axis bounds are centred at
+  // (50, 50), its bounds along the hypotenuse's direction (yaw 135 deg) elsewhere.
+  std::vector<Eigen::Vector3d> v = {{0, 0, 0}, {100, 0, 0}, {0, 100, 0}, {0, 0, 40}, {100, 0, 40}, {0, 100, 40}};
+  Eigen::Vector3d centre, size;
+  ASSERT_TRUE(TrueBoxAtYaw(v, 0.0, &centre, &size));
+  EXPECT_NEAR((centre - Eigen::Vector3d(50, 50, 20)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((size - Eigen::Vector3d(100, 100, 40)).norm(), 0.0, 1e-9);
+  ASSERT_TRUE(TrueBoxAtYaw(v, 3 * M_PI / 4, &centre, &size));
+  // Along (-1, 1)/sqrt2 the corners span -70.7..70.7 (centre 0); across it, along (-1, -1)/sqrt2: -70.7..0.
+  EXPECT_NEAR(size.x(), 100 * std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(size.y(), 50 * std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR((centre - Eigen::Vector3d(25, 25, 20)).norm(), 0.0, 1e-9);
+  // A box's own centre does not depend on the yaw's quarter turns.
+  std::vector<Eigen::Vector3d> box;
+  for (int i = 0; i < 8; ++i) box.push_back({i & 1 ? 60.0 : -60.0, i & 2 ? 30.0 : -30.0, i & 4 ? 20.0 : 0.0});
+  ASSERT_TRUE(TrueBoxAtYaw(box, M_PI / 2, &centre, &size));
+  EXPECT_NEAR((centre - Eigen::Vector3d(0, 0, 10)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((size - Eigen::Vector3d(60, 120, 20)).norm(), 0.0, 1e-9);
+  EXPECT_FALSE(TrueBoxAtYaw({}, 0.0, &centre, &size));
+}
+
+TEST(YawInTruthFrame, AddsTheAlignmentsTurn) {
+  Sim3 truth_from_estimate;
+  truth_from_estimate.rotation = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_NEAR(YawInTruthFrame(0.25, truth_from_estimate), 0.75, 1e-12);
+  EXPECT_NEAR(YawInTruthFrame(0.25, Sim3()), 0.25, 1e-12);
+}
+
 }  // namespace
 }  // namespace objscan
