@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <set>
@@ -1897,6 +1898,24 @@ std::vector<int64_t> PoseEstimator::UnjoinedRestartSeqs() const {
   return seqs;
 }
 
+double MapBendFraction(const std::vector<Eigen::Vector3d>& before, const std::vector<Eigen::Vector3d>& after) {
+  if (before.size() != after.size() || before.size() < 10) return -1;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : after) mean += p;
+  mean /= static_cast<double>(after.size());
+  double spread_sq = 0;
+  for (const Eigen::Vector3d& p : after) spread_sq += (p - mean).squaredNorm();
+  const double spread = std::sqrt(spread_sq / static_cast<double>(after.size()));
+  Sim3 sim;
+  double rms = 0;
+  if (!(spread > 0) || !AlignSimilarity(before, after, &sim, &rms)) return -1;
+  std::vector<double> d;
+  d.reserve(after.size());
+  for (size_t i = 0; i < after.size(); ++i) d.push_back((sim * before[i] - after[i]).norm());
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2] / spread;
+}
+
 std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
   const int64_t start_us = MonotonicMicros();
   if (map_initialized_) {
@@ -1914,7 +1933,41 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
       if (RegisterAgainstMap(f, frames_[nearest].world_from_camera))
         frames_[f].map_start_seq = frames_[nearest].map_start_seq;  // registered from its neighbour's map
     }
+    // The windowed adjustments' state, kept in case the global BA bends a map (kMaxFinalBendFraction).
+    std::vector<Eigen::Isometry3d> poses_before;
+    poses_before.reserve(frames_.size());
+    for (const Frame& fr : frames_) poses_before.push_back(fr.world_from_camera);
+    const bool check = any_frozen_;
+    std::map<int64_t, Point> points_before;
+    if (check) points_before = points_;
     GlobalBundleAdjustment();
+    final_bend_fraction_ = -1;
+    final_ba_dropped_ = false;
+    if (check) {
+      std::map<int64_t, std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> maps;
+      for (size_t f = 0; f < frames_.size(); ++f) {
+        if (!frames_[f].posed) continue;
+        auto& m = maps[frames_[f].map_start_seq];
+        m.first.push_back(poses_before[f].translation());
+        m.second.push_back(frames_[f].world_from_camera.translation());
+      }
+      for (const auto& [map_start, centres] : maps)
+        final_bend_fraction_ = std::max(final_bend_fraction_, MapBendFraction(centres.first, centres.second));
+      if (final_bend_fraction_ > kMaxFinalBendFraction) {
+        for (size_t f = 0; f < frames_.size(); ++f) frames_[f].world_from_camera = poses_before[f];
+        points_ = std::move(points_before);
+        final_ba_dropped_ = true;
+        std::ostringstream m;
+        m << "global BA dropped: it bent a map by " << 100.0 * final_bend_fraction_
+          << " % of its camera spread (median, after a similarity; over " << 100.0 * kMaxFinalBendFraction
+          << " %): the final poses are the windowed adjustments' (" << last_message_ << ")";
+        last_message_ = m.str();
+      } else if (final_bend_fraction_ >= 0) {
+        std::ostringstream m;
+        m << "; map bend " << 100.0 * final_bend_fraction_ << " % of the camera spread (median, kept)";
+        last_message_ += m.str();
+      }
+    }
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
     // Final per-frame statistics (compacted and frozen frames keep their online figures).
     for (auto& fr : frames_)

@@ -23,6 +23,8 @@ struct RunFigures {
   size_t memory_bytes_half = 0;                    // the same after half of the frames
   double mean_observations = 0;                    // Landmark::num_observations, mean over the final landmarks
   std::vector<std::pair<int64_t, int64_t>> fused;  // PoseEstimator::FusedTrackIds
+  double final_bend_fraction = -1;                 // PoseEstimator::final_bend_fraction
+  bool final_ba_dropped = false;
 };
 
 // with_odometry false: images only (AddFrame without odometry). final_heights_error_mm: max over the final poses of
@@ -47,6 +49,8 @@ RunFigures RunOrbit(const SyntheticOrbit& s, const PoseEstimatorOptions& options
   fig.online_tracked = static_cast<int>(online_est.size());
   EvaluateTrajectory(online_est, online_true, true, &fig.online);
   const std::vector<CameraPoseEstimate> final_poses = estimator.Finish();
+  fig.final_bend_fraction = estimator.final_bend_fraction();
+  fig.final_ba_dropped = estimator.final_ba_dropped();
   std::vector<Eigen::Isometry3d> fe, ft;
   for (size_t f = 0; f < final_poses.size(); ++f) {
     if (final_poses[f].status != PoseStatus::kTracking && final_poses[f].status != PoseStatus::kRelocalized) continue;
@@ -551,6 +555,11 @@ TEST(PoseEstimator, FrozenKeyframesBoundTheMemory) {
   const RunFigures bounded = RunOrbit(s, o);
   EXPECT_EQ(bounded.final_posed, 200);
   EXPECT_LE(bounded.final_error.ate_rmse, bounded.online.ate_rmse);
+  // The global BA was checked (frozen keyframes) and kept: it refines the map, it does not bend it.
+  EXPECT_FALSE(bounded.final_ba_dropped);
+  EXPECT_GE(bounded.final_bend_fraction, 0.0);
+  EXPECT_LT(bounded.final_bend_fraction, kMaxFinalBendFraction);
+  EXPECT_LT(all_active.final_bend_fraction, 0.0);  // no frozen keyframe: not checked
   // Memory growth over the second half of the orbit (100 frames, 20 keyframes): flat once 12 keyframes are active.
   const double growth_bounded = (double(bounded.memory_bytes) - double(bounded.memory_bytes_half)) / 100 / 1024;
   const double growth_all = (double(all_active.memory_bytes) - double(all_active.memory_bytes_half)) / 100 / 1024;
@@ -560,6 +569,32 @@ TEST(PoseEstimator, FrozenKeyframesBoundTheMemory) {
       bounded.final_error.ate_rmse, all_active.final_error.ate_rmse, growth_bounded, growth_all);
   EXPECT_LT(growth_bounded, 2.0);               // kB per frame: poses (and a frames_ reallocation), new landmarks
   EXPECT_GT(growth_all, growth_bounded + 3.0);  // 20 keyframes x ~1000 observations
+}
+
+TEST(MapBendFraction, ZeroForASimilarityLargeForABend) {
+  // 40 camera centres on a 1 m circle; moved as a whole, then with a 10 mm sag over a quarter of it.
+  std::vector<Eigen::Vector3d> before, moved, bent;
+  Sim3 sim;
+  sim.scale = 1.2;
+  sim.rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.2, 0.1, 1).normalized()).toRotationMatrix();
+  sim.translation = Eigen::Vector3d(300, -50, 20);
+  for (int i = 0; i < 40; ++i) {
+    const double a = 2 * M_PI * i / 40;
+    before.emplace_back(1000 * std::cos(a), 1000 * std::sin(a), 400);
+    moved.push_back(sim * before.back());
+    bent.push_back(before.back() + Eigen::Vector3d(0, 0, i < 10 ? -10.0 * std::sin(M_PI * i / 10) : 0.0));
+  }
+  EXPECT_NEAR(MapBendFraction(before, moved), 0.0, 1e-9);
+  // Only 10 of 40 centres sag: the median offset after the best similarity is small but well over the limit (1 m
+  // spread: 0.5 mm).
+  const double bend = MapBendFraction(before, bent);
+  EXPECT_GT(bend, kMaxFinalBendFraction);
+  EXPECT_LT(bend, 0.01);
+  // Too few centres, or none spread: not measured.
+  EXPECT_LT(MapBendFraction({before.begin(), before.begin() + 9}, {moved.begin(), moved.begin() + 9}), 0.0);
+  EXPECT_LT(MapBendFraction(std::vector<Eigen::Vector3d>(12, Eigen::Vector3d(1, 2, 3)),
+                            std::vector<Eigen::Vector3d>(12, Eigen::Vector3d(1, 2, 3))),
+            0.0);
 }
 
 TEST(PoseEstimator, DeterministicOutput) {

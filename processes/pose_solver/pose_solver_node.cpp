@@ -326,7 +326,14 @@ void PoseSolverNode::RunFinalPhase(const control_t& msg) {
       LogError(failure);
     }
     status_.SetValue("final_ba_ms", estimator_->final_ba_ms());
-    LogInfo(estimator_->last_message());
+    status_.SetValue("final_bend_percent", estimator_->final_bend_fraction() < 0
+                                               ? -1.0
+                                               : 100.0 * estimator_->final_bend_fraction());
+    status_.SetValue("final_ba_dropped", estimator_->final_ba_dropped() ? 1 : 0);
+    if (estimator_->final_ba_dropped())
+      LogWarning(estimator_->last_message());
+    else
+      LogInfo(estimator_->last_message());
     BurstPacer pacer(bus_);  // one message per frame: lcm-logger and viewers would drop an unpaced burst
     for (const auto& p : final_poses) {
       if (bus_.PublishMessage(options_.final_pose_channel, PoseToMessage(p))) status_.CountOut();

@@ -24,7 +24,9 @@
 //   "tracks: after end of stream", "tracks: estimator error", "camera_info: malformed" + CameraFromMessage reasons,
 //   "camera_info: changed" (a different calibration after the first: ignored), "odometry: malformed",
 //   "odometry: non-finite value", "odometry: out of order", "control: malformed".
-// Status values: frames, keyframes, landmarks, inliers, rms_px, lost_frames, frame_ms, final_ba_ms.
+// Status values: frames, keyframes, landmarks, inliers, rms_px, lost_frames, frame_ms, final_ba_ms,
+// final_bend_percent (PoseEstimator::final_bend_fraction in %; -1 = not checked) and final_ba_dropped (1: the global
+// BA bent a map and the windowed adjustments' poses were kept, with a warning).
 // Handlers run inside Bus::Handle() on the caller's thread; the final BA blocks it (about a second for 200 frames).
 #pragma once
 
