@@ -39,6 +39,11 @@ constexpr int kMaxOrbitMappings = 6;             // such trips per orbit at most
 constexpr double kCameraTurnPerMm = 0.2 * kDeg;  // rad per mm of base travel (see Motion)
 constexpr double kStillCameraTurn = 2 * kDeg;    // rad/s the camera may turn without travel
 constexpr double kInPlaceSpeedMm = 20;           // mm/s: slower base motion with a turn is a turn in place
+// The camera's yaw may swing this far (rad) from where travel last took it (camera_anchor_yaw_), whatever the motion:
+// beyond, it follows only at the rate travel allows. A camera swept round while the base turns in place sees
+// unmapped scene without parallax and loses the pose solver's map (rooms 03 and 04 on 41af2aa: 3 of 3 pose losses
+// came 55 deg into such a sweep at 30 deg/s, the pan held while the base turned: a lost-target search, a bypass).
+constexpr double kFreeSwing = 15 * kDeg;
 
 std::string Mm(const Eigen::Vector2d& p) {
   char buffer[64];
@@ -377,6 +382,21 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
   return command;
 }
 
+double Planner::CameraTurnRate(const Motion& motion, double v_mm_s) const {
+  const double turn = std::min(options_.tracking_turn_rad_s, options_.limits.max_omega_rad_s);
+  if (!motion.camera_turn_needs_translation) return turn;
+  return std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v_mm_s));
+}
+
+void Planner::CameraTurnBounds(const Motion& motion, double v_mm_s, double dt, double* lowest,
+                               double* highest) const {
+  const double camera_step = CameraTurnRate(motion, v_mm_s) * dt;
+  const double off_anchor =
+      camera_anchor_set_ ? WrapAngle(base_.theta_rad + pan_command_ - camera_anchor_yaw_) : 0.0;
+  *lowest = std::max(-camera_step, std::min(0.0, -kFreeSwing - off_anchor));
+  *highest = std::min(camera_step, std::max(0.0, kFreeSwing - off_anchor));
+}
+
 // A base turning in place with the head at its pan limit takes the camera round with it: a pure rotation at the base's
 // rate, which loses the pose solver's map (ten-room run on e1489ea: 7 of 9 pose losses came after 46-54 frames of
 // turning in place at 30 deg/s with the pan at -170 deg, each one a map restart). Decided before the safety check and
@@ -385,12 +405,6 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
 // limit it cannot, and the camera is swept by the base. When the other direction sweeps less, the base turns that way
 // round (the long way to its heading), as a true turn in place (v = 0: always free for a round base), until the
 // motion's own request turns that way, the activity changes, or the forced direction would sweep too.
-double Planner::CameraTurnRate(const Motion& motion, double v_mm_s) const {
-  const double turn = std::min(options_.tracking_turn_rad_s, options_.limits.max_omega_rad_s);
-  if (!motion.camera_turn_needs_translation) return turn;
-  return std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v_mm_s));
-}
-
 void Planner::ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v) {
   const RobotLimits& l = options_.limits;
   const bool in_place = std::abs(v->v_mm_s) < kInPlaceSpeedMm && std::abs(v->omega_rad_s) > 1e-6;
@@ -399,8 +413,9 @@ void Planner::ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v
   double aim_pan = motion.pan_rad, aim_tilt = motion.tilt_rad;
   if (motion.aim_at_point) AimHead(options_.robot, base_, motion.aim_point, &aim_pan, &aim_tilt);
   if (!std::isfinite(aim_pan)) return;
-  const double camera_step = CameraTurnRate(motion, 0.0) * dt;  // turning in place: no travel
-  const double towards_aim = std::clamp(WrapAngle(aim_pan - pan_command_), -camera_step, camera_step);
+  double lowest, highest;
+  CameraTurnBounds(motion, 0.0, dt, &lowest, &highest);  // turning in place: no travel
+  const double towards_aim = std::clamp(WrapAngle(aim_pan - pan_command_), lowest, highest);
   auto overshoot = [&](double base_turn) {  // rad the head would have to go past its limit (<= 0: none)
     return std::abs(pan_command_ + towards_aim - base_turn) - l.max_pan_rad;
   };
@@ -428,6 +443,10 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   Velocity v = motion.velocity;
   v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, -l.max_reverse_mm_s, l.max_speed_mm_s);
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
+  if (!camera_anchor_set_) {
+    camera_anchor_yaw_ = WrapAngle(base_.theta_rad + pan_command_);
+    camera_anchor_set_ = true;
+  }
   ReverseTurnAtPanLimit(motion, dt, &v);
   bool limited = false;
   const bool wants_to_move = std::abs(v.v_mm_s) > 1;
@@ -453,11 +472,18 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   }
   pan = std::clamp(pan, -l.max_pan_rad, l.max_pan_rad);
   tilt = std::clamp(tilt, l.min_tilt_rad, l.max_tilt_rad);
-  // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s.
-  const double step = turn * dt, camera_step = CameraTurnRate(motion, v.v_mm_s) * dt;
+  // The camera's yaw (base + pan) and the tilt turn at most `turn` rad/s; the yaw within CameraTurnBounds.
+  const double step = turn * dt;
   const double base_turn = v.omega_rad_s * dt;
-  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), -camera_step, camera_step);
+  double lowest, highest;
+  CameraTurnBounds(motion, v.v_mm_s, dt, &lowest, &highest);
+  const double camera_turn = std::clamp(base_turn + (pan - pan_command_), lowest, highest);
   pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
+  // The anchor follows the camera as travel allows.
+  const double follow = (kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s)) * dt;
+  camera_anchor_yaw_ = WrapAngle(
+      camera_anchor_yaw_ +
+      std::clamp(WrapAngle(base_.theta_rad + base_turn + pan - camera_anchor_yaw_), -follow, follow));
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
   tilt_command_ = tilt;

@@ -261,8 +261,12 @@ class Planner {
   // the other way round (see the definition); *v is replaced then.
   void ReverseTurnAtPanLimit(const Motion& motion, double dt, Velocity* v);
   // rad/s the camera's yaw may turn this step (the tracking turn rate; while the motion needs translation for it,
-  // only kStillCameraTurn plus kCameraTurnPerMm per mm/s of base speed).
+  // only kStillCameraTurn plus kCameraTurnPerMm per mm/s of base speed). Every motion also keeps the camera within
+  // kFreeSwing of camera_anchor_yaw_ (Finalize).
   double CameraTurnRate(const Motion& motion, double v_mm_s) const;
+  // The camera yaw's turn this step (rad, dt s) lies in [*lowest, *highest]: CameraTurnRate, and within kFreeSwing
+  // of camera_anchor_yaw_ (beyond it already: no further away).
+  void CameraTurnBounds(const Motion& motion, double v_mm_s, double dt, double* lowest, double* highest) const;
   Eigen::Vector3d TargetCentre() const { return target_.centre_mm; }
 
   PlannerOptions options_;
@@ -305,6 +309,11 @@ class Planner {
   Eigen::Isometry3d last_marked_ = Eigen::Isometry3d::Identity();
   bool marked_once_ = false;
   double pan_command_ = 0, tilt_command_ = 0;  // last commanded head angles
+  // The camera yaw (world, rad) the map is taken to know around: the commanded camera yaw may swing at most
+  // kFreeSwing from it; it follows the camera at the rate travel allows (CameraTurnRate's budget). Set at the first
+  // command.
+  double camera_anchor_yaw_ = 0;
+  bool camera_anchor_set_ = false;
   bool head_initialised_ = false;
   double dt_ = 1.0 / 30.0;      // s, period of the current step
   int64_t blocked_since_ = -1;  // µs, since when the safety check holds a robot that wants to move

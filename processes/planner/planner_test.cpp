@@ -50,6 +50,14 @@ struct RunLog {
   // Frames turning in place (> 5 deg/s, < 20 mm/s) with the pan command at its limit: the camera swept round with
   // the base, a pure rotation that loses the pose solver's map (the ten-room run's main cause of map restarts).
   int64_t pan_limit_turn_frames = 0;
+  // The commanded camera yaw's largest swing while the base stands or turns in place (< 20 mm/s), deg: away from
+  // its yaw when that stretch began, less 2 deg/s of its duration (the slow re-aim the pose solver follows); where
+  // (phase / activity, frame). A camera swept round without travel sees unmapped scene without parallax and loses
+  // the pose solver's map (rooms 03 and 04 on 41af2aa: 55 deg at 30 deg/s while the base turned, pan held). The
+  // planner keeps the camera within 15 deg of a yaw that follows it only as travel allows: up to 30 deg from one
+  // side of it to the other (before: 39-61 deg in 7 of these missions).
+  double max_in_place_swing_deg = 0;
+  std::string max_in_place_swing_where;
 };
 
 PlannerOptions TestOptions() {
@@ -87,6 +95,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
   std::vector<MapLandmark> landmarks;
   VoxelCloud voxels;
   int64_t push_run = 0;
+  double in_place_start_yaw = 0, in_place_s = -1;  // the camera yaw when the base last began to stand; -1: moving
   for (int64_t i = 0; i < max_frames; ++i) {
     planner.AddOdometry(world.Odometry());
     if (world.Landmarks(&landmarks)) planner.SetLandmarks(landmarks);
@@ -122,6 +131,25 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     if (!c.stop && std::abs(c.omega_rad_s) > 5 * kDeg && std::abs(c.v_mm_s) < 20 &&
         std::abs(c.pan_rad) > options.limits.max_pan_rad - 0.5 * kDeg)
       ++log.pan_limit_turn_frames;
+    if (!c.stop) {
+      const double yaw = world.truth().theta_rad + c.pan_rad;  // the commanded yaw (the base turns this step)
+      if (std::abs(c.v_mm_s) >= 20) {
+        in_place_s = -1;
+      } else if (in_place_s < 0) {
+        in_place_s = 0;
+        in_place_start_yaw = world.truth().theta_rad + last_pan;
+      } else {
+        in_place_s += 1.0 / 30.0;
+      }
+      if (in_place_s >= 0) {
+        const double swing = std::abs(WrapAngle(yaw - in_place_start_yaw)) / kDeg - 2 * in_place_s;
+        if (swing > log.max_in_place_swing_deg) {
+          log.max_in_place_swing_deg = swing;
+          log.max_in_place_swing_where = std::string(PhaseName(planner.phase())) + " / " + planner.activity() +
+                                         " at frame " + std::to_string(world.seq());
+        }
+      }
+    }
     if (!c.stop) last_pan = c.pan_rad;
     if (!c.stop) {
       const bool ok = c.v_mm_s >= -100 && c.v_mm_s <= 400 && std::abs(c.omega_rad_s) <= 30 * kDeg + 1e-9 &&
@@ -173,6 +201,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     push_run = pushing ? push_run + 1 : 0;
     log.longest_push_frames = std::max(log.longest_push_frames, push_run);
   }
+  EXPECT_LE(log.max_in_place_swing_deg, 32.0) << log.max_in_place_swing_where;
   log.end_phase = planner.phase();
   log.collisions = world.collisions();
   log.summary = planner.Summary();
@@ -182,7 +211,7 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
     std::printf("frames %lld, path %.0f mm, coverage %.3f (%d samples), orbit %.0f %%, next views %zu, "
                 "min clearance %.0f mm (%s), safety stops %lld, orbit frames %lld (on the circle %lld, paused %lld), "
                 "max radius error %.1f mm, max off-axis %.2f deg (%.2f deg off the circle too), glances %d, disagreement max %.0f mm %.2f deg, "
-                "pan-limit turn frames %lld, reversals %lld\n",
+                "pan-limit turn frames %lld, reversals %lld, in-place camera swing %.1f deg (%s)\n",
                 static_cast<long long>(log.frames), log.summary.path_length_mm, log.summary.coverage,
                 log.summary.coverage_samples, log.summary.orbit_percent, log.summary.next_views.size(),
                 log.min_clearance_mm, log.min_clearance_where.c_str(), static_cast<long long>(log.summary.safety_stops),
@@ -190,7 +219,8 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
                 static_cast<long long>(log.orbit_paused_frames), log.orbit_max_radius_error_mm,
                 log.orbit_max_off_axis_deg, log.orbit_max_off_axis_all_deg, log.summary.orbit_glances, log.summary.max_disagreement.distance_mm,
                 log.summary.max_disagreement.angle_rad / kDeg, static_cast<long long>(log.pan_limit_turn_frames),
-                static_cast<long long>(log.summary.pan_limit_reversals));
+                static_cast<long long>(log.summary.pan_limit_reversals), log.max_in_place_swing_deg,
+                log.max_in_place_swing_where.c_str());
   return log;
 }
 
