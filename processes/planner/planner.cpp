@@ -39,8 +39,9 @@ constexpr int kMaxOrbitMappings = 6;             // such trips per orbit at most
 constexpr double kCameraTurnPerMm = 0.2 * kDeg;  // rad per mm of base travel (see Motion)
 constexpr double kStillCameraTurn = 2 * kDeg;    // rad/s the camera may turn without travel
 constexpr double kInPlaceSpeedMm = 20;           // mm/s: slower base motion with a turn is a turn in place
-// The camera's yaw may swing this far (rad) from where travel last took it (camera_anchor_yaw_), whatever the motion:
-// beyond, it follows only at the rate travel allows. A camera swept round while the base turns in place sees
+// The camera's yaw may swing this far (rad) from where travel last took it (camera_anchor_yaw_), whatever the motion
+// but a head-only look-around: beyond, it follows only at the rate travel allows (the pan limit aside: a head at its
+// limit is carried by the base, see ReverseTurnAtPanLimit). A camera swept round while the base turns in place sees
 // unmapped scene without parallax and loses the pose solver's map (rooms 03 and 04 on 41af2aa: 3 of 3 pose losses
 // came 55 deg into such a sweep at 30 deg/s, the pan held while the base turned: a lost-target search, a bypass).
 constexpr double kFreeSwing = 15 * kDeg;
@@ -391,10 +392,18 @@ double Planner::CameraTurnRate(const Motion& motion, double v_mm_s) const {
 void Planner::CameraTurnBounds(const Motion& motion, double v_mm_s, double dt, double* lowest,
                                double* highest) const {
   const double camera_step = CameraTurnRate(motion, v_mm_s) * dt;
-  const double off_anchor =
-      camera_anchor_set_ ? WrapAngle(base_.theta_rad + pan_command_ - camera_anchor_yaw_) : 0.0;
+  if (motion.head_only_sweep || !camera_anchor_set_) {
+    *lowest = -camera_step;
+    *highest = camera_step;
+    return;
+  }
+  const double off_anchor = WrapAngle(AnchorFrameHeading() + pan_command_ - camera_anchor_yaw_);
   *lowest = std::max(-camera_step, std::min(0.0, -kFreeSwing - off_anchor));
   *highest = std::min(camera_step, std::max(0.0, kFreeSwing - off_anchor));
+}
+
+double Planner::AnchorFrameHeading() const {
+  return have_odometry_base_ ? odometry_base_.theta_rad : base_.theta_rad;
 }
 
 // A base turning in place with the head at its pan limit takes the camera round with it: a pure rotation at the base's
@@ -443,8 +452,9 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   Velocity v = motion.velocity;
   v.v_mm_s = std::clamp(std::isfinite(v.v_mm_s) ? v.v_mm_s : 0.0, -l.max_reverse_mm_s, l.max_speed_mm_s);
   v.omega_rad_s = std::clamp(std::isfinite(v.omega_rad_s) ? v.omega_rad_s : 0.0, -turn, turn);
-  if (!camera_anchor_set_) {
-    camera_anchor_yaw_ = WrapAngle(base_.theta_rad + pan_command_);
+  if (!camera_anchor_set_ || camera_anchor_by_odometry_ != have_odometry_base_) {  // first command, or new frame
+    camera_anchor_yaw_ = WrapAngle(AnchorFrameHeading() + pan_command_);
+    camera_anchor_by_odometry_ = have_odometry_base_;
     camera_anchor_set_ = true;
   }
   ReverseTurnAtPanLimit(motion, dt, &v);
@@ -479,11 +489,11 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   CameraTurnBounds(motion, v.v_mm_s, dt, &lowest, &highest);
   const double camera_turn = std::clamp(base_turn + (pan - pan_command_), lowest, highest);
   pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
-  // The anchor follows the camera as travel allows.
-  const double follow = (kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s)) * dt;
+  // The anchor follows the camera as travel allows (a head-only sweep takes it along).
+  const double follow = motion.head_only_sweep ? M_PI : (kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s)) * dt;
   camera_anchor_yaw_ = WrapAngle(
       camera_anchor_yaw_ +
-      std::clamp(WrapAngle(base_.theta_rad + base_turn + pan - camera_anchor_yaw_), -follow, follow));
+      std::clamp(WrapAngle(AnchorFrameHeading() + base_turn + pan - camera_anchor_yaw_), -follow, follow));
   tilt = std::clamp(tilt_command_ + std::clamp(tilt - tilt_command_, -step, step), l.min_tilt_rad, l.max_tilt_rad);
   pan_command_ = pan;
   tilt_command_ = tilt;
@@ -647,6 +657,7 @@ Planner::Motion Planner::LookAround() {
   Motion m;
   if (!shuttle_stalled_) m.velocity.v_mm_s = shuttle_direction_ * std::min(kShuttleSpeed, l.max_reverse_mm_s);
   m.camera_turn_needs_translation = !shuttle_stalled_;
+  m.head_only_sweep = shuttle_stalled_;
   m.aim_at_point = false;
   m.pan_rad = sweep_target_rad_;
   m.tilt_rad = kLookAroundTiltRad;

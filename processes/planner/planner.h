@@ -201,6 +201,9 @@ class Planner {
     // standstill): a camera that swings to unmapped floor while the base turns in place loses the pose solver's
     // track (room_03: lost at the first U-turn, restarted on a pure rotation, map 1.3x off in scale).
     bool camera_turn_needs_translation = false;
+    // A look-around by the head alone (the base can travel neither way): the camera sweeps at the tracking rate,
+    // free of kFreeSwing; the pose may be lost, and the lost-pose retrace follows.
+    bool head_only_sweep = false;
     // The robot's own trail this motion follows (TrailBack of the odometry trail, odometry frame): the
     // swept-footprint check lets it pass while the odometry pose keeps within kTrailToleranceMm of it, where the map
     // alone would hold it (room_07: a start 168 mm from a wall that the map drew 50-100 mm nearer).
@@ -265,8 +268,10 @@ class Planner {
   // kFreeSwing of camera_anchor_yaw_ (Finalize).
   double CameraTurnRate(const Motion& motion, double v_mm_s) const;
   // The camera yaw's turn this step (rad, dt s) lies in [*lowest, *highest]: CameraTurnRate, and within kFreeSwing
-  // of camera_anchor_yaw_ (beyond it already: no further away).
+  // of camera_anchor_yaw_ (beyond it already: no further away) unless the motion is a head-only sweep.
   void CameraTurnBounds(const Motion& motion, double v_mm_s, double dt, double* lowest, double* highest) const;
+  // The base heading in camera_anchor_yaw_'s frame (rad).
+  double AnchorFrameHeading() const;
   Eigen::Vector3d TargetCentre() const { return target_.centre_mm; }
 
   PlannerOptions options_;
@@ -309,11 +314,12 @@ class Planner {
   Eigen::Isometry3d last_marked_ = Eigen::Isometry3d::Identity();
   bool marked_once_ = false;
   double pan_command_ = 0, tilt_command_ = 0;  // last commanded head angles
-  // The camera yaw (world, rad) the map is taken to know around: the commanded camera yaw may swing at most
-  // kFreeSwing from it; it follows the camera at the rate travel allows (CameraTurnRate's budget). Set at the first
-  // command.
+  // The camera yaw (rad, in the odometry's frame, which never jumps; the estimate's without odometry) the map is
+  // taken to know around: the commanded camera yaw may swing at most kFreeSwing from it (the pan limit aside); it
+  // follows the camera at kStillCameraTurn plus kCameraTurnPerMm per mm/s of base speed. Set at the first command.
   double camera_anchor_yaw_ = 0;
   bool camera_anchor_set_ = false;
+  bool camera_anchor_by_odometry_ = false;
   bool head_initialised_ = false;
   double dt_ = 1.0 / 30.0;      // s, period of the current step
   int64_t blocked_since_ = -1;  // µs, since when the safety check holds a robot that wants to move

@@ -50,7 +50,7 @@ struct RunLog {
   // Frames turning in place (> 5 deg/s, < 20 mm/s) with the pan command at its limit: the camera swept round with
   // the base, a pure rotation that loses the pose solver's map (the ten-room run's main cause of map restarts).
   int64_t pan_limit_turn_frames = 0;
-  // The commanded camera yaw's largest swing while the base stands or turns in place (< 20 mm/s), deg: away from
+  // The commanded camera yaw's largest swing while the base stands or turns in place (v = 0), deg: away from
   // its yaw when that stretch began, less 2 deg/s of its duration (the slow re-aim the pose solver follows); where
   // (phase / activity, frame). A camera swept round without travel sees unmapped scene without parallax and loses
   // the pose solver's map (rooms 03 and 04 on 41af2aa: 55 deg at 30 deg/s while the base turned, pan held). The
@@ -132,14 +132,15 @@ RunLog RunMission(toy::ToyWorld& world, const PlannerOptions& options, int64_t m
         std::abs(c.pan_rad) > options.limits.max_pan_rad - 0.5 * kDeg)
       ++log.pan_limit_turn_frames;
     if (!c.stop) {
-      const double yaw = world.truth().theta_rad + c.pan_rad;  // the commanded yaw (the base turns this step)
-      if (std::abs(c.v_mm_s) >= 20) {
+      const double dt = 1.0 / 30.0;  // the commanded yaw after this step's base turn
+      const double yaw = world.truth().theta_rad + c.omega_rad_s * dt + c.pan_rad;
+      if (std::abs(c.v_mm_s) >= 1 || planner.activity() == "look around (head only)") {
         in_place_s = -1;
       } else if (in_place_s < 0) {
         in_place_s = 0;
         in_place_start_yaw = world.truth().theta_rad + last_pan;
       } else {
-        in_place_s += 1.0 / 30.0;
+        in_place_s += dt;
       }
       if (in_place_s >= 0) {
         const double swing = std::abs(WrapAngle(yaw - in_place_start_yaw)) / kDeg - 2 * in_place_s;

@@ -1596,7 +1596,7 @@ void PoseEstimator::PruneLandmarks(const std::vector<int64_t>& ids, const std::v
   }
 }
 
-void PoseEstimator::GlobalBundleAdjustment() {
+bool PoseEstimator::GlobalBundleAdjustment() {
   std::vector<int> frame_list;
   for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
     if (frames_[g].posed && !frames_[g].frozen &&
@@ -1659,7 +1659,7 @@ void PoseEstimator::GlobalBundleAdjustment() {
   global_options.function_tolerance = options_.global_ba_function_tolerance;
   const BaSummary s = RunBundleAdjustment(camera_, options_.robot, global_options, &bp);
   last_message_ = "global BA: " + s.message;
-  if (!s.ok) return;
+  if (!s.ok) return false;
   std::vector<Eigen::Isometry3d> before;
   before.reserve(frames_.size());
   for (const Frame& fr : frames_) before.push_back(fr.world_from_camera);
@@ -1667,10 +1667,11 @@ void PoseEstimator::GlobalBundleAdjustment() {
   FollowKeyframes(before);
   for (size_t i = 0; i < point_list.size(); ++i) points_[point_list[i]].x = bp.points[i];
   PruneLandmarks(point_list, frame_list);
-  if (options_.global_ba_all_frames) return;
+  if (options_.global_ba_all_frames) return true;
   // The other frames: pose-only refit against the adjusted map (inliers of their PnP kept).
   for (int g = 0; g < static_cast<int>(frames_.size()); ++g)
     if (frames_[g].posed && !std::binary_search(frame_list.begin(), frame_list.end(), g)) RefitPose(g);
+  return true;
 }
 
 void PoseEstimator::RefitPose(int f) {
@@ -1912,8 +1913,9 @@ double MapBendFraction(const std::vector<Eigen::Vector3d>& before, const std::ve
   std::vector<double> d;
   d.reserve(after.size());
   for (size_t i = 0; i < after.size(); ++i) d.push_back((sim * before[i] - after[i]).norm());
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2] / spread;
+  const size_t p90 = d.size() * 9 / 10;
+  std::nth_element(d.begin(), d.begin() + p90, d.end());
+  return d[p90] / spread;
 }
 
 std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
@@ -1940,10 +1942,10 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
     const bool check = any_frozen_;
     std::map<int64_t, Point> points_before;
     if (check) points_before = points_;
-    GlobalBundleAdjustment();
+    const bool adjusted = GlobalBundleAdjustment();
     final_bend_fraction_ = -1;
     final_ba_dropped_ = false;
-    if (check) {
+    if (check && adjusted) {
       std::map<int64_t, std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> maps;
       for (size_t f = 0; f < frames_.size(); ++f) {
         if (!frames_[f].posed) continue;
@@ -1959,12 +1961,12 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
         final_ba_dropped_ = true;
         std::ostringstream m;
         m << "global BA dropped: it bent a map by " << 100.0 * final_bend_fraction_
-          << " % of its camera spread (median, after a similarity; over " << 100.0 * kMaxFinalBendFraction
+          << " % of its camera spread (p90, after a similarity; over " << 100.0 * kMaxFinalBendFraction
           << " %): the final poses are the windowed adjustments' (" << last_message_ << ")";
         last_message_ = m.str();
       } else if (final_bend_fraction_ >= 0) {
         std::ostringstream m;
-        m << "; map bend " << 100.0 * final_bend_fraction_ << " % of the camera spread (median, kept)";
+        m << "; map bend " << 100.0 * final_bend_fraction_ << " % of the camera spread (p90, kept)";
         last_message_ += m.str();
       }
     }
