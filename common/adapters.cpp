@@ -63,6 +63,7 @@ image_t ImageToMessage(const ImageFrame& frame, int8_t encoding, int jpeg_qualit
   image_t msg;
   msg.utime = frame.utime;
   msg.seq = frame.seq;
+  msg.session_id = 0;  // the publishing node stamps its session
   msg.camera_name = frame.camera_name;
   msg.width = frame.image.cols;
   msg.height = frame.image.rows;
@@ -114,6 +115,7 @@ bool CameraFromMessage(const camera_info_t& msg, PinholeCamera* out, std::string
 camera_info_t CameraToMessage(const PinholeCamera& c, int64_t utime) {
   camera_info_t msg;
   msg.utime = utime;
+  msg.session_id = 0;  // the publishing node stamps its session
   msg.camera_name = c.name;
   msg.width = c.width;
   msg.height = c.height;
@@ -181,6 +183,7 @@ odometry_t OdometryToMessage(const OdometryReading& r) {
   odometry_t m;
   m.utime = r.utime;
   m.seq = r.seq;
+  m.session_id = 0;  // the publishing node stamps its session
   m.x_mm = r.x_mm;
   m.y_mm = r.y_mm;
   m.theta_rad = r.theta_rad;

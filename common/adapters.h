@@ -31,6 +31,14 @@ feature_tracks_t TracksToMessage(const TrackFrame& frame);
 bool OdometryFromMessage(const odometry_t& msg, OdometryReading* out, std::string* error);
 odometry_t OdometryToMessage(const OdometryReading& reading);
 
+// The To...Message functions leave session_id 0: a driver stamps its session on what it publishes (StampSession).
+// Stamps a driver's session id (StatusReporter::AcceptSession) on the types that carry one; others stay as they are.
+inline void StampSession(image_t* m, int64_t session_id) { m->session_id = session_id; }
+inline void StampSession(camera_info_t* m, int64_t session_id) { m->session_id = session_id; }
+inline void StampSession(odometry_t* m, int64_t session_id) { m->session_id = session_id; }
+template <class Msg>
+void StampSession(Msg*, int64_t) {}
+
 // Rejects non-finite values and non-unit quaternions.
 bool PoseFromMessage(const pose_t& msg, CameraPoseEstimate* out, std::string* error);
 pose_t PoseToMessage(const CameraPoseEstimate& pose, const std::string& parent_frame = "world",

@@ -100,7 +100,8 @@ bool CheckCameraInfoMessageSize(const void* data, int size, std::string* why) {
   int64_t hash = 0;
   if (!r.Int64(&hash)) return Fail(why, "truncated");
   if (hash != camera_info_t::getHash()) return Fail(why, "wrong type");
-  if (!r.Skip(8) || !r.String() || !r.Skip(4 + 4 + 5 * 8) || !r.String()) return Fail(why, "truncated");
+  // utime, session_id, camera_name, width, height, fx fy cx cy skew, distortion_model
+  if (!r.Skip(8 + 8) || !r.String() || !r.Skip(4 + 4 + 5 * 8) || !r.String()) return Fail(why, "truncated");
   return CheckArray(r, 8, "distortion coefficients", size, why);
 }
 
@@ -128,8 +129,8 @@ bool CheckImageMessageSize(const void* data, int size, std::string* why) {
   int64_t hash = 0;
   if (!r.Int64(&hash)) return Fail(why, "truncated");
   if (hash != image_t::getHash()) return Fail(why, "wrong type");
-  // utime, seq, camera_name, width, height, stride, encoding
-  if (!r.Skip(8 + 8) || !r.String() || !r.Skip(4 + 4 + 4 + 1)) return Fail(why, "truncated");
+  // utime, seq, session_id, camera_name, width, height, stride, encoding
+  if (!r.Skip(8 + 8 + 8) || !r.String() || !r.Skip(4 + 4 + 4 + 1)) return Fail(why, "truncated");
   return CheckArray(r, 1, "data bytes", size, why);
 }
 

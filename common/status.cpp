@@ -5,6 +5,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
 #include <limits>
 
 #include "common/bus.h"
@@ -89,6 +94,54 @@ bool StatusReporter::AcceptSeq(const std::string& stream, int64_t seq, const std
     return false;
   }
   return true;
+}
+
+bool SessionIdFromText(const std::string& text, int64_t* id, std::string* error) {
+  if (text.empty()) {
+    std::random_device device;
+    uint64_t v = 0;
+    while (v == 0)
+      v = (static_cast<uint64_t>(device()) << 32) ^ static_cast<uint64_t>(device()) ^
+          static_cast<uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
+    *id = static_cast<int64_t>(v);
+    return true;
+  }
+  std::string digits = text;
+  if (digits.size() > 2 && digits[0] == '0' && (digits[1] == 'x' || digits[1] == 'X')) digits = digits.substr(2);
+  const bool hex = !digits.empty() && digits.size() <= 16 &&
+                   std::all_of(digits.begin(), digits.end(), [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+  const uint64_t v = hex ? std::strtoull(digits.c_str(), nullptr, 16) : 0;
+  if (!hex || v == 0) {
+    if (error) *error = "session id '" + text + "': 1-16 hex digits, not zero";
+    return false;
+  }
+  *id = static_cast<int64_t>(v);
+  return true;
+}
+
+std::string SessionIdText(int64_t id) {
+  char text[24];
+  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(id));
+  return text;
+}
+
+bool StatusReporter::AcceptSession(int64_t session_id, const std::string& what) {
+  if (session_id == 0 || session_id == session_id_) return true;
+  if (session_id_ == 0) {
+    session_id_ = session_id;
+    return true;
+  }
+  ++foreign_session_inputs_;
+  SetValue("foreign_session_inputs", static_cast<double>(foreign_session_inputs_));
+  constexpr size_t kMaxLoggedSessions = 16;  // a flood of forged ids is counted, not logged one by one
+  if (foreign_sessions_.size() < kMaxLoggedSessions && foreign_sessions_.insert(session_id).second) {
+    LogError("another session is on this bus: " + what + " of session " + SessionIdText(session_id) +
+             " refused (this process keeps to session " + SessionIdText(session_id_) +
+             ", the first it heard). Give each session a bus of its own: objscan run picks a free one unless "
+             "--lcm-url is given; across hosts, another multicast port or group");
+  }
+  Reject(what + ": foreign session", "session " + std::to_string(session_id));
+  return false;
 }
 
 void StatusReporter::Reject(const std::string& reason, const std::string& detail, const std::string& stream,

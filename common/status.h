@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,14 @@ class StatusReporter {
   void NoteRejectedSeq(const std::string& stream, int64_t seq);
   // Reject(reason, detail) of an input with sequence number seq on stream, which NoteRejectedSeq records as received.
   void Reject(const std::string& reason, const std::string& detail, const std::string& stream, int64_t seq);
+  // Session isolation (issue 26): drivers stamp image_t, camera_info_t and odometry_t with their session's id (0 =
+  // unstamped, always taken). The first non-zero id is this process's session for its life; an input of `what`
+  // ("image") with another non-zero id is rejected as "<what>: foreign session" (false), each new foreign id is
+  // logged as an error at once, and value foreign_session_inputs counts them (the session supervisor fails a run
+  // whose process reports any). A second session on one bus (another robot, a log replayed onto a live bus) then
+  // never mixes its frames into this one's.
+  bool AcceptSession(int64_t session_id, const std::string& what);
+  int64_t session_id() const { return session_id_; }  // 0 until the first stamped input
   void RecordLatencyMs(double ms);
   void SetLastDataUtime(int64_t utime) { last_data_utime_ = utime; }
   void SetValue(const std::string& name, double value);
@@ -85,6 +94,9 @@ class StatusReporter {
   int64_t messages_out_ = 0;
   int64_t dropped_inputs_ = 0;
   std::map<std::string, int64_t> rejections_;
+  int64_t session_id_ = 0;             // the session's id (0: none heard yet)
+  std::set<int64_t> foreign_sessions_;  // foreign ids logged (at most kMaxLoggedSessions)
+  int64_t foreign_session_inputs_ = 0;
   struct SeqStream {
     int64_t last = 0;                     // seq of the last usable input
     int64_t jump_last = 0;                // seq of the last input after an implausible jump
@@ -95,6 +107,12 @@ class StatusReporter {
   std::vector<std::pair<std::string, double>> values_;
   RecentValues latency_window_ms_;  // ms, the last 1000 handler latencies (kLatencyWindow)
 };
+
+// A driver's session id (--session-id, StatusReporter::AcceptSession): "" draws a random non-zero one; otherwise
+// 1-16 hex digits (an optional 0x), not all zero. False with *error otherwise.
+bool SessionIdFromText(const std::string& text, int64_t* id, std::string* error);
+// The id as 16 hex digits (how logs, processes.txt and summary.json show it).
+std::string SessionIdText(int64_t id);
 
 // The answer of a processing node to end of stream: control_t COMMAND_FINISHED from sender to "*" with the data time
 // and seq of its last input and a free-text argument, on channel; counted as an output on status, a failed

@@ -100,5 +100,41 @@ TEST(StatusTest, CountsGapsRejectionsAndPublishesFullState) {
   EXPECT_EQ(m.value[0], 900);
 }
 
+TEST(StatusTest, KeepsToTheFirstSessionAndRefusesOthers) {
+  StatusReporter status(nullptr, "unit");
+  EXPECT_EQ(status.session_id(), 0);
+  EXPECT_TRUE(status.AcceptSession(0, "image"));  // unstamped: taken, latches nothing
+  EXPECT_EQ(status.session_id(), 0);
+  EXPECT_TRUE(status.AcceptSession(0x1234, "image"));  // the first stamped id is the session
+  EXPECT_EQ(status.session_id(), 0x1234);
+  EXPECT_TRUE(status.AcceptSession(0x1234, "odometry"));
+  EXPECT_TRUE(status.AcceptSession(0, "odometry"));
+  EXPECT_FALSE(status.AcceptSession(0x5678, "image"));  // another session on the bus
+  EXPECT_FALSE(status.AcceptSession(0x5678, "image"));
+  EXPECT_FALSE(status.AcceptSession(-7, "odometry"));
+  EXPECT_EQ(status.session_id(), 0x1234);  // never moves to the intruder
+  EXPECT_EQ(status.rejected("image: foreign session"), 2);
+  EXPECT_EQ(status.rejected("odometry: foreign session"), 1);
+}
+
+TEST(StatusTest, SessionIdsFromText) {
+  int64_t a = 0, b = 0, id = 0;
+  std::string error;
+  ASSERT_TRUE(SessionIdFromText("", &a, &error));
+  ASSERT_TRUE(SessionIdFromText("", &b, &error));
+  EXPECT_NE(a, 0);
+  EXPECT_NE(a, b);  // drawn at random
+  ASSERT_TRUE(SessionIdFromText("0x00ff", &id, &error));
+  EXPECT_EQ(id, 255);
+  ASSERT_TRUE(SessionIdFromText("ffffffffffffffff", &id, &error));
+  EXPECT_EQ(id, -1);
+  EXPECT_EQ(SessionIdText(id), "ffffffffffffffff");
+  EXPECT_EQ(SessionIdText(255), "00000000000000ff");
+  for (const char* bad : {"0", "0x", "xyz", "12345678901234567", "-5", "12 "}) {
+    EXPECT_FALSE(SessionIdFromText(bad, &id, &error)) << bad;
+    EXPECT_NE(error.find("hex digits"), std::string::npos) << bad;
+  }
+}
+
 }  // namespace
 }  // namespace objscan

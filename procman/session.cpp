@@ -126,6 +126,11 @@ class Monitor {
             std::find(error_order_.begin(), error_order_.end(), m.name) == error_order_.end())
           error_order_.push_back(m.name);
         statuses_[m.name] = m;
+        // One of ours refused another session's frames (StatusReporter::AcceptSession): that session shares the bus.
+        for (int k = 0; k < m.num_values && foreign_session_.empty(); ++k)
+          if (m.value_name[k] == "foreign_session_inputs" && m.value[k] > 0)
+            foreign_session_ = "'" + m.name + "' refused " + std::to_string(static_cast<int64_t>(m.value[k])) +
+                               " inputs stamped with another session's id (its log names it)";
       }
     } else if (raw.channel == kControlChannel) {
       control_t m;
@@ -163,7 +168,8 @@ class Monitor {
   void NoteForeign(const process_status_t& m) {
     const std::string who = "'" + m.name + "' (pid " + std::to_string(m.pid) + " on host " + m.host + ")";
     const bool same_name = is_ours_ && is_ours_(m.name);
-    if (same_name && ++foreign_reports_ >= kForeignReports && foreign_session_.empty()) foreign_session_ = who;
+    if (same_name && ++foreign_reports_ >= kForeignReports && foreign_session_.empty())
+      foreign_session_ = who + " is not one of this run's processes";
     if (!foreign_.insert(who).second) return;
     LogWarning(std::string(same_name ? "another session is on this bus: " : "a process of no session here is on this bus: ") +
                who + (same_name ? " runs next to ours and its messages mix with this run's" : " (not counted as ours)"));
@@ -172,7 +178,8 @@ class Monitor {
   std::function<bool(const std::string& name, const std::string& host, int32_t pid)> is_own_;  // unset: all ours
   std::function<bool(const std::string& name)> is_ours_;  // a name in the session's process list
   std::set<std::string> foreign_;    // foreign processes heard, as "'name' (pid P on host H)"
-  std::string foreign_session_;      // the first foreign process with one of our names ("" = none)
+  std::string foreign_session_;      // how another session was found: a foreign process with one of our names, or
+                                     // one of ours refusing foreign-session inputs ("" = none)
   int foreign_reports_ = 0;          // statuses heard from foreign processes with one of our names
   std::map<std::string, ChannelCount> channels_;
   std::map<std::string, process_status_t> statuses_;
@@ -339,8 +346,8 @@ class SessionRun {
 
 std::string SessionRun::ForeignSessionFailure() const {
   return "another session is on this bus (" + options.lcm_url + "): " + monitor->foreign_session_ +
-         " is not one of this run's processes, and the two runs' messages mix (the same channels, frame numbers "
-         "from 0), so neither run's results would be right. Run each session on a bus of its own: leave out "
+         "; the two runs' messages mix (the same channels, frame numbers from 0), so neither run's results would "
+         "be right. Run each session on a bus of its own: leave out "
          "--lcm-url (objscan run then picks a free port), or give each run another port, e.g. " +
          std::string("udpm://239.255.76.67:7668?ttl=0&recv_buf_size=4194304");
 }

@@ -4,7 +4,9 @@
 #    "lcm_url" differs), each ends "ok" with exactly its frames, hears no foreign process, and poses its orbit as a run
 #    alone does (registered fraction and ATE against its own truth);
 # 2. two runs forced onto one URL: each hears the other's processes, ends at once with a non-zero exit, status
-#    "failed" and an error that says what to do (a bus of its own).
+#    "failed" and an error that says what to do (a bus of its own);
+# 3. another session's sensor frames alone (its log played onto a live run's bus): refused by their session id, and
+#    the run fails loudly.
 set -euo pipefail
 BIN="$1"; SRC="$2"
 source "$SRC/tests/netns_lib.sh"
@@ -52,4 +54,24 @@ for r in c d; do
     { grep '"error"' "$s"; fail "run $r: the error does not name the other session and the fix"; }
   grep -q '"foreign_processes"' "$s" || fail "run $r: foreign processes not listed in summary.json"
 done
-echo "PASS: two runs at once on their own buses as alone; two on one bus both failed loudly"
+# 3. Another session's frames alone on a live run's bus (its sensors log played in, no foreign process to hear): the
+#    frames carry that session's id, the run's processes refuse them (counted) and the run fails loudly.
+"$SRC/objscan" log filter "$WORK/a/session.lcmlog" "$WORK/a_sensors.lcmlog" --sensors > /dev/null
+URL3="udpm://239.255.76.67:7683?ttl=0&recv_buf_size=4194304"
+( while [ ! -f "$WORK/e.rc" ]; do
+    in_ns "$NS" lcm-logplayer -l "$URL3" "$WORK/a_sensors.lcmlog" >> "$WORK/player.out" 2>&1 || sleep 0.2
+  done ) &
+player=$!
+run e --lcm-url "$URL3" --frames 150  # long enough to overlap a replay of a's log whatever the start-up times
+wait "$player"
+s="$WORK/e/summary.json"
+[ "$(cat "$WORK/e.rc")" != 0 ] || { tail -n 20 "$WORK/e.out"; tail -n 5 "$WORK/player.out"; grep -h "foreign" "$WORK/e/logs/"*.log | head -5
+  fail "run e took in another session's frames, yet exit 0"; }
+grep -q '"status": "failed"' "$s" || { cat "$s"; fail "run e: foreign frames, status not failed"; }
+grep -q '"error": "another session is on this bus[^"]*inputs stamped with another session' "$s" ||
+  { grep '"error"' "$s"; fail "run e: the error does not say that another session's frames were refused"; }
+grep -q 'foreign session' "$s" || fail "run e: no 'foreign session' rejections counted in summary.json"
+grep -q "another session is on this bus: [a-z_]* of session [0-9a-f]\{16\} refused" "$WORK/e/logs/"*.log ||
+  fail "run e: no process log names the foreign session"
+echo "PASS: two runs at once on their own buses as alone; two on one bus both failed loudly; another session's" \
+  "frames played onto a live bus refused and the run failed loudly"

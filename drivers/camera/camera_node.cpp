@@ -61,6 +61,9 @@ void AddCameraNodeOptions(OptionParser& parser, CameraNodeOptions* o) {
   parser.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   parser.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
   parser.Add("max-frames", &o->max_frames, "stop after this many published frames (0 = all)");
+  parser.Add("session-id", &o->session_id,
+             "the session's id, stamped on every image, calibration and odometry message: 1-16 hex digits (empty = "
+             "a random one); processes keep to the first session they hear and refuse the others");
   parser.Add("lockstep-channel", &o->lockstep_channel,
              "publish frame i+1 only after a message with seq >= i on this channel (empty = off)");
   parser.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms,
@@ -102,6 +105,10 @@ bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
   };
   int8_t encoding = 0;
   if (o.source.empty()) return fail("--source is required");
+  int64_t session_id = 0;
+  std::string session_why;
+  if (!o.session_id.empty() && !SessionIdFromText(o.session_id, &session_id, &session_why))
+    return fail("--session-id: " + session_why);
   if (!std::isfinite(o.rate_hz) || o.rate_hz < 0 || o.rate_hz > 10000) return fail("--rate must be in [0, 10000] Hz");
   if (o.realtime && o.rate_hz <= 0) return fail("--realtime needs --rate > 0");
   if (!EncodingFromName(o.encoding, &encoding)) return fail("--encoding must be rgb8, bgr8, gray8 or jpeg");
@@ -137,7 +144,8 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
 
   timestamp_rate_ = options_.rate_hz > 0 ? options_.rate_hz : 30.0;
   if (source_->IsLive() && source_->SourceRate() > 0) timestamp_rate_ = source_->SourceRate();
-  LogInfo("source: " + source_->Describe());
+  SessionIdFromText(options_.session_id, &session_id_, &why);  // validated above; "" draws one
+  LogInfo("source: " + source_->Describe() + "; session " + SessionIdText(session_id_));
   const bool folder_source = source_->kind() == SourceKind::kImageFolder ||
                              (source_->kind() == SourceKind::kVideoFile && std::filesystem::is_directory(options_.source));
   if (folder_source && options_.odometry) LoadRecordedOdometry();
@@ -160,7 +168,8 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
 CameraNode::~CameraNode() = default;
 
 template <class Msg>
-void CameraNode::Publish(const std::string& channel, const Msg& msg) {
+void CameraNode::Publish(const std::string& channel, Msg msg) {
+  StampSession(&msg, session_id_);
   if (bus_.PublishMessage(channel, msg)) {
     status_.CountOut();
   } else if (publish_failures_++ == 0) {

@@ -53,6 +53,7 @@ struct CameraNodeOptions {
   std::string encoding = "rgb8";       // image encoding: rgb8, bgr8, gray8 or jpeg
   int jpeg_quality = 90;               // 1..100, for --encoding jpeg
   int64_t max_frames = 0;              // stop after this many published frames (0 = all)
+  std::string session_id;              // the session's id stamped on image/info/odometry (hex; "" = a random one)
   std::string lockstep_channel;        // wait for seq >= i on this channel before publishing frame i+1 ("" = off)
   int lockstep_timeout_ms = 5000;      // ms, give up waiting for a lockstep message after this (0 = forever)
   double gt_position_scale = 1000;     // ground-truth positions (TUM, Middlebury) times this = mm (m -> mm)
@@ -117,7 +118,7 @@ class CameraNode : public Node {
   void PublishOdometryUpTo(int64_t utime);
   void FinishStream();
   template <class Msg>
-  void Publish(const std::string& channel, const Msg& msg);
+  void Publish(const std::string& channel, Msg msg);  // stamped with session_id_ (StampSession)
   void UpdateStatusValues();
 
   Bus& bus_;
@@ -137,6 +138,7 @@ class CameraNode : public Node {
   int64_t last_utime_ = 0;
   bool end_of_stream_sent_ = false;
   int64_t publish_failures_ = 0;
+  int64_t session_id_ = 0;  // stamped on what Publish sends
 
   std::vector<OdometryReading> odometry_;  // recorded odometry in objscan's convention (empty: none)
   size_t next_odometry_ = 0;               // index of the next reading to publish

@@ -83,6 +83,9 @@ void AddRobotSimNodeOptions(OptionParser& p, RobotSimNodeOptions* o) {
   p.Add("blank", &o->blank, "FIRST,COUNT: frames rendered as a uniform grey view (tracking loss test; \"\" = none)");
   p.Add("encoding", &o->encoding, "image encoding: rgb8, bgr8, gray8 or jpeg");
   p.Add("jpeg-quality", &o->jpeg_quality, "JPEG quality 1..100 (--encoding jpeg)");
+  p.Add("session-id", &o->session_id,
+        "the session's id, stamped on every image, calibration and odometry message: 1-16 hex digits (empty = a "
+        "random one); processes keep to the first session they hear and refuse the others");
   p.Add("lockstep-channel", &o->lockstep_channel,
         "publish frame i+1 only after a message with seq >= i - lockstep_lag on this channel (empty = off)");
   p.Add("lockstep-timeout-ms", &o->lockstep_timeout_ms, "ms, go on after waiting this long for lockstep (0 = forever)");
@@ -160,6 +163,10 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why,
   int8_t encoding = 0;
   double values[3];
   if (o.scene.empty()) return fail("--scene is required");
+  int64_t session_id = 0;
+  std::string session_why;
+  if (!o.session_id.empty() && !SessionIdFromText(o.session_id, &session_id, &session_why))
+    return fail("--session-id: " + session_why);
   if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("orbit_center must be x,y");
   if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
   if (o.seed < 0) return fail("--seed must be >= 0");
@@ -217,8 +224,9 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   render_options.trilinear = options_.trilinear;
   renderer_ = std::make_unique<Renderer>(*scene_, render_options);
   sim_ = std::make_unique<RobotSimulator>(*scene_, sim_options_);
+  SessionIdFromText(options_.session_id, &session_id_, &why);  // validated above; "" draws one
   LogInfo("scene " + options_.scene + ": " + std::to_string(scene_->objects.size()) + " objects, target '" +
-          scene_->target().name + "'");
+          scene_->target().name + "'; session " + SessionIdText(session_id_));
   {
     const RobotState& start = sim_->start_state();
     int object = -1;
@@ -364,7 +372,8 @@ void RobotSimNode::SubscribeInputs() {
 RobotSimNode::~RobotSimNode() = default;
 
 template <class Msg>
-void RobotSimNode::Publish(const std::string& channel, const Msg& msg) {
+void RobotSimNode::Publish(const std::string& channel, Msg msg) {
+  StampSession(&msg, session_id_);
   if (bus_.PublishMessage(channel, msg)) {
     status_.CountOut();
   } else if (publish_failures_++ == 0) {

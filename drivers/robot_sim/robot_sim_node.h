@@ -100,6 +100,7 @@ struct RobotSimNodeOptions {
   int command_timeout_ms = 1000;     // ms of sim time without a command before the base stops (0 = never)
   double footprint_radius_mm = 200;  // mm, radius of the base's circular footprint (collisions)
   // timing
+  std::string session_id;          // the session's id stamped on image/info/odometry (hex; "" = a random one)
   std::string lockstep_channel;    // wait for seq >= i - lockstep_lag here before frame i+1 ("" = off)
   int lockstep_lag = 0;            // frames the consumer may lag behind
   int lockstep_timeout_ms = 5000;  // ms, go on after waiting this long (0 = forever)
@@ -171,7 +172,7 @@ class RobotSimNode : public Node {
   void FinishStream();
   void WriteOutcome();
   template <class Msg>
-  void Publish(const std::string& channel, const Msg& msg);
+  void Publish(const std::string& channel, Msg msg);  // stamped with session_id_ (StampSession)
 
   Bus& bus_;
   RobotSimNodeOptions options_;
@@ -195,6 +196,7 @@ class RobotSimNode : public Node {
   int64_t last_utime_ = 0;
   bool end_of_stream_sent_ = false;
   int64_t publish_failures_ = 0;
+  int64_t session_id_ = 0;  // stamped on what Publish sends
   int64_t commands_ = 0;
   double render_ms_ = 0;
   int64_t lockstep_max_seq_ = -1;

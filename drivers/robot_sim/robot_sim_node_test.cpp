@@ -252,6 +252,32 @@ TEST(RobotSimNodeTest, OutputIsDeterministicAndEncodingsWork) {
   }
 }
 
+// Every image and odometry reading carries the session's id: --session-id's, else one drawn at start (never 0).
+TEST(RobotSimNodeTest, StampsItsSessionOnWhatItPublishes) {
+  for (const char* given : {"", "abc"}) {
+    auto bus = MakeLcmBus("memq://");
+    Recorder rec(*bus);
+    RobotSimNodeOptions options = FastOptions(2);
+    options.session_id = given;
+    RobotSimNode node(*bus, options);
+    RunToEnd(*bus, node);
+    ASSERT_EQ(rec.images.size(), 2u);
+    ASSERT_EQ(rec.odometry.size(), 2u);
+    const int64_t id = rec.images[0].session_id;
+    if (std::string(given).empty())
+      EXPECT_NE(id, 0);
+    else
+      EXPECT_EQ(id, 0xabc);
+    EXPECT_EQ(rec.images[1].session_id, id);
+    for (const odometry_t& o : rec.odometry) EXPECT_EQ(o.session_id, id);
+    for (const camera_info_t& c : rec.infos) EXPECT_EQ(c.session_id, id);
+  }
+  auto bus = MakeLcmBus("memq://");
+  RobotSimNodeOptions bad = FastOptions(2);
+  bad.session_id = "not-hex";
+  EXPECT_THROW(RobotSimNode(*bus, bad), std::invalid_argument);
+}
+
 // --blank FIRST,COUNT renders frames FIRST..FIRST+COUNT-1 grey (the tracking loss tests); anything else is refused.
 TEST(RobotSimNodeTest, BlankFramesAreGreyAndBadSpecsRefused) {
   RobotSimNodeOptions options = FastOptions(4);

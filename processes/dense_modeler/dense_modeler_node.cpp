@@ -202,6 +202,7 @@ DenseModelerNode::FrameSlot* DenseModelerNode::Slot(int64_t seq) {
 }
 
 void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "camera_info")) return;  // another session on the bus
   PinholeCamera camera;
   std::string error;
   if (!CameraFromMessage(msg, &camera, &error)) {
@@ -217,6 +218,7 @@ void DenseModelerNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void DenseModelerNode::OnImage(const image_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "image")) return;  // another session on the bus
   if (!camera_) {
     status_.Reject("image: no camera_info yet", "seq " + std::to_string(msg.seq), "image", msg.seq);
     return;

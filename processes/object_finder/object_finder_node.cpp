@@ -210,6 +210,7 @@ void ObjectFinderNode::OnPose(const pose_t& msg) {
 }
 
 void ObjectFinderNode::OnCameraInfo(const camera_info_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "camera_info")) return;  // another session on the bus
   PinholeCamera camera;
   std::string error;
   if (!CameraFromMessage(msg, &camera, &error)) {
@@ -232,6 +233,7 @@ void ObjectFinderNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void ObjectFinderNode::OnOdometry(const odometry_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "odometry")) return;  // another session on the bus
   OdometryReading reading;
   std::string error;
   if (!OdometryFromMessage(msg, &reading, &error)) {

@@ -245,6 +245,7 @@ void PlannerNode::PublishCommand(const PlannerCommand& c, int64_t seq, int64_t u
 }
 
 void PlannerNode::OnOdometry(const odometry_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "odometry")) return;  // another session on the bus
   OdometryReading reading;
   std::string error;
   if (!OdometryFromMessage(msg, &reading, &error)) {
@@ -321,6 +322,7 @@ void PlannerNode::OnVoxels(const voxel_map_t& msg) {
 }
 
 void PlannerNode::OnCameraInfo(const camera_info_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "camera_info")) return;  // another session on the bus
   PinholeCamera camera;
   std::string error;
   if (!CameraFromMessage(msg, &camera, &error)) {

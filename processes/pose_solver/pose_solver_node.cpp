@@ -122,6 +122,7 @@ PoseSolverNode::PoseSolverNode(Bus& bus, const PoseSolverNodeOptions& options)
 }
 
 void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "camera_info")) return;  // another session on the bus
   PinholeCamera camera;
   std::string error;
   if (!CameraFromMessage(msg, &camera, &error)) {
@@ -158,6 +159,7 @@ void PoseSolverNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void PoseSolverNode::OnOdometry(const odometry_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "odometry")) return;  // another session on the bus
   OdometryReading r;
   std::string error;
   if (!OdometryFromMessage(msg, &r, &error)) {

@@ -98,6 +98,7 @@ TrackerNode::TrackerNode(Bus& bus, const TrackerNodeOptions& options)
 }
 
 void TrackerNode::OnCameraInfo(const camera_info_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "camera_info")) return;  // another session on the bus
   PinholeCamera camera;
   std::string error;
   if (!CameraFromMessage(msg, &camera, &error)) {
@@ -116,6 +117,7 @@ void TrackerNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void TrackerNode::OnImage(const image_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "image")) return;  // another session on the bus
   const int64_t start_us = MonotonicMicros();
   ImageFrame frame;
   std::string error;

@@ -204,6 +204,34 @@ TEST_F(TrackerNodeTest, EndOfStreamForAnotherProcessIsIgnored) {
   EXPECT_FALSE(node_->Finished());
 }
 
+// A second session on the bus (another robot, a log replayed onto a live bus): its frames carry another session id
+// and are refused, even with the very next seqs, and tracking goes on with this session's frames.
+TEST_F(TrackerNodeTest, RefusesTheFramesOfAnotherSession) {
+  Start();
+  auto stamped = [this](int64_t seq, int64_t session) {
+    image_t m = Frame(seq);
+    StampSession(&m, session);
+    return m;
+  };
+  Publish(stamped(0, 0xAAAA));
+  Drain();
+  ASSERT_EQ(tracks_.size(), 1u);
+  for (int64_t seq = 1; seq <= 6; ++seq) {
+    Publish(stamped(seq, 0xBBBB));  // the intruder's frame, then ours with the same seq
+    Publish(stamped(seq, 0xAAAA));
+  }
+  Drain();
+  const auto& st = node_->status();
+  EXPECT_EQ(st.rejected("image: foreign session"), 6);
+  EXPECT_EQ(st.rejected("image: out of order or repeated"), 0);  // never taken in, never in the seq stream
+  ASSERT_EQ(tracks_.size(), 7u);
+  for (int64_t seq = 0; seq <= 6; ++seq) EXPECT_EQ(tracks_[static_cast<size_t>(seq)].seq, seq);
+  int continued = 0;
+  for (int32_t age : tracks_.back().age) continued += age > 0;
+  EXPECT_GT(continued, tracks_.back().num_tracks * 8 / 10);
+  EXPECT_EQ(st.session_id(), 0xAAAA);
+}
+
 TEST_F(TrackerNodeTest, RejectsEachKindOfBadImageAndKeepsTracking) {
   Start();
   ExpectTracked(0);
