@@ -7,6 +7,7 @@
 #include "common/camera_model.h"
 #include "common/sensor_data.h"
 #include "objscan/camera_info_t.hpp"
+#include "objscan/control_t.hpp"
 #include "objscan/feature_tracks_t.hpp"
 #include "objscan/image_t.hpp"
 #include "objscan/odometry_t.hpp"
@@ -36,6 +37,7 @@ odometry_t OdometryToMessage(const OdometryReading& reading);
 inline void StampSession(image_t* m, int64_t session_id) { m->session_id = session_id; }
 inline void StampSession(camera_info_t* m, int64_t session_id) { m->session_id = session_id; }
 inline void StampSession(odometry_t* m, int64_t session_id) { m->session_id = session_id; }
+inline void StampSession(control_t* m, int64_t session_id) { m->session_id = session_id; }
 template <class Msg>
 void StampSession(Msg*, int64_t) {}
 

@@ -236,6 +236,7 @@ std::function<void(const RawMessage&)> StatusReporter::MalformedHandler(const st
 void PublishFinished(Bus& bus, StatusReporter& status, const std::string& channel, const std::string& sender,
                      int64_t utime, int64_t last_seq, const std::string& argument) {
   control_t reply;
+  reply.session_id = status.session_id();  // the session it keeps to (0: none heard)
   reply.utime = utime;
   reply.sender = sender;
   reply.target = "*";

@@ -260,6 +260,7 @@ std::string FinishSurvivors(bool interrupted, const SessionOptions& options, con
     if (done()) continue;
     control_t request;
     request.utime = 0;
+    request.session_id = 0;  // the supervisor belongs to no session id
     request.sender = "objscan_session";
     request.target = c.name();
     request.command = control_t::COMMAND_FINALIZE;

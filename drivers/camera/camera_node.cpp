@@ -326,6 +326,7 @@ void CameraNode::FinishStream() {
   if (end_of_stream_sent_) return;
   if (!odometry_.empty()) PublishOdometryUpTo(INT64_MAX);
   control_t control;
+  control.session_id = 0;  // Publish stamps the session
   control.utime = last_utime_;
   control.sender = kProcessName;
   control.target = "*";

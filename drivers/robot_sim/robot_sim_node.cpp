@@ -350,6 +350,11 @@ void RobotSimNode::SubscribeInputs() {
         if (msg.command != control_t::COMMAND_SHUTDOWN) return;
         if (msg.target != "*" && msg.target != kProcessName) return;
         status_.CountIn();
+        if (msg.session_id != 0 && msg.session_id != session_id_) {  // another session's planner
+          status_.Reject("control: foreign session", "shutdown from " + msg.sender + " of session " +
+                                                        SessionIdText(msg.session_id));
+          return;
+        }
         if (!stop_requested_) LogInfo("shutdown requested by " + msg.sender);
         stop_requested_ = true;
       },
@@ -495,6 +500,7 @@ void RobotSimNode::FinishStream() {
   if (end_of_stream_sent_) return;
   control_t msg;
   msg.utime = last_utime_;
+  msg.session_id = 0;  // Publish stamps the session
   msg.sender = kProcessName;
   msg.target = "*";
   msg.command = control_t::COMMAND_END_OF_STREAM;

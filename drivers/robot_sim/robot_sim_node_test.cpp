@@ -389,6 +389,7 @@ TEST(RobotSimNodeTest, CommandModeFollowsRobotCommandAndStopsOnShutdown) {
   EXPECT_NEAR(moved, 300.0 * 10 / 30, 1e-6);
   EXPECT_FALSE(node.Finished());
   control_t shutdown;
+  shutdown.session_id = 0;
   shutdown.utime = 0;
   shutdown.sender = "test";
   shutdown.target = "robot_sim";

@@ -1119,6 +1119,7 @@ bool DenseModelerNode::SaveSnapshot(const std::string& path) {
 }
 
 void DenseModelerNode::OnControl(const control_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session on the bus
   if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;
   if (msg.command == control_t::COMMAND_SNAPSHOT) {
     status_.CountIn();

@@ -184,6 +184,7 @@ class NodeFixture : public ::testing::Test {
   }
   void PublishControl(int8_t command, const std::string& sender, const std::string& argument = "") {
     control_t c;
+    c.session_id = 0;
     c.utime = 0;
     c.sender = sender;
     c.target = "*";

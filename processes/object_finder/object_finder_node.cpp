@@ -436,6 +436,7 @@ void ObjectFinderNode::PublishTarget(int64_t wall_utime) {
 }
 
 void ObjectFinderNode::OnControl(const control_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session on the bus
   if (awaiting_final_ && msg.command == control_t::COMMAND_FINISHED && msg.sender == kPoseSolverName) {
     status_.CountIn();
     FinishTarget("the pose solver finished");

@@ -112,6 +112,7 @@ class ObjectFinderNodeTest : public ::testing::Test {
   void PoseSolverFinished() { Finished("pose_solver"); }
   void Finished(const std::string& sender) {
     control_t c;
+    c.session_id = 0;
     c.utime = 0;
     c.sender = sender;
     c.target = "*";
@@ -131,6 +132,7 @@ class ObjectFinderNodeTest : public ::testing::Test {
   }
   void EndOfStream() {
     control_t c;
+    c.session_id = 0;
     c.utime = 0;
     c.sender = "robot_sim";
     c.target = "*";

@@ -203,6 +203,7 @@ void PlannerNode::OnPose(const pose_t& msg) {
   PublishCommand(command, msg.seq, msg.utime);
   if (planner_.done() && !shutdown_sent_) {
     control_t request;
+    request.session_id = status_.session_id();  // the session it keeps to
     request.utime = msg.utime;
     request.sender = options_.name;
     request.target = options_.driver_name;
@@ -346,6 +347,7 @@ void PlannerNode::OnCameraInfo(const camera_info_t& msg) {
 }
 
 void PlannerNode::OnControl(const control_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session on the bus
   if (!IsFinalizeRequest(msg, options_.name)) {
     if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // our own SHUTDOWN, others' FINISHED, ...
     if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;

@@ -70,6 +70,7 @@ class PlannerNodeTest : public ::testing::Test {
   }
   void EndOfStream() {
     control_t c;
+    c.session_id = 0;
     c.utime = 0;
     c.sender = "robot_sim";
     c.target = "*";

@@ -305,6 +305,7 @@ void PoseSolverNode::PublishLandmarks(int64_t utime, int64_t seq, bool current_m
 }
 
 void PoseSolverNode::OnControl(const control_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session on the bus
   if (!IsFinalizeRequest(msg, options_.name)) {
     if (msg.command != control_t::COMMAND_FINISHED || msg.sender != options_.finish_on_sender) return;
     if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;

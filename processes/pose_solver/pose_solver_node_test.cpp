@@ -44,6 +44,7 @@ void Drain(Bus& bus) {
 
 control_t TrackerFinished(int64_t last_seq) {
   control_t c;
+  c.session_id = 0;
   c.utime = 0;
   c.sender = "tracker";
   c.target = "*";

@@ -219,6 +219,7 @@ void TrackerNode::OnImage(const image_t& msg) {
 }
 
 void TrackerNode::OnControl(const control_t& msg) {
+  if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session on the bus
   if (!IsFinalizeRequest(msg, options_.name)) {
     if (msg.command != control_t::COMMAND_END_OF_STREAM) return;  // other commands are not for the tracker
     if (!msg.target.empty() && msg.target != "*" && msg.target != options_.name) return;

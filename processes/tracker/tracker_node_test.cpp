@@ -69,6 +69,7 @@ class TrackerNodeTest : public ::testing::Test {
   }
   void EndOfStream(int64_t last_seq) {
     control_t c;
+    c.session_id = 0;
     c.utime = 0;
     c.sender = "robot_sim";
     c.target = "*";
@@ -194,6 +195,7 @@ TEST_F(TrackerNodeTest, EndOfStreamWithoutExitKeepsRunning) {
 TEST_F(TrackerNodeTest, EndOfStreamForAnotherProcessIsIgnored) {
   Start();
   control_t c;
+  c.session_id = 0;
   c.sender = "robot_sim";
   c.target = "pose_solver";
   c.command = control_t::COMMAND_END_OF_STREAM;
@@ -230,6 +232,23 @@ TEST_F(TrackerNodeTest, RefusesTheFramesOfAnotherSession) {
   for (int32_t age : tracks_.back().age) continued += age > 0;
   EXPECT_GT(continued, tracks_.back().num_tracks * 8 / 10);
   EXPECT_EQ(st.session_id(), 0xAAAA);
+  // The other session's end of stream does not end this one's; its own does.
+  control_t eos;
+  eos.session_id = 0xBBBB;
+  eos.utime = 0;
+  eos.sender = "robot_sim";
+  eos.target = "*";
+  eos.command = control_t::COMMAND_END_OF_STREAM;
+  eos.last_seq = 6;
+  ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", eos));
+  Drain();
+  EXPECT_TRUE(finished_.empty());
+  EXPECT_EQ(st.rejected("control: foreign session"), 1);
+  eos.session_id = 0xAAAA;
+  ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", eos));
+  Drain();
+  ASSERT_EQ(finished_.size(), 1u);
+  EXPECT_EQ(finished_[0].session_id, 0xAAAA);  // its FINISHED carries the session it keeps to
 }
 
 TEST_F(TrackerNodeTest, RejectsEachKindOfBadImageAndKeepsTracking) {
