@@ -1142,10 +1142,22 @@ Planner::Motion Planner::Orbit() {
   if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
     if (lost_since_ < 0) {
       lost_since_ = now_;
-      Event("orbit paused: target lost, searching");
+      if (!StartShuttle(&search_shuttle_, kShuttleLegMm)) search_shuttle_ = TrailShuttle{};
+      Event(std::string("orbit paused: target lost, searching") +
+            (search_shuttle_.back.empty() ? "" : " (shuttling on the trail, the head on the target)"));
     }
     if (now_ - lost_since_ < static_cast<int64_t>(options_.lost_search_s * kSecond)) {
       activity_ = "orbit paused: searching the target";
+      // Back and forth on the trail with the head on the target: the travel lets the camera turn back to it (a
+      // standing search may only re-aim by kFreeSwing, and the target is often far off the axis after a glance,
+      // floor mapping or a bypass: room_05, two 20-s searches, orbit unfinished) and gives the pose solver parallax.
+      if (!search_shuttle_.back.empty()) {
+        Motion m;
+        m.velocity = ShuttleStep(&search_shuttle_, HeldLongerThan(kSecond), &m.trail);
+        m.aim_point = centre;
+        m.camera_turn_needs_translation = true;
+        return m;
+      }
       const double sweep = 0.25 * std::sin(2 * M_PI * (now_ - lost_since_) * 1e-6 / 4.0);  // ~±14 deg
       const Eigen::Vector2d side(-r.y(), r.x());
       return Hold(centre + Eigen::Vector3d(side.x(), side.y(), 0) * sweep);

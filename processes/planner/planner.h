@@ -412,6 +412,8 @@ class Planner {
   double glanced_azimuth_ = 0;     // rad, blocked point looked at last (when glances_ > 0)
   int glances_ = 0;
   int64_t lost_since_ = -1;
+  // The lost-target search's shuttle on the trail (empty: too little trail, the search stands and sweeps the head).
+  TrailShuttle search_shuttle_;
   int orbit_reported_quarter_ = 0;
 
   // NEXT_VIEWS

@@ -628,19 +628,26 @@ TEST(PlannerClosedLoopTest, TargetLostDuringTheOrbitPausesAndResumes) {
   toy::ToyWorld world(toy::MakeLivingRoom(true), options.robot);
   int64_t lost_from = -1;
   Eigen::Vector2d at_loss;
-  double moved_while_lost = 0;
+  double moved_while_lost = 0, off_axis_while_lost_deg = 0;
+  const Eigen::Vector3d target = world.TargetCentre();
   const RunLog log = RunMission(world, options, 30 * 900, [&](const Planner& planner, toy::ToyWorld& w) {
     if (planner.phase() == Phase::kOrbit && lost_from < 0 && planner.activity() == "orbit") {
       lost_from = w.seq() + 150;  // 5 s into the orbit, for 4 s
       w.ForceLost(lost_from, lost_from + 120);
     }
     if (w.seq() == lost_from + 5) at_loss = w.truth().position();  // the pause takes effect one frame late
-    if (lost_from >= 0 && w.seq() > lost_from + 5 && w.seq() < lost_from + 120)
+    if (lost_from >= 0 && w.seq() > lost_from + 5 && w.seq() < lost_from + 120) {
       moved_while_lost = std::max(moved_while_lost, (w.truth().position() - at_loss).norm());
+      off_axis_while_lost_deg =
+          std::max(off_axis_while_lost_deg, AngleOffAxis(w.WorldFromCamera(), target) / kDeg);
+    }
   });
   ASSERT_GE(lost_from, 0);
   EXPECT_GE(log.orbit_paused_frames, 100);
-  EXPECT_LT(moved_while_lost, 5.0);
+  // The search shuttles on the trail (400 mm legs) with the head on the target, then the orbit goes on.
+  EXPECT_GT(moved_while_lost, 50.0);
+  EXPECT_LT(moved_while_lost, 450.0);
+  EXPECT_LT(off_axis_while_lost_deg, 5.0);
   EXPECT_EQ(log.end_phase, Phase::kFinish) << PhaseName(log.end_phase);
   EXPECT_GE(log.summary.orbit_percent, 95.0);
   EXPECT_EQ(log.collisions, 0);
