@@ -1122,6 +1122,40 @@ double Planner::OrbitRadiusAhead(double azimuth, double* blocked_azimuth) const 
   return -1;
 }
 
+// The orbit's pause while the target is LOST (not hidden behind an obstacle, not during a glance): for
+// lost_search_s, back and forth on the trail with the head on the target: the travel lets the camera turn back to it
+// (a standing search may only re-aim by kFreeSwing, and the target is often far off the axis after a glance, floor
+// mapping or a bypass: room_05, two 20-s searches, orbit unfinished) and gives the pose solver parallax; without
+// trail, standing with the head swept over its last position. True (and *m) while searching.
+bool Planner::SearchLostTarget(const Eigen::Vector3d& centre, const Eigen::Vector2d& r, bool hidden, Motion* m) {
+  if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
+    if (lost_since_ < 0) {
+      lost_since_ = now_;
+      if (!StartShuttle(&search_shuttle_, kShuttleLegMm)) search_shuttle_ = TrailShuttle{};
+      Event(std::string("orbit paused: target lost, searching") +
+            (search_shuttle_.back.empty() ? "" : " (shuttling on the trail, the head on the target)"));
+    }
+    if (now_ - lost_since_ >= static_cast<int64_t>(options_.lost_search_s * kSecond)) return false;
+    activity_ = "orbit paused: searching the target";
+    if (!search_shuttle_.back.empty()) {
+      *m = Motion{};
+      m->velocity = ShuttleStep(&search_shuttle_, HeldLongerThan(kSecond), &m->trail);
+      m->aim_point = centre;
+      m->camera_turn_needs_translation = true;
+      return true;
+    }
+    const double sweep = 0.25 * std::sin(2 * M_PI * (now_ - lost_since_) * 1e-6 / 4.0);  // ~±14 deg
+    const Eigen::Vector2d side(-r.y(), r.x());
+    *m = Hold(centre + Eigen::Vector3d(side.x(), side.y(), 0) * sweep);
+    return true;
+  }
+  if (lost_since_ >= 0 && target_state_ != TargetState::kLost) {
+    lost_since_ = -1;
+    Event("orbit continues: target found again");
+  }
+  return false;
+}
+
 Planner::Motion Planner::Orbit() {
   activity_ = "orbit";
   const Eigen::Vector3d centre = TargetCentre();
@@ -1139,33 +1173,8 @@ Planner::Motion Planner::Orbit() {
       WrapAngle(azimuth - orbit_last_azimuth_);
   orbit_last_azimuth_ = azimuth;
   const bool hidden = TargetHidden();
-  if (target_state_ == TargetState::kLost && !glancing_ && !hidden) {
-    if (lost_since_ < 0) {
-      lost_since_ = now_;
-      if (!StartShuttle(&search_shuttle_, kShuttleLegMm)) search_shuttle_ = TrailShuttle{};
-      Event(std::string("orbit paused: target lost, searching") +
-            (search_shuttle_.back.empty() ? "" : " (shuttling on the trail, the head on the target)"));
-    }
-    if (now_ - lost_since_ < static_cast<int64_t>(options_.lost_search_s * kSecond)) {
-      activity_ = "orbit paused: searching the target";
-      // Back and forth on the trail with the head on the target: the travel lets the camera turn back to it (a
-      // standing search may only re-aim by kFreeSwing, and the target is often far off the axis after a glance,
-      // floor mapping or a bypass: room_05, two 20-s searches, orbit unfinished) and gives the pose solver parallax.
-      if (!search_shuttle_.back.empty()) {
-        Motion m;
-        m.velocity = ShuttleStep(&search_shuttle_, HeldLongerThan(kSecond), &m.trail);
-        m.aim_point = centre;
-        m.camera_turn_needs_translation = true;
-        return m;
-      }
-      const double sweep = 0.25 * std::sin(2 * M_PI * (now_ - lost_since_) * 1e-6 / 4.0);  // ~±14 deg
-      const Eigen::Vector2d side(-r.y(), r.x());
-      return Hold(centre + Eigen::Vector3d(side.x(), side.y(), 0) * sweep);
-    }
-  } else if (lost_since_ >= 0 && target_state_ != TargetState::kLost) {
-    lost_since_ = -1;
-    Event("orbit continues: target found again");
-  }
+  Motion search;
+  if (SearchLostTarget(centre, r, hidden, &search)) return search;
   if (orbit_progress_ >= 2 * M_PI) {
     char text[96];
     std::snprintf(text, sizeof(text), "orbit complete (%.0f %% of the circle driven)", orbit_percent());

@@ -240,6 +240,8 @@ class Planner {
   Motion Investigate();
   Motion Approach();
   Motion Orbit();
+  // The orbit's lost-target search (see the definition): true and *m while it runs.
+  bool SearchLostTarget(const Eigen::Vector3d& centre, const Eigen::Vector2d& r, bool hidden, Motion* m);
   Motion NextViews();
   Motion FollowPathLookingAt(const Eigen::Vector3d& point, double speed);
   Motion LookAhead(const Velocity& v);
