@@ -54,13 +54,15 @@ class StatusReporter {
   // Reject(reason, detail) of an input with sequence number seq on stream, which NoteRejectedSeq records as received.
   void Reject(const std::string& reason, const std::string& detail, const std::string& stream, int64_t seq);
   // Session isolation (issue 26): drivers stamp image_t, camera_info_t, odometry_t and their control_t with their
-  // session's id, processes their control_t with the id they keep to (0 = unstamped, always taken). The first non-zero id is this process's session for its life; an input of `what`
+  // session's id, processes their control_t with the id they keep to (0 = unstamped, always taken). The first
+  // non-zero id is this process's session for its life (a driver sets its own: SetSession); an input of `what`
   // ("image") with another non-zero id is rejected as "<what>: foreign session" (false), each new foreign id is
   // logged as an error at once, and value foreign_session_inputs counts them (the session supervisor fails a run
   // whose process reports any). A second session on one bus (another robot, a log replayed onto a live bus) then
   // never mixes its frames into this one's.
   bool AcceptSession(int64_t session_id, const std::string& what);
   int64_t session_id() const { return session_id_; }  // 0 until the first stamped input
+  void SetSession(int64_t session_id) { session_id_ = session_id; }  // a driver's own session, before any input
   void RecordLatencyMs(double ms);
   void SetLastDataUtime(int64_t utime) { last_data_utime_ = utime; }
   void SetValue(const std::string& name, double value);

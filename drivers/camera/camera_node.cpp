@@ -105,9 +105,8 @@ bool ValidateCameraNodeOptions(const CameraNodeOptions& o, std::string* why) {
   };
   int8_t encoding = 0;
   if (o.source.empty()) return fail("--source is required");
-  int64_t session_id = 0;
-  std::string session_why;
-  if (!o.session_id.empty() && !SessionIdFromText(o.session_id, &session_id, &session_why))
+  int64_t session_id = 0;  // "" draws one: always valid
+  if (std::string session_why; !SessionIdFromText(o.session_id, &session_id, &session_why))
     return fail("--session-id: " + session_why);
   if (!std::isfinite(o.rate_hz) || o.rate_hz < 0 || o.rate_hz > 10000) return fail("--rate must be in [0, 10000] Hz");
   if (o.realtime && o.rate_hz <= 0) return fail("--realtime needs --rate > 0");
@@ -145,6 +144,7 @@ CameraNode::CameraNode(Bus& bus, const CameraNodeOptions& options)
   timestamp_rate_ = options_.rate_hz > 0 ? options_.rate_hz : 30.0;
   if (source_->IsLive() && source_->SourceRate() > 0) timestamp_rate_ = source_->SourceRate();
   SessionIdFromText(options_.session_id, &session_id_, &why);  // validated above; "" draws one
+  status_.SetSession(session_id_);
   LogInfo("source: " + source_->Describe() + "; session " + SessionIdText(session_id_));
   const bool folder_source = source_->kind() == SourceKind::kImageFolder ||
                              (source_->kind() == SourceKind::kVideoFile && std::filesystem::is_directory(options_.source));

@@ -163,9 +163,8 @@ bool ValidateRobotSimNodeOptions(const RobotSimNodeOptions& o, std::string* why,
   int8_t encoding = 0;
   double values[3];
   if (o.scene.empty()) return fail("--scene is required");
-  int64_t session_id = 0;
-  std::string session_why;
-  if (!o.session_id.empty() && !SessionIdFromText(o.session_id, &session_id, &session_why))
+  int64_t session_id = 0;  // "" draws one: always valid
+  if (std::string session_why; !SessionIdFromText(o.session_id, &session_id, &session_why))
     return fail("--session-id: " + session_why);
   if (!o.orbit_center.empty() && !ParseList(o.orbit_center, 2, values)) return fail("orbit_center must be x,y");
   if (!o.look_at.empty() && !ParseList(o.look_at, 3, values)) return fail("look_at must be x,y,z");
@@ -225,6 +224,7 @@ RobotSimNode::RobotSimNode(Bus& bus, const RobotSimNodeOptions& options)
   renderer_ = std::make_unique<Renderer>(*scene_, render_options);
   sim_ = std::make_unique<RobotSimulator>(*scene_, sim_options_);
   SessionIdFromText(options_.session_id, &session_id_, &why);  // validated above; "" draws one
+  status_.SetSession(session_id_);
   LogInfo("scene " + options_.scene + ": " + std::to_string(scene_->objects.size()) + " objects, target '" +
           scene_->target().name + "'; session " + SessionIdText(session_id_));
   {
@@ -350,11 +350,7 @@ void RobotSimNode::SubscribeInputs() {
         if (msg.command != control_t::COMMAND_SHUTDOWN) return;
         if (msg.target != "*" && msg.target != kProcessName) return;
         status_.CountIn();
-        if (msg.session_id != 0 && msg.session_id != session_id_) {  // another session's planner
-          status_.Reject("control: foreign session", "shutdown from " + msg.sender + " of session " +
-                                                        SessionIdText(msg.session_id));
-          return;
-        }
+        if (!status_.AcceptSession(msg.session_id, "control")) return;  // another session's planner
         if (!stop_requested_) LogInfo("shutdown requested by " + msg.sender);
         stop_requested_ = true;
       },

@@ -46,6 +46,10 @@ constexpr double kInPlaceSpeedMm = 20;           // mm/s: slower base motion wit
 // came 55 deg into such a sweep at 30 deg/s, the pan held while the base turned: a lost-target search, a bypass).
 constexpr double kFreeSwing = 15 * kDeg;
 
+// rad/s the camera's yaw may turn for the base's travel at v_mm_s (the budget of the motions that need translation,
+// and the rate camera_anchor_yaw_ follows the camera at).
+double TravelTurnRate(double v_mm_s) { return kStillCameraTurn + kCameraTurnPerMm * std::abs(v_mm_s); }
+
 std::string Mm(const Eigen::Vector2d& p) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), "(%.0f, %.0f) mm", p.x(), p.y());
@@ -386,7 +390,7 @@ PlannerCommand Planner::Step(const CameraPoseEstimate& pose) {
 double Planner::CameraTurnRate(const Motion& motion, double v_mm_s) const {
   const double turn = std::min(options_.tracking_turn_rad_s, options_.limits.max_omega_rad_s);
   if (!motion.camera_turn_needs_translation) return turn;
-  return std::min(turn, kStillCameraTurn + kCameraTurnPerMm * std::abs(v_mm_s));
+  return std::min(turn, TravelTurnRate(v_mm_s));
 }
 
 void Planner::CameraTurnBounds(const Motion& motion, double v_mm_s, double dt, double* lowest,
@@ -490,7 +494,7 @@ PlannerCommand Planner::Finalize(const Motion& motion, double dt) {
   const double camera_turn = std::clamp(base_turn + (pan - pan_command_), lowest, highest);
   pan = std::clamp(pan_command_ + camera_turn - base_turn, -l.max_pan_rad, l.max_pan_rad);
   // The anchor follows the camera as travel allows (a head-only sweep takes it along).
-  const double follow = motion.head_only_sweep ? M_PI : (kStillCameraTurn + kCameraTurnPerMm * std::abs(v.v_mm_s)) * dt;
+  const double follow = motion.head_only_sweep ? M_PI : TravelTurnRate(v.v_mm_s) * dt;
   camera_anchor_yaw_ = WrapAngle(
       camera_anchor_yaw_ +
       std::clamp(WrapAngle(AnchorFrameHeading() + base_turn + pan - camera_anchor_yaw_), -follow, follow));

@@ -1918,6 +1918,43 @@ double MapBendFraction(const std::vector<Eigen::Vector3d>& before, const std::ve
   return d[p90] / spread;
 }
 
+void PoseEstimator::GlobalBundleAdjustmentKeepingShape() {
+  final_bend_fraction_ = -1;
+  final_ba_dropped_ = false;
+  if (!any_frozen_) {  // the BA over every keyframe is the whole adjustment, not a refinement: nothing to hold it to
+    GlobalBundleAdjustment();
+    return;
+  }
+  // The windowed adjustments' state, restored when the BA bends a map.
+  std::vector<Eigen::Isometry3d> poses_before;
+  poses_before.reserve(frames_.size());
+  for (const Frame& fr : frames_) poses_before.push_back(fr.world_from_camera);
+  std::map<int64_t, Point> points_before = points_;
+  if (!GlobalBundleAdjustment()) return;
+  std::map<int64_t, std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> maps;  // before, after
+  for (size_t f = 0; f < frames_.size(); ++f) {
+    if (!frames_[f].posed) continue;
+    auto& m = maps[frames_[f].map_start_seq];
+    m.first.push_back(poses_before[f].translation());
+    m.second.push_back(frames_[f].world_from_camera.translation());
+  }
+  for (const auto& [map_start, centres] : maps)
+    final_bend_fraction_ = std::max(final_bend_fraction_, MapBendFraction(centres.first, centres.second));
+  std::ostringstream m;
+  if (final_bend_fraction_ > kMaxFinalBendFraction) {
+    for (size_t f = 0; f < frames_.size(); ++f) frames_[f].world_from_camera = poses_before[f];
+    points_ = std::move(points_before);
+    final_ba_dropped_ = true;
+    m << "global BA dropped: it bent a map by " << 100.0 * final_bend_fraction_
+      << " % of its camera spread (p90, after a similarity; over " << 100.0 * kMaxFinalBendFraction
+      << " %): the final poses are the windowed adjustments' (" << last_message_ << ")";
+    last_message_ = m.str();
+  } else if (final_bend_fraction_ >= 0) {
+    m << "; map bend " << 100.0 * final_bend_fraction_ << " % of the camera spread (p90, kept)";
+    last_message_ += m.str();
+  }
+}
+
 std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
   const int64_t start_us = MonotonicMicros();
   if (map_initialized_) {
@@ -1935,41 +1972,7 @@ std::vector<CameraPoseEstimate> PoseEstimator::Finish() {
       if (RegisterAgainstMap(f, frames_[nearest].world_from_camera))
         frames_[f].map_start_seq = frames_[nearest].map_start_seq;  // registered from its neighbour's map
     }
-    // The windowed adjustments' state, kept in case the global BA bends a map (kMaxFinalBendFraction).
-    std::vector<Eigen::Isometry3d> poses_before;
-    poses_before.reserve(frames_.size());
-    for (const Frame& fr : frames_) poses_before.push_back(fr.world_from_camera);
-    const bool check = any_frozen_;
-    std::map<int64_t, Point> points_before;
-    if (check) points_before = points_;
-    const bool adjusted = GlobalBundleAdjustment();
-    final_bend_fraction_ = -1;
-    final_ba_dropped_ = false;
-    if (check && adjusted) {
-      std::map<int64_t, std::pair<std::vector<Eigen::Vector3d>, std::vector<Eigen::Vector3d>>> maps;
-      for (size_t f = 0; f < frames_.size(); ++f) {
-        if (!frames_[f].posed) continue;
-        auto& m = maps[frames_[f].map_start_seq];
-        m.first.push_back(poses_before[f].translation());
-        m.second.push_back(frames_[f].world_from_camera.translation());
-      }
-      for (const auto& [map_start, centres] : maps)
-        final_bend_fraction_ = std::max(final_bend_fraction_, MapBendFraction(centres.first, centres.second));
-      if (final_bend_fraction_ > kMaxFinalBendFraction) {
-        for (size_t f = 0; f < frames_.size(); ++f) frames_[f].world_from_camera = poses_before[f];
-        points_ = std::move(points_before);
-        final_ba_dropped_ = true;
-        std::ostringstream m;
-        m << "global BA dropped: it bent a map by " << 100.0 * final_bend_fraction_
-          << " % of its camera spread (p90, after a similarity; over " << 100.0 * kMaxFinalBendFraction
-          << " %): the final poses are the windowed adjustments' (" << last_message_ << ")";
-        last_message_ = m.str();
-      } else if (final_bend_fraction_ >= 0) {
-        std::ostringstream m;
-        m << "; map bend " << 100.0 * final_bend_fraction_ << " % of the camera spread (p90, kept)";
-        last_message_ += m.str();
-      }
-    }
+    GlobalBundleAdjustmentKeepingShape();
     if (options_.model == MotionModel::kSixDof) RescaleSixDof(0);
     // Final per-frame statistics (compacted and frozen frames keep their online figures).
     for (auto& fr : frames_)

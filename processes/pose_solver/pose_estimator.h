@@ -368,6 +368,9 @@ class PoseEstimator {
   void FollowKeyframes(const std::vector<Eigen::Isometry3d>& old_world_from_camera);
   // True when the adjustment converged and was applied.
   bool GlobalBundleAdjustment();
+  // Finish()'s global BA, dropped (the poses and landmarks before it restored) when it bends a map by more than
+  // kMaxFinalBendFraction; sets final_bend_fraction_, final_ba_dropped_ and last_message_.
+  void GlobalBundleAdjustmentKeepingShape();
   // PnP of frame f against the current landmarks from a nearby pose; on success f is posed (status TRACKING) with
   // its outlier flags set. False (frame untouched) otherwise.
   bool RegisterAgainstMap(int f, const Eigen::Isometry3d& prior);

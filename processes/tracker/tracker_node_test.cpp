@@ -67,9 +67,9 @@ class TrackerNodeTest : public ::testing::Test {
     camera.cy = height / 2.0;
     ASSERT_TRUE(bus_->PublishMessage("CAMERA_INFO", CameraToMessage(camera, 0)));
   }
-  void EndOfStream(int64_t last_seq) {
+  void EndOfStream(int64_t last_seq, int64_t session_id = 0) {
     control_t c;
-    c.session_id = 0;
+    c.session_id = session_id;
     c.utime = 0;
     c.sender = "robot_sim";
     c.target = "*";
@@ -233,19 +233,11 @@ TEST_F(TrackerNodeTest, RefusesTheFramesOfAnotherSession) {
   EXPECT_GT(continued, tracks_.back().num_tracks * 8 / 10);
   EXPECT_EQ(st.session_id(), 0xAAAA);
   // The other session's end of stream does not end this one's; its own does.
-  control_t eos;
-  eos.session_id = 0xBBBB;
-  eos.utime = 0;
-  eos.sender = "robot_sim";
-  eos.target = "*";
-  eos.command = control_t::COMMAND_END_OF_STREAM;
-  eos.last_seq = 6;
-  ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", eos));
+  EndOfStream(6, 0xBBBB);
   Drain();
   EXPECT_TRUE(finished_.empty());
   EXPECT_EQ(st.rejected("control: foreign session"), 1);
-  eos.session_id = 0xAAAA;
-  ASSERT_TRUE(bus_->PublishMessage("OBJSCAN_CONTROL", eos));
+  EndOfStream(6, 0xAAAA);
   Drain();
   ASSERT_EQ(finished_.size(), 1u);
   EXPECT_EQ(finished_[0].session_id, 0xAAAA);  // its FINISHED carries the session it keeps to
